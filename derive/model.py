@@ -1,0 +1,249 @@
+"""The Lagrangian model of a scene: T, V, R, L, the Euler-Lagrange equations, M, K, C, D.
+
+Every energy term belongs to one scene entry (``masses.m1``, ``springs[0]``,
+``dampers[0]``, ``forces[0]``, ``gravity``) and touches at most two
+coordinates, so the Euler-Lagrange equations are derived element by element:
+the cost grows with the number of entries, not with its square. Only the
+effects a scene declares produce terms.
+"""
+
+from __future__ import annotations
+
+import enum
+from dataclasses import dataclass
+from functools import cached_property
+
+import sympy as sp
+
+from .scene import WALL, Scene
+
+
+class Effect(enum.Enum):
+    """What kind of scene entry a term comes from."""
+
+    INERTIA = "inertia"
+    SPRING = "spring"
+    CUBIC = "cubic"
+    DAMPER = "damper"
+    FORCE = "force"
+    GRAVITY = "gravity"
+
+
+@dataclass(frozen=True)
+class Term:
+    """A generalized force on one coordinate, traced to the scene entry that produced it."""
+
+    key: str
+    effect: Effect
+    coordinate: int
+    force: sp.Expr
+
+
+def parameter_symbols(scene: Scene) -> dict[str, sp.Symbol]:
+    """SymPy symbols for the parameters, in sorted order.
+
+    A parameter whose scene value is positive is declared positive, so that
+    e.g. ``sqrt(m**2)`` reads ``m``; the generated code is then valid for
+    positive values of such parameters (masses and stiffnesses must be
+    positive anyway).
+    """
+    return {
+        name: sp.Symbol(name, positive=True) if scene.parameters[name] > 0 else sp.Symbol(name, real=True)
+        for name in sorted(scene.parameters)
+    }
+
+
+class Model:
+    """Symbolic equations of motion of a (non-[chain]) scene.
+
+    ``M ẍ + C ẋ + K x + f_nl(x) = F(t) + g_force`` with ``M`` diagonal.
+    """
+
+    def __init__(self, scene: Scene):
+        if scene.chain is not None:
+            raise ValueError("a [chain] scene is derived by derive.chain.ChainModel")
+        self.scene = scene
+        self.params = parameter_symbols(scene)
+        self.t = sp.Symbol("t", real=True)
+        self.x = tuple(sp.Symbol(f"x_{m}", real=True) for m in scene.mass_names)
+        self.v = tuple(sp.Symbol(f"v_{m}", real=True) for m in scene.mass_names)
+        self.a = tuple(sp.Symbol(f"a_{m}", real=True) for m in scene.mass_names)
+        self.masses = tuple(e.to_sympy(self.params) for e in scene.mass_exprs)
+        sym = {**self.params, "t": self.t}
+        self.springs = tuple(
+            (s.a, s.b, s.k.to_sympy(sym), None if s.k3 is None else s.k3.to_sympy(sym), s.key)
+            for s in scene.springs)
+        self.dampers = tuple((d.a, d.b, d.c.to_sympy(sym), d.key) for d in scene.dampers)
+        self.forces = tuple((f.on, f.f.to_sympy(sym), f.key) for f in scene.forces)
+        self.g = None if scene.gravity is None else scene.gravity.to_sympy(sym)
+
+    # -- energies ------------------------------------------------------------------
+    def _ext(self, a: int, b: int, q) -> sp.Expr:
+        """Extension of an element between ends a and b (a wall end is 0)."""
+        return (q[a] if a != WALL else 0) - (q[b] if b != WALL else 0)
+
+    @cached_property
+    def kinetic_terms(self) -> tuple[tuple[str, sp.Expr], ...]:
+        return tuple((f"masses.{name}", m * v**2 / 2)
+                     for name, m, v in zip(self.scene.mass_names, self.masses, self.v))
+
+    @cached_property
+    def potential_terms(self) -> tuple[tuple[str, sp.Expr], ...]:
+        terms = []
+        for a, b, k, k3, key in self.springs:
+            d = self._ext(a, b, self.x)
+            terms.append((key, k * d**2 / 2 + (k3 * d**4 / 4 if k3 is not None else 0)))
+        if self.g is not None:
+            terms.append(("gravity", -sum(m * self.g * x for m, x in zip(self.masses, self.x))))
+        return tuple(terms)
+
+    @cached_property
+    def dissipation_terms(self) -> tuple[tuple[str, sp.Expr], ...]:
+        return tuple((key, c * self._ext(a, b, self.v) ** 2 / 2) for a, b, c, key in self.dampers)
+
+    @property
+    def T(self) -> sp.Expr:
+        return sp.Add(*(e for _, e in self.kinetic_terms))
+
+    @property
+    def V(self) -> sp.Expr:
+        return sp.Add(*(e for _, e in self.potential_terms))
+
+    @property
+    def R(self) -> sp.Expr:
+        """Rayleigh dissipation function (0 without dampers)."""
+        return sp.Add(*(e for _, e in self.dissipation_terms))
+
+    @property
+    def L(self) -> sp.Expr:
+        return self.T - self.V
+
+    # -- equations of motion ---------------------------------------------------------
+    @cached_property
+    def terms(self) -> tuple[Term, ...]:
+        """Generalized forces ``-dV/dx_i - dR/dv_i + Q_i``, one per (entry, coordinate)."""
+        out: list[Term] = []
+        for a, b, k, k3, key in self.springs:
+            d = self._ext(a, b, self.x)
+            for i, sign in ((a, 1), (b, -1)):
+                if i == WALL:
+                    continue
+                out.append(Term(key, Effect.SPRING, i, -sign * k * d))
+                if k3 is not None:
+                    out.append(Term(key, Effect.CUBIC, i, -sign * k3 * d**3))
+        if self.g is not None:
+            out.extend(Term("gravity", Effect.GRAVITY, i, m * self.g) for i, m in enumerate(self.masses))
+        for a, b, c, key in self.dampers:
+            dv = self._ext(a, b, self.v)
+            for i, sign in ((a, 1), (b, -1)):
+                if i != WALL:
+                    out.append(Term(key, Effect.DAMPER, i, -sign * c * dv))
+        for on, f, key in self.forces:
+            out.append(Term(key, Effect.FORCE, on, f))
+        return tuple(out)
+
+    def euler_lagrange(self) -> list[sp.Expr]:
+        """``d/dt dL/dv_i - dL/dx_i + dR/dv_i - Q_i`` (= 0 on trajectories), element by element.
+
+        The total time derivative of ``dL/dv_i`` is taken by the chain rule
+        through ``x``, ``v`` and ``t``; each element differentiates only the
+        coordinates it touches.
+        """
+        n = self.scene.n
+        lhs = [sp.Integer(0)] * n
+        coords = lambda expr: [i for i in range(n) if expr.has(self.x[i]) or expr.has(self.v[i])]  # noqa: E731
+        for _, e in self.kinetic_terms:
+            for i in coords(e):
+                p = sp.diff(e, self.v[i])
+                lhs[i] += sum(sp.diff(p, self.v[j]) * self.a[j] + sp.diff(p, self.x[j]) * self.v[j]
+                              for j in coords(p)) + sp.diff(p, self.t)
+        for _, e in self.potential_terms:
+            for i in coords(e):
+                lhs[i] += sp.diff(e, self.x[i])
+        for _, e in self.dissipation_terms:
+            for i in coords(e):
+                lhs[i] += sp.diff(e, self.v[i])
+        for on, f, _ in self.forces:
+            lhs[on] -= f
+        return lhs
+
+    @cached_property
+    def effects(self) -> frozenset[Effect]:
+        return frozenset(t.effect for t in self.terms)
+
+    # -- matrices ----------------------------------------------------------------------
+    @cached_property
+    def M(self) -> sp.Matrix:
+        """Mass matrix ``d²T/dv²`` (diagonal for point masses)."""
+        return sp.diag(*[sp.diff(e, v, 2) for (_, e), v in zip(self.kinetic_terms, self.v)])
+
+    def _assemble(self, elements, q) -> sp.Matrix:
+        n = self.scene.n
+        out = sp.zeros(n, n)
+        for a, b, c in elements:
+            for i, si in ((a, 1), (b, -1)):
+                for j, sj in ((a, 1), (b, -1)):
+                    if i != WALL and j != WALL:
+                        out[i, j] += si * sj * c
+        return out
+
+    @cached_property
+    def K(self) -> sp.Matrix:
+        """Stiffness matrix ``d²V/dx²`` at x = 0 (the linear part of the springs)."""
+        return self._assemble([(a, b, k) for a, b, k, _, _ in self.springs], self.x)
+
+    @cached_property
+    def C(self) -> sp.Matrix | None:
+        """Damping matrix ``d²R/dv²``; None for a scene without dampers."""
+        if not self.dampers:
+            return None
+        return self._assemble([(a, b, c) for a, b, c, _ in self.dampers], self.v)
+
+    @cached_property
+    def D(self) -> sp.Matrix:
+        """Dynamical matrix ``M^-1/2 K M^-1/2``."""
+        s = [1 / sp.sqrt(m) for m in self.masses]
+        n = self.scene.n
+        return sp.Matrix(n, n, lambda i, j: self.K[i, j] * s[i] * s[j] if self.K[i, j] != 0 else 0)
+
+    @cached_property
+    def gravity_force(self) -> tuple[sp.Expr, ...] | None:
+        return None if self.g is None else tuple(m * self.g for m in self.masses)
+
+    def force_expressions(self, *effects: Effect) -> list[sp.Expr]:
+        """Sum of the terms of the given effects on each coordinate."""
+        out = [sp.Integer(0)] * self.scene.n
+        for term in self.terms:
+            if term.effect in effects:
+                out[term.coordinate] += term.force
+        return out
+
+    @cached_property
+    def energy(self) -> sp.Expr:
+        return self.T + self.V
+
+    @cached_property
+    def components(self) -> list[list[int]]:
+        """Connected pieces of the spring graph (masses linked by springs), in mass order."""
+        n = self.scene.n
+        parent = list(range(n))
+
+        def find(i):
+            while parent[i] != i:
+                parent[i] = parent[parent[i]]
+                i = parent[i]
+            return i
+
+        for a, b, *_ in self.springs:
+            if a != WALL and b != WALL:
+                parent[find(a)] = find(b)
+        groups: dict[int, list[int]] = {}
+        for i in range(n):
+            groups.setdefault(find(i), []).append(i)
+        return sorted(groups.values())
+
+    @cached_property
+    def free_components(self) -> list[list[int]]:
+        """Pieces with no spring to a wall: each has one rigid-body (ω² = 0) mode."""
+        walled = {a for a, b, *_ in self.springs if b == WALL} | {b for a, b, *_ in self.springs if a == WALL}
+        return [c for c in self.components if not walled.intersection(c)]

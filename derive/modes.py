@@ -1,0 +1,267 @@
+"""Closed-form normal modes of ``K φ = ω² M φ`` (equivalently of ``D = M^-1/2 K M^-1/2``).
+
+Structure first, algebra second:
+
+1. **Rigid-body modes by structure.** Each free connected piece of the
+   spring graph contributes one exact ``ω² = 0`` with the uniform translation
+   of that piece as its shape. They are projected out before any algebra.
+2. **Mirror symmetry.** If reversing the mass order maps M and K to
+   themselves, the problem splits into symmetric and antisymmetric blocks of
+   half the size.
+3. **Factor the characteristic polynomial** ``det(K_b - λ M_b)`` of each
+   block (rigid-body factors λ divided out exactly), solve the factors of
+   degree ≤ 2 (or ≤ 4 within the budget) by radicals, and build each shape
+   from cofactors (polynomials in λ reduced modulo its factor); no
+   ``simplify`` on large expressions.
+4. **Budget.** All of it runs under a wall-clock budget; past it (or for
+   factors of degree ≥ 5) the eigenvalues fall back to numeric values at the
+   scene's parameters (``CRootOf`` of the numeric polynomial), with a note.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import signal
+import threading
+from dataclasses import dataclass, field
+
+import sympy as sp
+
+from .model import Model
+
+DEFAULT_BUDGET = 20.0
+
+
+class BudgetExceeded(Exception):
+    """The symbolic eigen-problem took longer than its budget."""
+
+
+@contextlib.contextmanager
+def time_budget(seconds: float | None):
+    """Raise :class:`BudgetExceeded` inside the block after ``seconds`` (main thread only)."""
+    usable = (seconds is not None and seconds > 0 and hasattr(signal, "setitimer")
+              and threading.current_thread() is threading.main_thread())
+    if not usable:
+        yield
+        return
+
+    def handler(signum, frame):
+        raise BudgetExceeded
+
+    old = signal.signal(signal.SIGALRM, handler)
+    signal.setitimer(signal.ITIMER_REAL, seconds)
+    try:
+        yield
+    finally:
+        signal.setitimer(signal.ITIMER_REAL, 0)
+        signal.signal(signal.SIGALRM, old)
+
+
+@dataclass(frozen=True)
+class Mode:
+    """One eigenvalue ω² with its independent physical shapes.
+
+    ``shapes`` are physical displacement patterns (columns of ``M^-1/2 e``), any
+    scale; ``weighted`` the corresponding mass-weighted eigenvectors ``e = M^1/2 φ``.
+    ``exact`` is False for numeric fallbacks.
+    """
+
+    omega2: sp.Expr
+    multiplicity: int
+    shapes: tuple[tuple[sp.Expr, ...], ...]
+    rigid: bool = False
+    exact: bool = True
+
+
+@dataclass(frozen=True)
+class ModeSet:
+    modes: tuple[Mode, ...]
+    closed_form: bool
+    notes: tuple[str, ...] = field(default=())
+
+    def weighted(self, model: Model) -> list[list[tuple[sp.Expr, ...]]]:
+        """Mass-weighted eigenvectors ``M^1/2 φ`` for each mode's shapes."""
+        r = [sp.sqrt(m) for m in model.masses]
+        return [[tuple(ri * c for ri, c in zip(r, s)) for s in mode.shapes] for mode in self.modes]
+
+
+def _rigid_shapes(model: Model) -> list[tuple[sp.Expr, ...]]:
+    n = model.scene.n
+    return [tuple(sp.Integer(1) if i in comp else sp.Integer(0) for i in range(n))
+            for comp in model.free_components]
+
+
+def _mirror(model: Model) -> list[int] | None:
+    """The reversal permutation if it leaves M and K unchanged, else None."""
+    n = model.scene.n
+    if n < 2:
+        return None
+    p = list(range(n - 1, -1, -1))
+    M, K = model.M, model.K
+    for i in range(n):
+        if sp.expand(M[i, i] - M[p[i], p[i]]) != 0:
+            return None
+        for j in range(n):
+            if sp.expand(K[i, j] - K[p[i], p[j]]) != 0:
+                return None
+    return p
+
+
+def _blocks(model: Model) -> list[sp.Matrix]:
+    """Bases (columns) of the invariant subspaces used to split the problem."""
+    n = model.scene.n
+    p = _mirror(model)
+    if p is None:
+        return [sp.eye(n)]
+    sym, anti = [], []
+    for i in range(n):
+        j = p[i]
+        if i < j:
+            e = [0] * n
+            e[i] = e[j] = 1
+            sym.append(e)
+            f = [0] * n
+            f[i], f[j] = 1, -1
+            anti.append(f)
+        elif i == j:
+            e = [0] * n
+            e[i] = 1
+            sym.append(e)
+    return [sp.Matrix(sym).T, sp.Matrix(anti).T] if anti else [sp.Matrix(sym).T]
+
+
+def _cofactor_vector(A: sp.Matrix) -> list[sp.Expr] | None:
+    """A kernel vector of a rank n-1 matrix from signed minors of one row deletion."""
+    n = A.shape[0]
+    if n == 1:
+        return [sp.Integer(1)]
+    for r in range(n):
+        sub = A.copy()
+        sub.row_del(r)
+        vec = []
+        for j in range(n):
+            minor = sub.copy()
+            minor.col_del(j)
+            vec.append((-1) ** j * minor.det(method="berkowitz"))
+        if any(sp.expand(c) != 0 for c in vec):
+            return vec
+    return None
+
+
+def _normalise(vec: list[sp.Expr]) -> tuple[sp.Expr, ...]:
+    """Scale so that the first non-zero component is 1, keeping expressions small."""
+    vec = [sp.radsimp(sp.cancel(c)) if c.has(sp.Pow) else sp.cancel(c) for c in vec]
+    pivot = next((c for c in vec if c != 0), None)
+    if pivot is None:
+        return tuple(vec)
+    return tuple(sp.radsimp(sp.cancel(c / pivot)) for c in vec)
+
+
+def _solve_block(model: Model, B: sp.Matrix, lam: sp.Symbol, n_rigid_in_block: int,
+                 max_radical_degree: int) -> list[Mode]:
+    Kb = (B.T * model.K * B).applyfunc(sp.expand)
+    Mb = (B.T * model.M * B).applyfunc(sp.expand)
+    A = Kb - lam * Mb
+    poly = sp.Poly(A.det(method="berkowitz"), lam)
+    if n_rigid_in_block:
+        poly = sp.Poly(sp.quo(poly.as_expr(), lam**n_rigid_in_block, lam), lam)
+    _, factors = sp.factor_list(poly.as_expr(), lam)
+    modes = []
+    for fac, mult in factors:
+        fpoly = sp.Poly(fac, lam)
+        if fpoly.degree() == 0:
+            continue
+        if fpoly.degree() > max_radical_degree:
+            raise BudgetExceeded  # no readable closed form: numeric fallback
+        roots = sp.roots(fpoly, lam, multiple=True)
+        if len(roots) != fpoly.degree():
+            raise BudgetExceeded
+        for root in roots:
+            root = sp.factor(sp.radsimp(root)) if fpoly.degree() == 1 else root
+            if mult == 1:
+                vec = _cofactor_vector(A)
+                if vec is None:
+                    raise BudgetExceeded
+                # reduce modulo the factor before substituting: components become low degree in λ
+                vec = [sp.rem(sp.expand(c), fac, lam) if fpoly.degree() > 1 else c for c in vec]
+                vec = [c.subs(lam, root) for c in vec]
+                shapes = [vec]
+            else:
+                ns = (Kb - root * Mb).applyfunc(sp.cancel).nullspace(simplify=True)
+                if len(ns) != mult:
+                    raise BudgetExceeded
+                shapes = [list(v) for v in ns]
+            phys = [_normalise(list(B * sp.Matrix(s))) for s in shapes]
+            modes.append(Mode(root, mult, tuple(phys)))
+    return modes
+
+
+def closed_form_modes(model: Model, budget: float | None = DEFAULT_BUDGET,
+                      max_radical_degree: int = 4) -> ModeSet:
+    """Eigenvalues ω² and shapes of ``K φ = ω² M φ`` for a (small) scene.
+
+    Parameters
+    ----------
+    model : Model
+    budget : float or None
+        Wall-clock seconds allowed for the algebra; None for no limit.
+    max_radical_degree : int
+        Irreducible factors of higher degree are not solved by radicals.
+
+    Returns
+    -------
+    ModeSet
+        Sorted by the numeric value of ω² at the scene's parameters.
+    """
+    lam = sp.Symbol("lambda")
+    rigid = _rigid_shapes(model)
+    modes: list[Mode] = []
+    if rigid:
+        modes.append(Mode(sp.Integer(0), len(rigid), tuple(rigid), rigid=True))
+    notes: list[str] = []
+    try:
+        with time_budget(budget):
+            for B in _blocks(model):
+                # rigid translations lie in the symmetric block (uniform vectors are mirror-symmetric)
+                n_rigid = sum(1 for s in rigid if _in_span(B, s))
+                modes.extend(_solve_block(model, B, lam, n_rigid, max_radical_degree))
+        closed = True
+    except BudgetExceeded:
+        notes.append(f"no closed form within the {budget:g} s budget or by radicals; "
+                     "eigenvalues below are numeric (CRootOf) at the scene's parameter values")
+        modes = [m for m in modes if m.rigid] + _numeric_modes(model, lam, len(rigid))
+        closed = False
+    values = model.scene.parameters
+    subs = {model.params[k]: v for k, v in values.items()}
+    modes.sort(key=lambda m: (float(sp.re(sp.N(m.omega2.subs(subs), 30))), str(m.omega2)))
+    return ModeSet(tuple(modes), closed, tuple(notes))
+
+
+def _in_span(B: sp.Matrix, s) -> bool:
+    v = sp.Matrix(s)
+    # B's columns are orthogonal 0/±1 vectors: project and compare
+    coeffs = [(B[:, j].T * v)[0] / (B[:, j].T * B[:, j])[0] for j in range(B.shape[1])]
+    return sp.simplify(B * sp.Matrix(coeffs) - v) == sp.zeros(*v.shape)
+
+
+def _numeric_modes(model: Model, lam: sp.Symbol, n_rigid: int) -> list[Mode]:
+    """Numeric fallback at the scene's parameter values (rigid modes stay exact).
+
+    Uses the symmetric generalized solver ``scipy.linalg.eigh(K, M)``; the
+    rigid-body modes were already taken out by structure, so the lowest
+    ``n_rigid`` numeric eigenvalues (roundoff around 0) are dropped.
+    """
+    import numpy as np
+    import scipy.linalg
+
+    values = model.scene.parameters
+    subs = {model.params[k]: v for k, v in values.items()}
+    K = np.array(model.K.subs(subs).evalf(17).tolist(), dtype=float)
+    M = np.array(model.M.subs(subs).evalf(17).tolist(), dtype=float)
+    w, V = scipy.linalg.eigh(K, M)
+    out = []
+    for j in range(n_rigid, len(w)):
+        v = V[:, j] / V[np.argmax(np.abs(V[:, j])), j]
+        out.append(Mode(sp.Float(float(max(w[j], 0.0)), 17), 1,
+                        (tuple(sp.Float(float(c), 17) for c in v),), exact=False))
+    return out

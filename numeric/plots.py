@@ -1,0 +1,83 @@
+"""Figures: each function takes arrays and returns a matplotlib Figure; the caller saves it."""
+
+from __future__ import annotations
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+
+STYLES = {"modal": dict(ls="-", lw=1.6, alpha=0.8), "verlet": dict(ls="--", lw=1.1)}
+
+
+def _offset(series: dict[str, np.ndarray]) -> np.ndarray:
+    """Vertical offset per mass so the curves do not overlap, shape (N,)."""
+    first = next(iter(series.values()))
+    span = float(np.ptp(first)) if first.size else 1.0
+    n = first.shape[1]
+    return np.arange(n)[::-1] * (span if span > 0 else 1.0)
+
+
+def trajectories(t: np.ndarray, series: dict[str, np.ndarray], names, quantity: str, unit: str,
+                 title: str):
+    """Each mass's curve (offset for readability), every method overlaid.
+
+    series : dict of method name -> ndarray, shape (S, N)
+    """
+    fig, ax = plt.subplots(figsize=(9, 5.5), constrained_layout=True)
+    off = _offset(series)
+    colors = plt.rcParams["axes.prop_cycle"].by_key()["color"]
+    for method, y in series.items():
+        style = STYLES.get(method, dict(ls=":", lw=1.0))
+        for j, name in enumerate(names):
+            ax.plot(t, y[:, j] + off[j], color=colors[j % len(colors)],
+                    label=f"{name} ({method})", **style)
+    ax.set_xlabel("time t [s]")
+    ax.set_ylabel(f"{quantity} + offset per mass [{unit}]")
+    ax.set_title(title)
+    ax.legend(ncol=max(1, len(series)), fontsize=8, loc="upper right")
+    ax.grid(alpha=0.3)
+    return fig
+
+
+def differences(t: np.ndarray, dx: np.ndarray, dv: np.ndarray, names, label: str):
+    """Position and velocity differences of a method from the exact solution.
+
+    dx, dv : ndarray, shape (S, N)
+    """
+    fig, axes = plt.subplots(2, 1, figsize=(9, 6), sharex=True, constrained_layout=True)
+    for j, name in enumerate(names):
+        axes[0].plot(t, dx[:, j], lw=1, label=name)
+        axes[1].plot(t, dv[:, j], lw=1, label=name)
+    axes[0].set_ylabel("x − x_exact [m]")
+    axes[1].set_ylabel("v − v_exact [m/s]")
+    axes[1].set_xlabel("time t [s]")
+    axes[0].set_title(f"{label} − exact modal solution")
+    for ax in axes:
+        ax.grid(alpha=0.3)
+        ax.legend(fontsize=8, ncol=min(len(names), 6))
+    return fig
+
+
+def energy(t: np.ndarray, energies: dict[str, np.ndarray], e0: float):
+    """Relative energy error (E(t) − E(0)) / |E(0)| per method."""
+    fig, ax = plt.subplots(figsize=(9, 4.5), constrained_layout=True)
+    scale = abs(e0) if e0 != 0 else 1.0
+    for method, e in energies.items():
+        ax.plot(t, (e - e0) / scale, label=method, **STYLES.get(method, {}))
+    ax.set_xlabel("time t [s]")
+    ax.set_ylabel("(E(t) − E(0)) / |E(0)|")
+    ax.set_title("Energy error")
+    ax.grid(alpha=0.3)
+    ax.legend()
+    return fig
+
+
+def save(fig, path) -> None:
+    """Save a figure atomically (temporary file, then rename) and close it."""
+    from .files import atomic_path
+
+    with atomic_path(path) as tmp:
+        fig.savefig(tmp, dpi=110, format=str(path).rsplit(".", 1)[-1])
+    plt.close(fig)

@@ -1,0 +1,165 @@
+"""Run methods on a system and compare them: the work behind ``springchain simulate``."""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from . import plots
+from .driver import Progress, integrate
+from .errors import RunRefused
+from .files import atomic_path
+from .integrators import INTEGRATORS
+from .integrators.base import Problem
+from .modal import ModalSolution
+from .spectrum import Spectrum, spectrum, spectrum_from_closed_form
+from .system import System
+
+EXACT = "modal"
+
+
+def method_names() -> list[str]:
+    """Every method selectable by name (``--method``), the exact one first."""
+    return [EXACT, *INTEGRATORS]
+
+
+@dataclass(frozen=True)
+class Run:
+    """One method's recorded trajectory. x, v : ndarray, shape (S, N)."""
+
+    method: str
+    t: np.ndarray = field(repr=False)
+    x: np.ndarray = field(repr=False)
+    v: np.ndarray = field(repr=False)
+    seconds: float
+    force_evals: int
+
+
+def system_spectrum(system: System, source: str = "svd") -> Spectrum:
+    """The system's modes: ``svd`` of the spring factor (accurate) or the generated ``closed-form``."""
+    if source == "closed-form":
+        mod = system.module
+        return spectrum_from_closed_form(mod.omega2(**system.params), mod.mode_shapes(**system.params),
+                                         system.masses, int(mod.RIGID_MODES))
+    return spectrum(system.masses, system.spring_ends, system.stiffness)
+
+
+def check_stable(omega_max: float, h: float, method: str, limit: float = 2.0) -> None:
+    """Refuse a step at or beyond the stability edge ``ω_max·h < limit``."""
+    if omega_max * h >= limit:
+        raise RunRefused(f"--dt {h:g} is at or beyond {method}'s stability limit: ω_max = {omega_max:.6g}, "
+                         f"so dt must be < {limit:g}/ω_max = {limit / omega_max:.6g}; "
+                         f"use a smaller --dt or --method modal (exact, any dt)")
+
+
+def problem_for(system: System) -> Problem:
+    return Problem(system.acceleration_fn)
+
+
+def run_methods(system: System, x0: np.ndarray, v0: np.ndarray, h: float, steps: int,
+                methods: list[str], record_every: int = 1, spectrum_source: str = "svd",
+                progress: bool | None = None) -> dict[str, Run]:
+    """Run each named method from (x0, v0) on the grid t = i·h, i = 0..steps.
+
+    Parameters
+    ----------
+    x0, v0 : ndarray, shape (N,)
+    methods : list of str
+        Names from :func:`method_names`.
+
+    Returns
+    -------
+    dict of str to Run
+    """
+    linear = system.linear
+    spec = None
+    if linear:
+        spec = system_spectrum(system, spectrum_source)
+    out: dict[str, Run] = {}
+    idx = np.arange(0, steps + 1, record_every)
+    if idx[-1] != steps:
+        idx = np.append(idx, steps)
+    t = idx * h
+    for name in methods:
+        if name == EXACT:
+            if not linear:
+                raise RunRefused("--method modal: the exact modal solution applies only to linear scenes "
+                                 "(this scene has cubic springs); use " + ", ".join(INTEGRATORS))
+            t0 = time.perf_counter()
+            sol = ModalSolution.from_initial(system_spectrum(system, spectrum_source), x0, v0)
+            x, v = sol.at(t)
+            out[name] = Run(name, t, x, v, time.perf_counter() - t0, 0)
+            continue
+        integrator = INTEGRATORS[name]()
+        if spec is not None:
+            check_stable(spec.omega_max, h, name, getattr(integrator, "stability_limit", 2.0))
+        bar = Progress(steps, name, enabled=progress if progress is not None else None)
+        if not (steps * system.n > 2_000_000):
+            bar.enabled = False
+        t0 = time.perf_counter()
+        traj = integrate(integrator, problem_for(system), x0, v0, h, steps, record_every, progress=bar)
+        out[name] = Run(name, traj.t, traj.x[..., 0], traj.v[..., 0], time.perf_counter() - t0,
+                        traj.force_evals)
+    return out
+
+
+def compare(system: System, runs: dict[str, Run]) -> dict:
+    """Largest differences from the exact run, energy drift and momentum change of every run."""
+    summary: dict = {"methods": {}}
+    exact = runs.get(EXACT)
+    for name, run in runs.items():
+        e = system.energy(run.x.T, run.v.T)
+        p = system.momentum(run.v.T)
+        rec = {
+            "seconds": run.seconds,
+            "force_evals": run.force_evals,
+            "energy_drift": float(np.max(np.abs(e - e[0]))),
+            "energy_drift_relative": float(np.max(np.abs(e - e[0])) / max(abs(e[0]), 1e-300)),
+            "momentum_change": float(np.max(np.abs(p - p[0]))),
+        }
+        if exact is not None and name != EXACT:
+            rec["max_position_difference"] = float(np.max(np.abs(run.x - exact.x)))
+            rec["max_velocity_difference"] = float(np.max(np.abs(run.v - exact.v)))
+        summary["methods"][name] = rec
+    return summary
+
+
+def write_npz(path: Path, runs: dict[str, Run]) -> None:
+    """NPZ with ``t`` (S,) and ``x_<method>``, ``v_<method>`` (S, N), written atomically."""
+    arrays = {"t": next(iter(runs.values())).t}
+    for name, run in runs.items():
+        arrays[f"x_{name}"] = run.x
+        arrays[f"v_{name}"] = run.v
+    with atomic_path(path, suffix=".npz") as tmp:
+        with open(tmp, "wb") as fh:
+            np.savez(fh, **arrays)
+
+
+def write_figures(out: Path, scene_name: str, names, system: System, runs: dict[str, Run]) -> list[Path]:
+    """Positions, velocities, differences from exact, and energy; returns the paths written."""
+    t = next(iter(runs.values())).t
+    paths = []
+    fig = plots.trajectories(t, {m: r.x for m, r in runs.items()}, names, "position x", "m",
+                             f"{scene_name}: positions (" + " vs ".join(runs) + ")")
+    paths.append(out / f"{scene_name}-positions.png")
+    plots.save(fig, paths[-1])
+    fig = plots.trajectories(t, {m: r.v for m, r in runs.items()}, names, "velocity v", "m/s",
+                             f"{scene_name}: velocities (" + " vs ".join(runs) + ")")
+    paths.append(out / f"{scene_name}-velocities.png")
+    plots.save(fig, paths[-1])
+    if EXACT in runs:
+        for name, run in runs.items():
+            if name == EXACT:
+                continue
+            fig = plots.differences(t, run.x - runs[EXACT].x, run.v - runs[EXACT].v, names, name)
+            paths.append(out / f"{scene_name}-{name}-minus-exact.png")
+            plots.save(fig, paths[-1])
+    energies = {m: system.energy(r.x.T, r.v.T) for m, r in runs.items()}
+    e0 = float(next(iter(energies.values()))[0])
+    fig = plots.energy(t, energies, e0)
+    paths.append(out / f"{scene_name}-energy.png")
+    plots.save(fig, paths[-1])
+    return paths
