@@ -54,6 +54,31 @@ def _matrix(mat: sp.Matrix) -> str:
     return "numpy.array([\n        " + ",\n        ".join(rows) + ",\n    ], dtype=float)"
 
 
+def forcing_harmonics(model: Model):
+    """Constant part and harmonics of every external force, or None if any is not harmonic.
+
+    Returns ``(const, omegas, cos_amp, sin_amp)`` with ``const`` a list of N
+    expressions and ``cos_amp``/``sin_amp`` lists (one per frequency) of N expressions.
+    """
+    from .forcing import decompose
+
+    n = model.scene.n
+    const = [sp.Integer(0)] * n
+    table: dict = {}
+    for on, f, _ in model.forces:
+        parts = decompose(f, model.t)
+        if parts is None:
+            return None
+        c, harmonics = parts
+        const[on] += c
+        for h in harmonics:
+            row = table.setdefault(h.omega, ([sp.Integer(0)] * n, [sp.Integer(0)] * n))
+            row[0][on] += h.cos_amp
+            row[1][on] += h.sin_amp
+    freqs = sorted(table, key=sp.default_sort_key)
+    return const, freqs, [table[f][0] for f in freqs], [table[f][1] for f in freqs]
+
+
 def render_module(model: Model, modes: ModeSet, *, bundled: bool = True) -> str:
     """The generated module's source for a ``[masses]``/``[[springs]]`` scene.
 
@@ -221,6 +246,36 @@ def render_module(model: Model, modes: ModeSet, *, bundled: bool = True) -> str:
             if ext[i] != 0:
                 w(f"    out[{i}] = {_p(ext[i] / model.masses[i])}")
         w("    return out")
+    if model.g is not None:
+        w("")
+        w("")
+        w(f"def gravity_forces({sig}):")
+        w('    """Constant gravity force m_i*g on each mass (+x direction), shape (N,)."""')
+        w(f"    return {_array([_p(f) for f in model.gravity_force])}")
+    if model.forces:
+        harmonic = forcing_harmonics(model)
+        w("")
+        w(f"FORCING_HARMONIC = {harmonic is not None!r}")
+        if harmonic is not None:
+            const, freqs, cos_amp, sin_amp = harmonic
+            w("")
+            w("")
+            w(f"def forcing_harmonics({sig}):")
+            w('    """External forces as F(t) = const + sum_h cos_amp[h] cos(omega[h] t) + sin_amp[h] sin(omega[h] t).')
+            w("")
+            w("    Returns")
+            w("    -------")
+            w("    omega : ndarray, shape (H,)")
+            w("    cos_amp, sin_amp : ndarray, shape (H, N)")
+            w("    const : ndarray, shape (N,)")
+            w('    """')
+            w(f"    omega = {_array([_p(f) for f in freqs])}")
+            w("    cos_amp = numpy.array([" + ", ".join(_array([_p(c) for c in row]) for row in cos_amp)
+              + "]).reshape(len(omega), N)")
+            w("    sin_amp = numpy.array([" + ", ".join(_array([_p(c) for c in row]) for row in sin_amp)
+              + "]).reshape(len(omega), N)")
+            w(f"    const = {_array([_p(c) for c in const])}")
+            w("    return omega, cos_amp, sin_amp, const")
     w("")
     w("")
     w(f"def energy(x, v{kw}):")

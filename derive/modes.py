@@ -148,6 +148,19 @@ def _cofactor_vector(A: sp.Matrix) -> list[sp.Expr] | None:
     return None
 
 
+def _normalise_mod(vec: list[sp.Expr], fac: sp.Expr, lam: sp.Symbol) -> list[sp.Expr]:
+    """Divide by the first non-zero component modulo the factor: components become
+    polynomials of degree < deg(fac) in λ with rational coefficients (short and readable)."""
+    vec = [sp.rem(sp.expand(c), fac, lam) for c in vec]
+    pivot = next(c for c in vec if c != 0)
+    inv = sp.invert(pivot, fac, lam)
+    out = []
+    for c in vec:
+        r = sp.Poly(sp.rem(sp.expand(c * inv), fac, lam), lam)
+        out.append(sp.Add(*(sp.factor(co) * lam**k for (k,), co in r.terms())))
+    return out
+
+
 def _normalise(vec: list[sp.Expr]) -> tuple[sp.Expr, ...]:
     """Scale so that the first non-zero component is 1, keeping expressions small."""
     vec = [sp.radsimp(sp.cancel(c)) if c.has(sp.Pow) else sp.cancel(c) for c in vec]
@@ -173,7 +186,7 @@ def _solve_block(model: Model, B: sp.Matrix, lam: sp.Symbol, n_rigid_in_block: i
             continue
         if fpoly.degree() > max_radical_degree:
             raise BudgetExceeded  # no readable closed form: numeric fallback
-        roots = sp.roots(fpoly, lam, multiple=True)
+        roots = _cubic_real_roots(fpoly) if fpoly.degree() == 3 else sp.roots(fpoly, lam, multiple=True)
         if len(roots) != fpoly.degree():
             raise BudgetExceeded
         for root in roots:
@@ -182,8 +195,12 @@ def _solve_block(model: Model, B: sp.Matrix, lam: sp.Symbol, n_rigid_in_block: i
                 vec = _cofactor_vector(A)
                 if vec is None:
                     raise BudgetExceeded
-                # reduce modulo the factor before substituting: components become low degree in λ
-                vec = [sp.rem(sp.expand(c), fac, lam) if fpoly.degree() > 1 else c for c in vec]
+                if fpoly.degree() > 1:
+                    vec = _normalise_mod(vec, fac, lam)
+                    phys = [tuple(sp.collect(sp.expand(c.subs(lam, root)), root) if c.has(lam) else c
+                                  for c in B * sp.Matrix(vec))]
+                    modes.append(Mode(root, mult, tuple(phys)))
+                    continue
                 vec = [c.subs(lam, root) for c in vec]
                 shapes = [vec]
             else:
@@ -196,8 +213,25 @@ def _solve_block(model: Model, B: sp.Matrix, lam: sp.Symbol, n_rigid_in_block: i
     return modes
 
 
+def _cubic_real_roots(poly: sp.Poly) -> list[sp.Expr]:
+    """The three real roots of a cubic in Viète's trigonometric form (no complex radicals).
+
+    For ``a λ³ + b λ² + c λ + d`` with depressed form ``t³ + p t + q`` (p < 0 when all
+    three roots are real, as for a symmetric positive pencil)::
+
+        λ_k = -b/(3a) + 2 sqrt(-p/3) cos(acos(3q/(2p) sqrt(-3/p))/3 - 2πk/3),  k = 0, 1, 2
+    """
+    a, b, c, d = poly.all_coeffs()
+    p = sp.cancel((3 * a * c - b**2) / (3 * a**2))
+    q = sp.cancel((2 * b**3 - 9 * a * b * c + 27 * a**2 * d) / (27 * a**3))
+    shift = sp.cancel(-b / (3 * a))
+    r = 2 * sp.sqrt(-p / 3)
+    phi = sp.acos(3 * q / (2 * p) * sp.sqrt(-3 / p)) / 3
+    return [shift + r * sp.cos(phi - 2 * sp.pi * k / 3) for k in range(3)]
+
+
 def closed_form_modes(model: Model, budget: float | None = DEFAULT_BUDGET,
-                      max_radical_degree: int = 4) -> ModeSet:
+                      max_radical_degree: int = 3) -> ModeSet:
     """Eigenvalues ω² and shapes of ``K φ = ω² M φ`` for a (small) scene.
 
     Parameters

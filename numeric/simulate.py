@@ -10,6 +10,8 @@ import numpy as np
 
 from . import plots
 from .driver import Progress, integrate
+from .effects import EffectSplitting
+from .linear_exact import AugmentedLinear
 from .errors import RunRefused
 from .files import atomic_path
 from .integrators import INTEGRATORS
@@ -78,6 +80,7 @@ def run_methods(system: System, x0: np.ndarray, v0: np.ndarray, h: float, steps:
     spec = None
     if linear:
         spec = system_spectrum(system, spectrum_source)
+    plain = not (system.damped or system.forced)
     out: dict[str, Run] = {}
     idx = np.arange(0, steps + 1, record_every)
     if idx[-1] != steps:
@@ -85,15 +88,22 @@ def run_methods(system: System, x0: np.ndarray, v0: np.ndarray, h: float, steps:
     t = idx * h
     for name in methods:
         if name == EXACT:
-            if not linear:
-                raise RunRefused("--method modal: the exact modal solution applies only to linear scenes "
-                                 "(this scene has cubic springs); use " + ", ".join(INTEGRATORS))
+            if not system.exact_available:
+                why = ("this scene has cubic springs" if not linear
+                       else "its external forces are not constant + harmonic")
+                raise RunRefused(f"--method modal: no exact solution applies ({why}); use "
+                                 + ", ".join(INTEGRATORS))
             t0 = time.perf_counter()
-            sol = ModalSolution.from_initial(system_spectrum(system, spectrum_source), x0, v0)
-            x, v = sol.at(t)
+            if plain and "gravity" not in system.effects:
+                sol = ModalSolution.from_initial(system_spectrum(system, spectrum_source), x0, v0)
+                x, v = sol.at(t)
+            else:
+                x, v = AugmentedLinear.from_system(system).solve(x0, v0, t, h * record_every)
             out[name] = Run(name, t, x, v, time.perf_counter() - t0, 0)
             continue
         integrator = INTEGRATORS[name]()
+        if not plain:
+            integrator = EffectSplitting(integrator, system.damping_rate_matrix(), system.external_fn)
         if spec is not None:
             check_stable(spec.omega_max, h, name, getattr(integrator, "stability_limit", 2.0))
         bar = Progress(steps, name, enabled=progress if progress is not None else None)
@@ -101,7 +111,8 @@ def run_methods(system: System, x0: np.ndarray, v0: np.ndarray, h: float, steps:
             bar.enabled = False
         t0 = time.perf_counter()
         traj = integrate(integrator, problem_for(system), x0, v0, h, steps, record_every, progress=bar)
-        out[name] = Run(name, traj.t, traj.x[..., 0], traj.v[..., 0], time.perf_counter() - t0,
+        n = system.n
+        out[name] = Run(name, traj.t, traj.x[:, :n, 0], traj.v[:, :n, 0], time.perf_counter() - t0,
                         traj.force_evals)
     return out
 

@@ -60,6 +60,33 @@ class System:
         mod, p = self.module, self.params
         return lambda x: mod.acceleration(x, **p)
 
+    @property
+    def damped(self) -> bool:
+        return hasattr(self.module, "damping_matrix")
+
+    @property
+    def forced(self) -> bool:
+        return hasattr(self.module, "external_acceleration")
+
+    def damping_rate_matrix(self) -> np.ndarray | None:
+        """``-M⁻¹C``, shape (N, N); None without dampers."""
+        if not self.damped:
+            return None
+        return -np.asarray(self.module.damping_matrix(**self.params), dtype=float) / self.masses[:, None]
+
+    @property
+    def external_fn(self) -> Callable[[float], np.ndarray] | None:
+        """``a_ext(t)`` shape (N,); None without external forces."""
+        if not self.forced:
+            return None
+        mod, p = self.module, self.params
+        return lambda t: mod.external_acceleration(t, **p)
+
+    @property
+    def exact_available(self) -> bool:
+        """Whether an exact solution exists: linear, and forces (if any) constant + harmonic."""
+        return self.linear and (not self.forced or bool(getattr(self.module, "FORCING_HARMONIC", False)))
+
     def energy(self, x: np.ndarray, v: np.ndarray) -> np.ndarray:
         """Total energy; x, v shape (N, ...) -> (...)."""
         return self.module.energy(x, v, **self.params)

@@ -1,0 +1,65 @@
+"""Split an external force f(t) into constant and harmonic parts, where it has that form.
+
+``f(t) = A + Σ_h (B_h cos(Ω_h t) + C_h sin(Ω_h t))`` with A, B, C, Ω free of t
+is what the exact linear solution can integrate in closed form (steady state
+plus transient). Anything else (``exp(-t)``, ``cos(t**2)``, ``t*cos(t)``) is
+reported as not harmonic, and only the integrators apply.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import sympy as sp
+
+
+@dataclass(frozen=True)
+class Harmonic:
+    """``cos_amp·cos(Ω t) + sin_amp·sin(Ω t)``."""
+
+    omega: sp.Expr
+    cos_amp: sp.Expr
+    sin_amp: sp.Expr
+
+
+def _linear_in_t(arg: sp.Expr, t: sp.Symbol) -> tuple[sp.Expr, sp.Expr] | None:
+    poly = sp.Poly(sp.expand(arg), t) if arg.has(t) else None
+    if poly is None or poly.degree() != 1:
+        return None
+    a, b = poly.all_coeffs()
+    if a.has(t) or b.has(t):
+        return None
+    return a, b
+
+
+def decompose(expr: sp.Expr, t: sp.Symbol) -> tuple[sp.Expr, list[Harmonic]] | None:
+    """Constant part and harmonics of ``expr``, or None if it is not of that form.
+
+    Harmonics with the same frequency are merged; frequencies are kept as
+    expressions (their sign normalised so that Ω is written as given).
+    """
+    const = sp.Integer(0)
+    by_freq: dict[sp.Expr, list[sp.Expr]] = {}
+    for term in sp.Add.make_args(sp.expand(expr)):
+        if not term.has(t):
+            const += term
+            continue
+        coeff, rest = term.as_independent(t, as_Add=False)
+        if not isinstance(rest, (sp.cos, sp.sin)):
+            return None
+        lin = _linear_in_t(rest.args[0], t)
+        if lin is None:
+            return None
+        a, b = lin
+        # cos(a t + b) = cos b cos(at) - sin b sin(at);  sin(a t + b) = sin b cos(at) + cos b sin(at)
+        if isinstance(rest, sp.cos):
+            cc, ss = coeff * sp.cos(b), -coeff * sp.sin(b)
+        else:
+            cc, ss = coeff * sp.sin(b), coeff * sp.cos(b)
+        if a.could_extract_minus_sign():
+            a, ss = -a, -ss
+        amps = by_freq.setdefault(a, [sp.Integer(0), sp.Integer(0)])
+        amps[0] += cc
+        amps[1] += ss
+    harmonics = [Harmonic(w, c, s) for w, (c, s) in sorted(by_freq.items(), key=lambda kv: sp.default_sort_key(kv[0]))]
+    return const, harmonics
