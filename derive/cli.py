@@ -102,7 +102,7 @@ def cmd_modes(args) -> int:
 def _simulate(scene, args, out: Path, quiet_json: bool) -> dict:
     import numpy as np
 
-    from numeric.simulate import compare, method_names, run_methods, write_figures, write_npz
+    from numeric.simulate import compare, method_names, run_methods, stream_methods, write_figures, write_npz
     from numeric.system import System
 
     from .pipeline import load_module
@@ -113,19 +113,24 @@ def _simulate(scene, args, out: Path, quiet_json: bool) -> dict:
     dt = args.dt if args.dt is not None else scene.dt
     steps = args.steps if args.steps is not None else scene.steps
     record_every = args.record_every or scene.record_every
-    methods = args.method or (method_names()[:2] if system.linear else ["verlet"])
+    methods = args.method or (method_names()[:2] if system.exact_available and not
+                              (system.chain and system.n > 4000) else ["verlet"])
     unknown = [m for m in methods if m not in method_names()]
     if unknown:
         raise SceneError(None, "--method", f"{unknown[0]!r} is not a method; accepted: {', '.join(method_names())}")
     check_memory(scene.file, scene.n, steps, record_every, methods=len(methods))
-    runs = run_methods(system, scene.x0, scene.v0, dt, steps, methods, record_every,
-                       spectrum_source=args.spectrum)
-    summary = compare(system, runs)
     out.mkdir(parents=True, exist_ok=True)
-    npz = out / f"{scene.name}.npz"
-    write_npz(npz, runs)
-    figures = [] if args.no_figures else write_figures(out, scene.name, scene.mass_names or
-                                                       [f"m{i}" for i in range(scene.n)], system, runs)
+    if system.chain:
+        summary = stream_methods(system, scene.x0, scene.v0, dt, steps, methods, record_every, out,
+                                 scene.name, figures=not args.no_figures)
+        npz, figures = Path(summary["npz"]), [Path(p) for p in summary["figures"]]
+    else:
+        runs = run_methods(system, scene.x0, scene.v0, dt, steps, methods, record_every,
+                           spectrum_source=args.spectrum)
+        summary = compare(system, runs)
+        npz = out / f"{scene.name}.npz"
+        write_npz(npz, runs)
+        figures = [] if args.no_figures else write_figures(out, scene.name, scene.mass_names, system, runs)
     summary.update({"scene": scene.name, "module": origin, "dt": dt, "steps": steps,
                     "t_end": steps * dt, "npz": str(npz), "figures": [str(p) for p in figures]})
     if not quiet_json:
@@ -251,6 +256,9 @@ def main(argv: list[str] | None = None) -> int:
             sys.stderr.write(f"springchain: error: {exc}\n")
             return EXIT_USAGE
         raise
+    except BrokenPipeError:  # output piped into e.g. `head`
+        sys.stderr.close()
+        return 0
     except KeyboardInterrupt:
         sys.stderr.write("springchain: interrupted\n")
         return 130

@@ -18,7 +18,7 @@ from typing import Callable
 import numpy as np
 import scipy.linalg
 
-from .integrators.base import Integrator, Problem, State
+from .integrators.base import Integrator, Problem, State  # noqa: F401
 
 
 class EffectSplitting(Integrator):
@@ -69,24 +69,30 @@ class EffectSplitting(Integrator):
             self._flow[h] = scipy.linalg.expm(self.damping * (0.5 * h))
         return self._flow[h]
 
-    def _damp(self, state: State, h: float) -> State:
-        E = self._half_flow(h)
-        v = state.v.copy()
-        n = E.shape[0]
-        v[:n] = E @ v[:n]
-        return state.replace(v=v)
+    def kernel(self, problem: Problem, h: float):
+        """Strang splitting: half damping flow, the inner step on the (time-augmented) problem,
+        time row reset to ``(i+1)·h``, half damping flow."""
+        inner = self.inner.kernel(self._augment(problem), h)
+        E = self._half_flow(h) if self.damping is not None else None
+        forced = self.external is not None
 
-    def step(self, problem: Problem, state: State, h: float) -> State:
-        if self.damping is not None:
-            state = self._damp(state, h)
-        state = self.inner.step(self._augment(problem), state, h)
-        if self.external is not None:
-            x = state.x.copy()
-            x[-1] = state.i * h  # t = i·h exactly
-            state = state.replace(x=x)
-        if self.damping is not None:
-            state = self._damp(state, h)
-        return state
+        def damp(v):
+            v = v.copy()
+            v[: E.shape[0]] = E @ v[: E.shape[0]]
+            return v
+
+        def step(x, v, a, i):
+            if E is not None:
+                v = damp(v)
+            x, v, a = inner(x, v, a, i)
+            if forced:
+                x = x.copy()
+                x[-1] = (i + 1) * h  # t = i·h exactly
+            if E is not None:
+                v = damp(v)
+            return x, v, a
+
+        return step
 
 
 def strip(x: np.ndarray, n: int) -> np.ndarray:

@@ -81,3 +81,38 @@ def save(fig, path) -> None:
     with atomic_path(path) as tmp:
         fig.savefig(tmp, dpi=110, format=str(path).rsplit(".", 1)[-1])
     plt.close(fig)
+
+
+def profiles(snapshots: dict[float, np.ndarray], quantity: str = "displacement x", unit: str = "m"):
+    """Chain profiles x(i) at a few times. snapshots: time -> ndarray, shape (N,)."""
+    fig, ax = plt.subplots(figsize=(9, 4.5), constrained_layout=True)
+    for t, y in snapshots.items():
+        ax.plot(np.arange(y.shape[0]), y, lw=1, label=f"t = {t:g} s")
+    ax.set_xlabel("mass index i")
+    ax.set_ylabel(f"{quantity} [{unit}]")
+    ax.set_title("Chain profile")
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=8)
+    return fig
+
+
+def frequency_response(drive: np.ndarray, amplitude: np.ndarray, names, natural: np.ndarray,
+                       driven: np.ndarray | None = None):
+    """Steady-state amplitude |X_j(Ω)| per mass against drive frequency Ω (log amplitude).
+
+    amplitude : ndarray, shape (W, N); natural : undamped ω_j (vertical lines).
+    """
+    fig, ax = plt.subplots(figsize=(9, 4.8), constrained_layout=True)
+    for j, name in enumerate(names):
+        ax.semilogy(drive, amplitude[:, j], lw=1.2, label=name)
+    for k, w in enumerate(natural):
+        ax.axvline(w, color="0.6", ls=":", lw=1, label="undamped ω_j" if k == 0 else None)
+    if driven is not None:
+        for k, w in enumerate(driven):
+            ax.axvline(w, color="k", ls="--", lw=1, label="scene's drive Ω" if k == 0 else None)
+    ax.set_xlabel("drive frequency Ω [rad/s]")
+    ax.set_ylabel("steady-state amplitude |X(Ω)| [m]")
+    ax.set_title("Frequency response (K − Ω²M + iΩC)⁻¹ F")
+    ax.grid(alpha=0.3, which="both")
+    ax.legend(fontsize=8)
+    return fig

@@ -35,9 +35,17 @@ class System:
     def from_module(cls, module: ModuleType, params: dict[str, float] | None = None) -> "System":
         values = dict(module.DEFAULTS)
         values.update(params or {})
-        ends = np.asarray(module.SPRING_ENDS, dtype=np.intp).reshape(-1, 2)
+        if getattr(module, "CHAIN", False):
+            ends = np.asarray(module.spring_ends(), dtype=np.intp).reshape(-1, 2)
+        else:
+            ends = np.asarray(module.SPRING_ENDS, dtype=np.intp).reshape(-1, 2)
         return cls(module, values, np.asarray(module.masses(**values), dtype=float),
                    ends, np.asarray(module.spring_constants(**values), dtype=float))
+
+    @property
+    def chain(self) -> bool:
+        """A [chain] scene: stencil acceleration, no dense matrices for large n."""
+        return bool(getattr(self.module, "CHAIN", False))
 
     @property
     def n(self) -> int:
@@ -57,7 +65,10 @@ class System:
 
     @property
     def acceleration_fn(self) -> Callable[[np.ndarray], np.ndarray]:
+        """a(x) with everything that does not depend on x computed once."""
         mod, p = self.module, self.params
+        if hasattr(mod, "make_acceleration"):
+            return mod.make_acceleration(**p, n=self.n)
         return lambda x: mod.acceleration(x, **p)
 
     @property

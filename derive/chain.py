@@ -1,0 +1,344 @@
+"""Long chains (``[chain]`` scenes): derive one element, generate a stencil.
+
+The Lagrangian of a chain is a sum of identical-shaped elements indexed by i:
+``T_i = ½ m(i) v_i²`` and ``V_i = ½ k(i) (x_{i+1} − x_i)² [+ ¼ k3(i) (x_{i+1} − x_i)⁴]``.
+The Euler–Lagrange equation of an interior mass involves only elements i−1
+and i, so it is derived once on that template; the ends (free, wall, ring)
+add one boundary row each. The symbolic work and the generated source do not
+grow with n: the module applies the template with array slices.
+
+Uniform chains have known closed forms (``m`` and ``k`` free of i)::
+
+    free–free  ω_j² = (4k/m) sin²(jπ/(2n)),          j = 0 … n−1,  shape cos(jπ(i+½)/n)
+    wall–wall  ω_j² = (4k/m) sin²(jπ/(2(n+1))),      j = 1 … n,    shape sin(jπ(i+1)/(n+1))
+    wall–free  ω_j² = (4k/m) sin²((2j−1)π/(2(2n+1))), j = 1 … n,   shape sin((2j−1)π(i+1)/(2n+1))
+    ring       ω_j² = (4k/m) sin²(jπ/n),             j = 0 … n−1,  shapes cos/sin(2πj i/n)
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import sympy as sp
+
+from .codegen import _p, header, regenerate_command
+from .model import parameter_symbols
+from .scene import Scene
+
+
+@dataclass(frozen=True)
+class ChainModes:
+    """Closed-form spectrum of a uniform chain (None for a non-uniform one)."""
+
+    omega2: sp.Expr | None  # in terms of the mode index j and n
+    shape: sp.Expr | None  # in terms of i, j, n
+    j_range: tuple[int, str] | None  # (first j, last j as text)
+    boundary: str
+    notes: tuple[str, ...]
+    closed_form: bool = True
+
+
+class ChainModel:
+    """Template derivation of a ``[chain]`` scene."""
+
+    def __init__(self, scene: Scene):
+        if scene.chain is None:
+            raise ValueError("not a [chain] scene")
+        self.scene = scene
+        self.chain = scene.chain
+        self.params = parameter_symbols(scene)
+        self.i = sp.Symbol("i", integer=True, nonnegative=True)
+        self.j = sp.Symbol("j", integer=True, nonnegative=True)
+        self.n = sp.Symbol("n", integer=True, positive=True)
+        sym = {**self.params, "i": self.i}
+        self.mass = self.chain.mass.to_sympy(sym)
+        self.k = self.chain.k.to_sympy(sym)
+        self.k3 = None if self.chain.k3 is None else self.chain.k3.to_sympy(sym)
+        # template coordinates x_{i-1}, x_i, x_{i+1}
+        self.xm, self.x0, self.xp = sp.symbols("x_im1 x_i x_ip1", real=True)
+        self.v0 = sp.Symbol("v_i", real=True)
+
+    def element_potential(self, xa, xb, idx) -> sp.Expr:
+        """V of the spring between masses idx and idx+1 (extension xb − xa)."""
+        d = xb - xa
+        v = self.k.subs(self.i, idx) * d**2 / 2
+        if self.k3 is not None:
+            v += self.k3.subs(self.i, idx) * d**4 / 4
+        return v
+
+    def interior_equation(self) -> sp.Expr:
+        """Force on mass i from elements i−1 and i: ``−∂(V_{i−1} + V_i)/∂x_i``."""
+        V = self.element_potential(self.xm, self.x0, self.i - 1) + self.element_potential(self.x0, self.xp, self.i)
+        return -sp.diff(V, self.x0)
+
+    @property
+    def effects(self) -> tuple[str, ...]:
+        return tuple(sorted({"spring", *(["cubic"] if self.k3 is not None else [])}))
+
+    @property
+    def rigid_modes(self) -> int:
+        return 1 if (self.chain.left != "wall" and self.chain.right != "wall") else 0
+
+
+def chain_modes(model: ChainModel) -> ChainModes:
+    ch = model.chain
+    left, right = ch.left, ch.right
+    if not ch.uniform:
+        return ChainModes(None, None, None, f"{left}-{right}",
+                          ("non-uniform chain: no closed form; ω² from the tridiagonal eigen-problem "
+                           "(scipy.linalg.eigh_tridiagonal) in the generated module",), closed_form=False)
+    k, m, i, j, n = model.k, model.mass, model.i, model.j, model.n
+    c = 4 * k / m
+    if left == "ring":
+        return ChainModes(c * sp.sin(sp.pi * j / n) ** 2, sp.cos(2 * sp.pi * j * i / n), (0, "n - 1"),
+                          "ring", ("each 0 < j < n/2 appears twice (cos and sin shapes)",))
+    if left == "free" and right == "free":
+        return ChainModes(c * sp.sin(sp.pi * j / (2 * n)) ** 2, sp.cos(sp.pi * j * (i + sp.Rational(1, 2)) / n),
+                          (0, "n - 1"), "free-free", ())
+    if left == "wall" and right == "wall":
+        return ChainModes(c * sp.sin(sp.pi * j / (2 * (n + 1))) ** 2, sp.sin(sp.pi * j * (i + 1) / (n + 1)),
+                          (1, "n"), "wall-wall", ())
+    # one wall: index from the wall end
+    shape = sp.sin((2 * j - 1) * sp.pi * (i + 1) / (2 * n + 1))
+    note = () if left == "wall" else ("wall on the right: i counts from the right end",)
+    return ChainModes(c * sp.sin((2 * j - 1) * sp.pi / (2 * (2 * n + 1))) ** 2, shape, (1, "n"),
+                      f"{left}-{right}", note)
+
+
+def chain_report(model: ChainModel, modes: ChainModes) -> tuple[str, dict]:
+    """Text and JSON description of a chain's derivation and spectrum."""
+    sc, ch = model.scene, model.chain
+    force = sp.factor_terms(model.interior_equation())
+    lines = [f"Scene {sc.name!r} ({sc.file}): {sc.description}".rstrip(": "),
+             f"Chain of n = {ch.n} masses; left end {ch.left}, right end {ch.right}; "
+             + ("uniform" if ch.uniform else "index-dependent"),
+             "Parameters: " + ", ".join(f"{k} = {sc.parameters[k]:g}" for k in sorted(sc.parameters)),
+             "",
+             f"Element i:  T_i = {sp.sstr(model.mass * model.v0**2 / 2)}",
+             f"            V_i = {sp.sstr(model.element_potential(model.x0, model.xp, model.i))}",
+             "Interior equation (Euler-Lagrange on elements i-1 and i):",
+             f"    {sp.sstr(model.mass)}*a_i = {sp.sstr(force)}"]
+    if modes.omega2 is not None:
+        lo, hi = modes.j_range
+        lines += ["", f"Normal modes ({modes.boundary}, closed form), j = {lo} ... {hi}:",
+                  f"    ω_j² = {sp.sstr(modes.omega2)}",
+                  f"    shape_j(i) = {sp.sstr(modes.shape)}"]
+    lines += [f"    note: {note}" for note in modes.notes]
+    if model.k3 is not None:
+        lines.append("    note: cubic springs: modes of the linearization; no exact solution")
+    data = {"scene": sc.name, "parameters": {k: sc.parameters[k] for k in sorted(sc.parameters)},
+            "n": ch.n, "left": ch.left, "right": ch.right, "uniform": ch.uniform,
+            "omega2": None if modes.omega2 is None else sp.sstr(modes.omega2),
+            "shape": None if modes.shape is None else sp.sstr(modes.shape),
+            "j_range": None if modes.j_range is None else list(modes.j_range),
+            "notes": list(modes.notes)}
+    return "\n".join(lines) + "\n", data
+
+
+def _index_expr(expr: sp.Expr, model: ChainModel, at: str) -> str:
+    """Print an expression of i with i replaced by the NumPy name ``at``."""
+    return _p(expr.subs(model.i, sp.Symbol(at)))
+
+
+def render_chain_module(model: ChainModel, *, bundled: bool = True) -> str:
+    """Stencil module for a chain; its size does not depend on n."""
+    sc, ch = model.scene, model.chain
+    params = list(model.params)
+    sig = ", ".join(params)
+    kw = ", ".join(f"{p}={p}" for p in params)
+    w_lines: list[str] = []
+    w = w_lines.append
+    w(header(sc.name, sc.sha256, regenerate_command(sc.file, bundled)).rstrip("\n"))
+    w(f'"""Stencil equations of motion of the chain scene {sc.name!r} (n = {ch.n}).')
+    w("")
+    w("Coordinates are displacements of masses 0 … n−1 from the springs' rest configuration;")
+    w("arrays of states have shape (n, ...). Every function takes the parameters PARAMETERS as")
+    w("keyword arguments and works for any n (default N). Nothing here is n×n except")
+    w("stiffness_matrix()/mass_matrix(), which refuse large n.")
+    w('"""')
+    w("")
+    w("import numpy")
+    w("import scipy.linalg")
+    w("")
+    w(f"SCENE = {sc.name!r}")
+    w(f"SCENE_SHA256 = {sc.sha256!r}")
+    w(f"PARAMETERS = {tuple(params)!r}")
+    w(f"DEFAULTS = {{{', '.join(f'{p!r}: {sc.parameters[p]!r}' for p in params)}}}")
+    w(f"N = {ch.n}")
+    w("CHAIN = True")
+    w(f"LEFT = {ch.left!r}")
+    w(f"RIGHT = {ch.right!r}")
+    w(f"UNIFORM = {ch.uniform!r}")
+    w(f"EFFECTS = {model.effects!r}")
+    w(f"LINEAR = {model.k3 is None!r}")
+    w(f"RIGID_MODES = {model.rigid_modes}")
+    w("MAX_DENSE = 4000")
+    w("")
+    w("")
+    w(f"def masses({sig}, n=N):")
+    w('    """Masses m(i), shape (n,)."""')
+    w("    i = numpy.arange(n, dtype=float)")
+    w(f"    return numpy.broadcast_to(numpy.asarray({_index_expr(model.mass, model, 'i')}, dtype=float), (n,)).copy()")
+    w("")
+    w("")
+    w(f"def _k(i{', ' + sig if sig else ''}):")
+    w(f"    return numpy.asarray({_index_expr(model.k, model, 'i')}, dtype=float)")
+    if model.k3 is not None:
+        w("")
+        w("")
+        w(f"def _k3(i{', ' + sig if sig else ''}):")
+        w(f"    return numpy.asarray({_index_expr(model.k3, model, 'i')}, dtype=float)")
+    w("")
+    w("")
+    w("def spring_ends(n=N):")
+    w('    """Spring ends (mass indices, -1 = wall) in spring_constants() order, shape (S, 2)."""')
+    w("    i = numpy.arange(n - 1)")
+    w("    ends = [numpy.stack([i, i + 1], axis=1)]")
+    if ch.left == "wall":
+        w("    ends.insert(0, numpy.array([[-1, 0]]))")
+    if ch.right == "wall":
+        w("    ends.append(numpy.array([[n - 1, -1]]))")
+    if ch.left == "ring":
+        w("    ends.append(numpy.array([[n - 1, 0]]))")
+    w("    return numpy.concatenate(ends).astype(numpy.intp)")
+    w("")
+    w("")
+    w(f"def spring_constants({sig}, n=N):")
+    w('    """Stiffness of each spring in spring_ends() order, shape (S,)."""')
+    w("    i = numpy.arange(n - 1, dtype=float)")
+    w(f"    parts = [numpy.broadcast_to(_k(i, {kw}), (n - 1,))]")
+    if ch.left == "wall":
+        w(f"    parts.insert(0, numpy.broadcast_to(_k(numpy.array([-1.0]), {kw}), (1,)))")
+    if ch.right in ("wall", "ring"):
+        w(f"    parts.append(numpy.broadcast_to(_k(numpy.array([n - 1.0]), {kw}), (1,)))")
+    w("    return numpy.concatenate(parts).astype(float)")
+    w("")
+    w("")
+    w(f"def make_acceleration({sig}, n=N):")
+    w('    """A function a(x) for this chain with coefficients precomputed; x shape (n, ...).')
+    w("")
+    w("    The stencil: the spring between i and i+1 pulls with s_i = k_i d_i [+ k3_i d_i³],")
+    w('    d_i = x_{i+1} − x_i; mass i feels s_i − s_{i−1}, walls and ring closure at the ends."""')
+    w("    i = numpy.arange(n - 1, dtype=float)")
+    w(f"    inv_m = 1.0 / masses({kw}, n=n)")
+    if ch.uniform:
+        w("    inv_m = float(inv_m[0])")
+        w(f"    k = float(_k(0.0, {kw}))")
+        if model.k3 is not None:
+            w(f"    k3 = float(_k3(0.0, {kw}))")
+    else:
+        w("    inv_m = inv_m.reshape((n,) + (1,))")
+        w(f"    k = numpy.broadcast_to(_k(i, {kw}), (n - 1,)).reshape(-1, 1)")
+        if model.k3 is not None:
+            w(f"    k3 = numpy.broadcast_to(_k3(i, {kw}), (n - 1,)).reshape(-1, 1)")
+    ends = []
+    if ch.left == "wall":
+        ends.append(("left", "-1.0"))
+    if ch.right in ("wall", "ring"):
+        ends.append(("right", "n - 1.0"))
+    for side, idx in ends:
+        w(f"    k_{side} = float(_k(numpy.array({idx}), {kw}))")
+        if model.k3 is not None:
+            w(f"    k3_{side} = float(_k3(numpy.array({idx}), {kw}))")
+    w("")
+    w("    def acceleration(x):")
+    w("        f = numpy.empty(numpy.shape(x))")
+    w("        d = x[1:] - x[:-1]")
+    w("        s = k * d" + (" + k3 * d**3" if model.k3 is not None else ""))
+    w("        f[:-1] = s")
+    w("        f[-1] = 0.0")
+    w("        f[1:] -= s")
+    if ch.left == "wall":
+        w("        f[0] -= k_left * x[0]" + (" + k3_left * x[0]**3" if model.k3 is not None else ""))
+    if ch.right == "wall":
+        w("        f[-1] -= k_right * x[-1]" + (" + k3_right * x[-1]**3" if model.k3 is not None else ""))
+    if ch.left == "ring":
+        w("        dr = x[0] - x[-1]")
+        w("        sr = k_right * dr" + (" + k3_right * dr**3" if model.k3 is not None else ""))
+        w("        f[-1] += sr")
+        w("        f[0] -= sr")
+    w("        f *= inv_m")
+    w("        return f")
+    w("")
+    w("    return acceleration")
+    w("")
+    w("")
+    w(f"def acceleration(x, {sig}):")
+    w('    """Acceleration of the chain; x shape (n, ...) (n taken from x)."""')
+    w(f"    return make_acceleration({kw}, n=numpy.shape(x)[0])(x)")
+    w("")
+    w("")
+    w(f"def energy(x, v, {sig}):")
+    w('    """Total energy; x, v shape (n, ...) -> (...)."""')
+    w("    n = numpy.shape(x)[0]")
+    w("    extra = (1,) * (numpy.ndim(x) - 1)")
+    w(f"    m = masses({kw}, n=n).reshape((n,) + extra)")
+    w(f"    kk = spring_constants({kw}, n=n)")
+    w("    ends = spring_ends(n)")
+    w("    xa = numpy.where((ends[:, 0] >= 0).reshape((-1,) + extra), x[ends[:, 0]], 0.0)")
+    w("    xb = numpy.where((ends[:, 1] >= 0).reshape((-1,) + extra), x[ends[:, 1]], 0.0)")
+    w("    d = xb - xa")
+    w("    e = 0.5 * numpy.sum(m * v**2, axis=0) + 0.5 * numpy.sum(kk.reshape((-1,) + extra) * d**2, axis=0)")
+    if model.k3 is not None:
+        w("    i = numpy.arange(len(kk), dtype=float) - (1.0 if LEFT == 'wall' else 0.0)")
+        w(f"    k3 = numpy.broadcast_to(_k3(i, {kw}), kk.shape)")
+        w("    e = e + 0.25 * numpy.sum(k3.reshape((-1,) + extra) * d**4, axis=0)")
+    w("    return e")
+    w("")
+    w("")
+    w(f"def stiffness_bands({sig}, n=N):")
+    w('    """Diagonal (n,) and first off-diagonal (n-1,) of K (ring closure not included)."""')
+    w(f"    kk = spring_constants({kw}, n=n)")
+    w("    ends = spring_ends(n)")
+    w("    diag = numpy.zeros(n)")
+    w("    for col in (0, 1):")
+    w("        idx = ends[:, col]")
+    w("        numpy.add.at(diag, idx[idx >= 0], kk[idx >= 0])")
+    w("    inner = (ends[:, 0] >= 0) & (ends[:, 1] >= 0) & (numpy.abs(ends[:, 0] - ends[:, 1]) == 1)")
+    w("    off = numpy.zeros(n - 1)")
+    w("    off[numpy.minimum(ends[inner, 0], ends[inner, 1])] = -kk[inner]")
+    w("    return diag, off")
+    w("")
+    w("")
+    w(f"def stiffness_matrix({sig}, n=N):")
+    w('    """Dense K, shape (n, n); only for n <= MAX_DENSE."""')
+    w("    if n > MAX_DENSE:")
+    w("        raise ValueError(f'stiffness_matrix: n = {n} > MAX_DENSE = {MAX_DENSE}; use stiffness_bands()')")
+    w(f"    diag, off = stiffness_bands({kw}, n=n)")
+    w("    K = numpy.diag(diag) + numpy.diag(off, 1) + numpy.diag(off, -1)")
+    if ch.left == "ring":
+        w(f"    kr = spring_constants({kw}, n=n)[-1]")
+        w("    K[0, n - 1] -= kr")
+        w("    K[n - 1, 0] -= kr")
+    w("    return K")
+    w("")
+    w("")
+    w(f"def mass_matrix({sig}, n=N):")
+    w('    """Dense M, shape (n, n); only for n <= MAX_DENSE."""')
+    w("    if n > MAX_DENSE:")
+    w("        raise ValueError(f'mass_matrix: n = {n} > MAX_DENSE = {MAX_DENSE}')")
+    w(f"    return numpy.diag(masses({kw}, n=n))")
+    w("")
+    w("")
+    modes = chain_modes(model)
+    w(f"def omega2({sig}, n=N):")
+    if modes.omega2 is not None:
+        lo, _ = modes.j_range
+        w('    """Closed-form squared angular frequencies, ascending, shape (n,)."""')
+        w(f"    j = numpy.arange({lo}, n + {lo}, dtype=float)")
+        expr = modes.omega2.subs({model.j: sp.Symbol("j"), model.n: sp.Symbol("n")})
+        w(f"    return numpy.sort(numpy.broadcast_to({_p(expr)}, (n,)))")
+    elif ch.left == "ring":
+        w('    """Squared angular frequencies (non-uniform ring: dense, n <= MAX_DENSE), shape (n,)."""')
+        w(f"    w = scipy.linalg.eigh(stiffness_matrix({kw}, n=n), mass_matrix({kw}, n=n), eigvals_only=True)")
+        w("    w[:RIGID_MODES] = 0.0")
+        w("    return numpy.maximum(w, 0.0)")
+    else:
+        w('    """Squared angular frequencies from the tridiagonal D (no closed form), shape (n,)."""')
+        w(f"    m = masses({kw}, n=n)")
+        w(f"    diag, off = stiffness_bands({kw}, n=n)")
+        w("    r = 1.0 / numpy.sqrt(m)")
+        w("    w = scipy.linalg.eigh_tridiagonal(diag * r * r, off * r[:-1] * r[1:], eigvals_only=True)")
+        w("    w[:RIGID_MODES] = 0.0")
+        w("    return numpy.maximum(w, 0.0)")
+    return "\n".join(w_lines) + "\n"
