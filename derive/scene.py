@@ -3,12 +3,19 @@
 A scene is a TOML file (see README, "Scene format"). Every key is checked
 when the file is loaded; a bad scene raises :class:`~derive.errors.SceneError`
 whose one-line message names the file, the key, the bad value and what would
-be accepted. Expressions are parsed by :mod:`derive.expr` (an ``ast``
-whitelist), never evaluated as code. SymPy is not imported here.
+be accepted::
+
+    scene.toml: springs[0].stiffness: unknown key (did you mean 'k'?); accepted: between, k, k3
+
+Expressions are parsed by :mod:`derive.expr` (an ``ast`` whitelist), never
+evaluated as code, and checked at the scene's parameter values with a bound
+on their rounding error, so that e.g. a mass ``sin(pi)`` (1.2e-16 in floating
+point, exactly 0) is refused. SymPy is not imported here.
 """
 
 from __future__ import annotations
 
+import builtins
 import difflib
 import hashlib
 import keyword
@@ -19,15 +26,55 @@ from pathlib import Path
 
 import numpy as np
 
-from .errors import SceneError
-from .expr import CONSTANTS, FUNCTIONS, Expr, Num, parse_expression
+from .errors import SceneError, show
+from .expr import CONSTANTS, FUNCTIONS, Expr, Num, accepted_form, parse_expression
 
 WALL = -1
-#: Names a parameter or mass may not take: free variables, functions and
-#: the local names used inside generated code.
-RESERVED = frozenset({"t", "i", "n", "x", "v", "a", "np", "numpy", "wall", *FUNCTIONS, *CONSTANTS})
-#: Largest number of floats all recorded trajectories of one run may hold.
+
+#: Free variables of expressions and the state vectors of generated code.
+FREE_NAMES = frozenset({"t", "i", "n", "x", "v", "a"})
+#: Module names the generated code (or a reader of it) uses.
+MODULE_NAMES = frozenset({"numpy", "np", "scipy", "math", "sympy", "sp"})
+#: Names the generated modules bind or read besides the scene's own names
+#: (module constants, functions, locals). A parameter becomes a keyword
+#: argument of those functions, so it must not shadow any of them. Helpers in
+#: generated code whose name starts with "_" need no entry: scene names never
+#: start with "_". ``tests/test_scene_validation.py`` checks this list
+#: against the checked-in generated modules.
+GENERATED_NAMES = frozenset({
+    "SCENE", "SCENE_SHA256", "PARAMETERS", "DEFAULTS", "MASS_NAMES", "N", "EFFECTS", "LINEAR",
+    "SPRING_ENDS", "DAMPER_ENDS", "CLOSED_FORM", "RIGID_MODES", "FORCING_HARMONIC", "CHAIN", "LEFT",
+    "RIGHT", "UNIFORM", "MAX_DENSE", "K",
+    "masses", "spring_constants", "cubic_constants", "damper_constants", "mass_matrix",
+    "stiffness_matrix", "damping_matrix", "dynamical_matrix", "omega2", "mode_shapes",
+    "acceleration", "damping_acceleration", "external_acceleration", "gravity_forces",
+    "forcing_harmonics", "energy", "spring_ends", "stiffness_bands", "make_acceleration",
+    "out", "w", "vec", "omega", "cos_amp", "sin_amp", "const", "col", "d", "e", "f", "s", "j",
+    "idx", "inner", "inv_m", "extra", "diag", "off", "xa", "xb", "kk", "parts", "ends",
+})
+#: Python's builtins (the generated code may call any of them, e.g. float, len).
+BUILTIN_NAMES = frozenset(n for n in dir(builtins) if not n.startswith("_"))
+#: Names a parameter may not take.
+RESERVED = FREE_NAMES | MODULE_NAMES | GENERATED_NAMES | BUILTIN_NAMES | {"wall", *FUNCTIONS, *CONSTANTS}
+#: Prefixes of coordinate names (x_m1, v_m1, a_m1); no parameter may start with them.
+RESERVED_PREFIXES = ("x_", "v_", "a_")
+#: Names a mass may not take (a mass name appears only inside x_<name>, v_<name>).
+MASS_RESERVED = FREE_NAMES | {"wall", "np", "numpy", *FUNCTIONS, *CONSTANTS}
+MAX_NAME = 64
+
+#: Largest number of bytes all recorded trajectories of one run may hold.
 MAX_RECORDED_BYTES = 4 * 2**30
+#: Largest scene file read.
+MAX_FILE_BYTES = 64 * 2**20
+#: Largest description (characters).
+MAX_DESCRIPTION = 2000
+#: Masses, stiffnesses, damping and |k3|, |g| must lie in this range (no
+#: subnormal numbers, no overflow when two of them multiply).
+MIN_MAGNITUDE, MAX_MAGNITUDE = 1e-150, 1e150
+MAX_STEPS = 10**12
+MAX_CHAIN = 10**7
+#: Index values evaluated at once when checking [chain] expressions.
+_CHUNK = 1 << 16
 
 TOP_KEYS = ("name", "description", "parameters", "masses", "springs", "dampers", "forces",
             "gravity", "chain", "initial", "simulation")
@@ -39,6 +86,28 @@ CHAIN_KEYS = ("n", "mass", "k", "k3", "left", "right")
 CHAIN_ENDS = ("free", "wall", "ring")
 INITIAL_KEYS = ("x", "v")
 SIMULATION_KEYS = ("dt", "steps", "record_every")
+
+#: Words people write for a key, tried after spelling mistakes for "did you mean".
+ALIASES = {
+    "stiffness": "k", "spring_constant": "k", "spring_k": "k", "k1": "k", "kappa": "k3",
+    "cubic": "k3", "k_cubic": "k3", "nonlinear": "k3",
+    "damping": "c", "viscosity": "c", "coefficient": "c", "c1": "c",
+    "ends": "between", "connects": "between", "nodes": "between", "pair": "between", "link": "between",
+    "mass": "masses", "spring": "springs", "damper": "dampers", "dashpots": "dampers",
+    "force": "forces", "forcing": "forces", "loads": "forces", "load": "forces",
+    "target": "on", "mass_name": "on", "at": "on", "force_expression": "f", "value": "f",
+    "params": "parameters", "parameter": "parameters", "constants": "parameters", "values": "parameters",
+    "init": "initial", "initial_conditions": "initial", "ic": "initial", "start": "initial",
+    "x0": "x", "position": "x", "positions": "x", "displacement": "x", "displacements": "x",
+    "v0": "v", "velocity": "v", "velocities": "v",
+    "sim": "simulation", "settings": "simulation", "solver": "simulation", "run": "simulation",
+    "h": "dt", "step": "dt", "timestep": "dt", "time_step": "dt", "step_size": "dt",
+    "nsteps": "steps", "n_steps": "steps", "num_steps": "steps", "iterations": "steps",
+    "record": "record_every", "stride": "record_every", "every": "record_every", "save_every": "record_every",
+    "title": "name", "desc": "description", "comment": "description",
+    "count": "n", "length": "n", "size": "n", "m": "mass", "left_end": "left", "right_end": "right",
+    "g0": "g", "acceleration": "g",
+}
 
 
 @dataclass(frozen=True)
@@ -130,9 +199,27 @@ class Scene:
         return tuple(sorted(self.parameters))
 
 
-def _close(word: str, options) -> str:
-    near = difflib.get_close_matches(word, list(options), n=1)
+def did_you_mean(word: object, options) -> str:
+    """`` (did you mean 'x'?)`` for a near spelling or a usual synonym of ``word``, else ``""``."""
+    if not isinstance(word, str):
+        return ""
+    options = [o for o in options if isinstance(o, str)]
+    norm = word.strip().lower().replace("-", "_").replace(" ", "_")
+    if norm in options and norm != word:
+        return f" (did you mean {norm!r}?)"
+    near = difflib.get_close_matches(word, options, n=1) or difflib.get_close_matches(norm, options, n=1)
+    if not near and ALIASES.get(norm) in options:
+        near = [ALIASES[norm]]
     return f" (did you mean {near[0]!r}?)" if near else ""
+
+
+def _human_bytes(n: float) -> str:
+    """``n`` bytes as e.g. ``5.96e+03 GiB`` or ``512 MiB``."""
+    for unit in ("B", "KiB", "MiB"):
+        if n < 1024:
+            return f"{n:.3g} {unit}"
+        n /= 1024
+    return f"{n:.3g} GiB"
 
 
 class _Loader:
@@ -143,71 +230,140 @@ class _Loader:
     def err(self, key: str | None, message: str) -> SceneError:
         return SceneError(self.file, key, message)
 
-    def keys(self, table: dict, allowed: tuple[str, ...], where: str | None, required=()) -> None:
+    def bad(self, key: str | None, value, why: str, accepted: str) -> SceneError:
+        """``<key>: <value>: <why>; accepted: <accepted>``."""
+        return SceneError(self.file, key, f"{show(value)}: {why}; accepted: {accepted}")
+
+    def keys(self, table: dict, allowed: tuple[str, ...], where: str | None, required=(),
+             what: str | None = None) -> None:
         for k in table:
             if k not in allowed:
                 raise self.err(f"{where}.{k}" if where else k,
-                               f"unknown key{_close(k, allowed)}; accepted: {', '.join(allowed)}")
+                               f"unknown key{did_you_mean(k, allowed)}; accepted: {', '.join(allowed)}")
+        optional = [k for k in allowed if k not in required]
+        form = (f"{what or where or 'the file'} with {', '.join(required)}"
+                + (f" (optional: {', '.join(optional)})" if optional else ""))
         for k in required:
             if k not in table:
-                raise self.err(f"{where}.{k}" if where else k, "missing required key")
+                raise self.err(f"{where}.{k}" if where else k, f"missing; accepted: {form}")
 
-    def table(self, key: str, required=False) -> dict:
+    def table(self, key: str, required=False, example: str = "") -> dict:
         value = self.data.get(key)
         if value is None:
             if required:
-                raise self.err(key, "missing required table")
+                raise self.err(key, f"missing; accepted: a table [{key}]{example}")
             return {}
         if not isinstance(value, dict):
-            raise self.err(key, f"{value!r} is not a table; write [{key}]")
+            raise self.bad(key, value, "not a table", f"a table written [{key}]{example}")
         return value
 
     def array_of_tables(self, key: str) -> list[dict]:
         value = self.data.get(key, [])
         if not isinstance(value, list) or not all(isinstance(v, dict) for v in value):
-            raise self.err(key, f"must be an array of tables, written [[{key}]]")
+            raise self.bad(key, value, "not an array of tables", f"entries written [[{key}]]")
         return value
 
-    def identifier(self, key: str, value) -> str:
-        if not isinstance(value, str) or not value.isascii() or not value.isidentifier():
-            raise self.err(key, f"{value!r} is not accepted; accepted: an ASCII Python identifier such as 'm1'")
+    def identifier(self, key: str, value, what: str = "name") -> str:
+        accepted = f"an ASCII Python identifier of at most {MAX_NAME} characters, such as 'm1'"
+        if not isinstance(value, str):
+            raise self.bad(key, value, f"a {type(value).__name__}, not a {what}", accepted)
+        if not value.isascii():
+            bad = next(ch for ch in value if not ch.isascii())
+            raise self.bad(key, value, f"non-ASCII character {bad!r} (look-alike letters are refused)",
+                           accepted)
+        if not value.isidentifier():
+            raise self.bad(key, value, f"not an identifier", accepted)
+        if len(value) > MAX_NAME:
+            raise self.bad(key, value, f"longer than {MAX_NAME} characters", accepted)
         if keyword.iskeyword(value) or keyword.issoftkeyword(value):
-            raise self.err(key, f"{value!r} is a Python keyword; choose another name")
+            raise self.bad(key, value, "a Python keyword", f"another {what}, e.g. {value}_1")
         if value.startswith("_"):
-            raise self.err(key, f"{value!r}: names may not start with '_'")
+            raise self.bad(key, value, "starts with '_' (kept for generated code)", accepted)
         return value
 
-    def number(self, key: str, value, *, positive=False, integer=False, minimum=None) -> float:
+    def number(self, key: str, value, *, positive=False, integer=False, maximum=None) -> float | int:
+        """A finite TOML number (int or float; never a boolean or a string)."""
+        what = "a whole number" if integer else "a number"
+        accepted = what + (" > 0" if positive else "") + (f" up to {maximum:g}" if maximum else "")
         if isinstance(value, bool) or not isinstance(value, (int, float)):
-            raise self.err(key, f"{value!r} is not a number")
+            kind = "a boolean" if isinstance(value, bool) else f"a {type(value).__name__}"
+            raise self.bad(key, value, f"{kind}, not a number", accepted)
         if integer and not isinstance(value, int):
-            raise self.err(key, f"{value!r} is not accepted; accepted: a whole number")
-        if not math.isfinite(value):
-            raise self.err(key, f"{value!r} is not accepted; accepted: a finite number")
+            raise self.bad(key, value, "not a whole number", accepted)
+        try:
+            finite = math.isfinite(value) and abs(float(value)) < math.inf
+        except OverflowError:
+            finite = False
+        if not finite:
+            raise self.bad(key, value, "not a finite number", accepted)
         if positive and value <= 0:
-            raise self.err(key, f"{value!r} is not accepted; accepted: a number > 0")
-        if minimum is not None and value < minimum:
-            raise self.err(key, f"{value!r} is not accepted; accepted: a number >= {minimum}")
+            raise self.bad(key, value, "not > 0", accepted)
+        if maximum is not None and value > maximum:
+            raise self.bad(key, value, f"more than {maximum:g}", accepted)
         return value
 
     def expression(self, key: str, text, allowed, *, positive=False, nonzero=False, env=None,
-                   index_range=None) -> Expr:
+                   index_range=None, bounded=False) -> Expr:
+        """Parse an expression and check its value at the scene's parameter values.
+
+        ``index_range`` is an iterable of index values i (for [chain]
+        expressions), evaluated in chunks so that memory stays bounded.
+        ``positive`` and ``nonzero`` hold only if rounding cannot blur them:
+        the value must exceed its error bound. ``bounded`` asks for
+        ``MIN_MAGNITUDE <= |value| <= MAX_MAGNITUDE``.
+        """
         expr = parse_expression(text, allowed, file=self.file, key=key)
         env = dict(env or {})
-        if index_range is not None:
-            env["i"] = np.arange(index_range, dtype=float)
-            env["n"] = float(index_range)
-        try:
-            value = np.asarray(expr.evaluate(env), dtype=float)
-        except (OverflowError, ZeroDivisionError, ValueError, TypeError):
-            value = np.asarray(np.nan)
-        if not np.all(np.isfinite(value)):
-            raise self.err(key, f"{text!r} is not finite at the scene's parameter values")
-        if positive and not np.all(value > 0):
-            raise self.err(key, f"{text!r} = {float(np.min(value)):g} is not accepted; accepted: a value > 0")
-        if nonzero and np.any(value == 0):
-            raise self.err(key, f"{text!r} is zero; leave the key out instead")
+        chunks = [None] if index_range is None else [index_range[s:s + _CHUNK]
+                                                    for s in range(0, len(index_range), _CHUNK)]
+        for chunk in chunks:
+            if chunk is not None:
+                env["i"] = np.asarray(chunk, dtype=float)
+            self._check_value(key, text, expr, env, positive=positive, nonzero=nonzero, bounded=bounded)
         return expr
+
+    def _check_value(self, key, text, expr, env, *, positive, nonzero, bounded):
+        try:
+            value, error = expr.evaluate_error(env)
+        except (OverflowError, ZeroDivisionError, ValueError, TypeError, FloatingPointError):
+            value, error = math.nan, math.inf
+        shape = np.broadcast_shapes(np.shape(value), np.shape(error), np.shape(env.get("i", 0.0)),
+                                    np.shape(env.get("t", 0.0)))
+        value = np.broadcast_to(np.asarray(value, dtype=float), shape)
+        error = np.broadcast_to(np.asarray(error, dtype=float), shape)
+        verb = "is" if isinstance(expr, Num) else "evaluates to"
+
+        def where(mask) -> str:
+            if "i" in env and np.ndim(env["i"]):
+                return f" at i = {int(np.asarray(env['i'])[np.argmax(mask)])}"
+            if "t" in env and np.ndim(env["t"]):
+                return f" at t = {float(np.asarray(env['t'])[np.argmax(mask)]):g}"
+            return ""
+
+        def first(mask):
+            return float(value.ravel()[np.argmax(mask.ravel())])
+
+        bad = ~np.isfinite(value)
+        if bad.any():
+            raise self.bad(key, text, f"{verb} {first(bad):g}{where(bad)}",
+                           "an expression finite at the scene's parameter values")
+        wanted = "a value > 0" if positive else "a nonzero value"
+        if positive and (value <= 0).any():
+            mask = value <= 0
+            raise self.bad(key, text, f"{verb} {first(mask):g}{where(mask)}", wanted)
+        if nonzero and (value == 0).any():
+            mask = value == 0
+            raise self.bad(key, text, f"{verb} 0{where(mask)}", wanted + " (or leave the key out)")
+        if (positive or nonzero) and (np.abs(value) <= error).any():
+            mask = np.abs(value) <= error
+            raise self.bad(key, text, f"{verb} {first(mask):.3g}{where(mask)}, which rounding cannot "
+                                      f"tell from 0 (error bound {float(error.ravel()[np.argmax(mask.ravel())]):.2g})",
+                           wanted + " clearly away from 0")
+        if bounded:
+            mask = (np.abs(value) < MIN_MAGNITUDE) | (np.abs(value) > MAX_MAGNITUDE)
+            if mask.any():
+                raise self.bad(key, text, f"{verb} {first(mask):g}{where(mask)}",
+                               f"values of size {MIN_MAGNITUDE:g} to {MAX_MAGNITUDE:g}")
 
 
 def load_scene(path: str | Path, text: str | None = None) -> Scene:
@@ -220,79 +376,125 @@ def load_scene(path: str | Path, text: str | None = None) -> Scene:
     text : str, optional
         The file's content, if already read.
 
+    Returns
+    -------
+    Scene
+
     Raises
     ------
     SceneError
-        For any problem, with a one-line message.
+        For any problem, with a one-line message. No other exception escapes
+        for any file content.
     """
     file = str(path)
     if text is None:
         try:
-            raw = Path(path).read_bytes()
+            with open(path, "rb") as fh:
+                raw = fh.read(MAX_FILE_BYTES + 1)
         except OSError as exc:
-            raise SceneError(file, None, f"cannot read scene file ({exc.strerror or exc})") from None
+            raise SceneError(file, None, f"cannot read the scene file ({exc.strerror or exc}); "
+                                         "accepted: a readable TOML file") from None
     else:
-        raw = text.encode()
+        raw = text.encode("utf-8", "surrogatepass")
+    if len(raw) > MAX_FILE_BYTES:
+        raise SceneError(file, None, f"larger than {MAX_FILE_BYTES // 2**20} MiB; accepted: smaller "
+                                     "files (a long chain's initial state can be an expression of i)")
     try:
         data = tomllib.loads(raw.decode("utf-8"))
-    except UnicodeDecodeError:
-        raise SceneError(file, None, "not UTF-8 text; a scene is a TOML file") from None
+    except UnicodeDecodeError as exc:
+        raise SceneError(file, None, f"byte {exc.start} is not UTF-8; accepted: a UTF-8 TOML file") from None
     except tomllib.TOMLDecodeError as exc:
-        raise SceneError(file, None, f"TOML syntax error: {exc}") from None
+        raise SceneError(file, None, f"TOML syntax error: {exc}; accepted: a TOML file "
+                                     "(https://toml.io)") from None
+    except RecursionError:
+        raise SceneError(file, None, "TOML arrays or tables nested too deeply; accepted: "
+                                     "a flat scene file") from None
+    except (ValueError, MemoryError):  # e.g. an integer of more than 4300 digits
+        raise SceneError(file, None, "a TOML value too large to read (e.g. a number of thousands of "
+                                     "digits); accepted: numbers of ordinary size") from None
     sha = hashlib.sha256(raw).hexdigest()
-    return _build(_Loader(file, data), sha)
+    try:
+        return _build(_Loader(file, data), sha)
+    except RecursionError:
+        raise SceneError(file, None, "nested too deeply; accepted: a flat scene file") from None
 
 
 def _build(ld: _Loader, sha: str) -> Scene:
     data = ld.data
-    ld.keys(data, TOP_KEYS, None, required=("name", "parameters", "initial"))
-    name = ld.identifier("name", data["name"])
+    ld.keys(data, TOP_KEYS, None, required=("name", "parameters", "initial"), what="a scene")
+    name = ld.identifier("name", data["name"], "scene name")
     description = data.get("description", "")
     if not isinstance(description, str):
-        raise ld.err("description", f"{description!r} is not a string")
+        raise ld.bad("description", description, "not a string", "a string")
+    if len(description) > MAX_DESCRIPTION:
+        raise ld.bad("description", description, f"longer than {MAX_DESCRIPTION} characters",
+                     f"a string of at most {MAX_DESCRIPTION} characters")
+    control = [ch for ch in description if not ch.isprintable() and ch not in "\n\t"]
+    if control:
+        raise ld.bad("description", description, f"holds the control character {control[0]!r}",
+                     "printable text (newlines and tabs allowed)")
 
-    params_raw = ld.table("parameters", required=True)
+    params_raw = ld.table("parameters", required=True, example=" of name = number, e.g. m = 1.0")
     parameters: dict[str, float] = {}
     for pname in sorted(params_raw):
         key = f"parameters.{pname}"
-        ld.identifier(key, pname)
-        if pname in RESERVED or pname.startswith(("x_", "v_")):
-            raise ld.err(key, f"{pname!r} is reserved; choose another name "
-                              f"(reserved: {', '.join(sorted(RESERVED))}, x_*, v_*)")
+        ld.identifier(key, pname, "parameter name")
+        if pname in RESERVED or pname.startswith(RESERVED_PREFIXES):
+            why = ("the name of a variable or function of expressions" if pname in FREE_NAMES | set(FUNCTIONS)
+                   | set(CONSTANTS) else "a Python builtin" if pname in BUILTIN_NAMES
+                   else "a coordinate name" if pname.startswith(RESERVED_PREFIXES)
+                   else "a name the generated code uses")
+            raise ld.bad(key, pname, f"reserved ({why})", f"another name, e.g. {pname}0")
         parameters[pname] = float(ld.number(key, params_raw[pname]))
     pnames = frozenset(parameters)
     env = dict(parameters)
 
+    sim = ld.table("simulation")
+    ld.keys(sim, SIMULATION_KEYS, "simulation", what="[simulation]")
+    dt = float(ld.number("simulation.dt", sim.get("dt", 0.1), positive=True))
+    steps = int(ld.number("simulation.steps", sim.get("steps", 1000), positive=True, integer=True,
+                          maximum=MAX_STEPS))
+    record_every = int(ld.number("simulation.record_every", sim.get("record_every", 1),
+                                 positive=True, integer=True, maximum=MAX_STEPS))
+    if not math.isfinite(dt * steps) or not math.isfinite(1.0 / dt):
+        raise ld.bad("simulation.dt", dt, f"dt x steps = {dt:g} x {steps} is not a finite time",
+                     "dt and steps whose product is a finite number")
+
     chain = None
     if "chain" in data:
         if "masses" in data or "springs" in data:
-            raise ld.err("chain", "use either [chain] or [masses] with [[springs]], not both")
+            both = "masses" if "masses" in data else "springs"
+            raise ld.bad("chain", f"[chain] with [{both}]", "both forms given",
+                         "either [chain] or [masses] with [[springs]]")
         chain = _chain(ld, pnames, env)
         mass_names: tuple[str, ...] = ()
         mass_exprs: tuple[Expr, ...] = ()
         n = chain.n
     else:
-        masses_raw = ld.table("masses", required=True)
+        masses_raw = ld.table("masses", required=True, example=" of name = expression, e.g. m1 = \"m\"")
         if not masses_raw:
-            raise ld.err("masses", "no masses; accepted: at least one entry like m1 = \"m\"")
+            raise ld.bad("masses", masses_raw, "no masses", "at least one entry such as m1 = \"m\"")
         names = []
         exprs = []
         for mname, mexpr in masses_raw.items():
             key = f"masses.{mname}"
-            ld.identifier(key, mname)
-            if mname in RESERVED:
-                raise ld.err(key, f"{mname!r} is reserved; choose another mass name")
+            ld.identifier(key, mname, "mass name")
+            if mname in MASS_RESERVED:
+                raise ld.bad(key, mname, "reserved (a variable, function or 'wall')",
+                             f"another mass name, e.g. {mname}1")
             names.append(mname)
-            exprs.append(ld.expression(key, mexpr, pnames, positive=True, env=env))
+            exprs.append(ld.expression(key, mexpr, pnames, positive=True, bounded=True, env=env))
         mass_names, mass_exprs = tuple(names), tuple(exprs)
         n = len(names)
+
+    check_memory(ld.file, n, steps, record_every)
 
     index = {m: j for j, m in enumerate(mass_names)}
     accepted_ends = ", ".join(repr(m) for m in (*mass_names, "wall"))
 
     def ends(key: str, value) -> tuple[int, int]:
         if not isinstance(value, list) or len(value) != 2:
-            raise ld.err(key, f"{value!r} is not accepted; accepted: two names, e.g. [\"m1\", \"m2\"]")
+            raise ld.bad(key, value, "not a list of two ends", f'two names, e.g. ["{(*mass_names, "m1")[0]}", "wall"]')
         idx = []
         for v in value:
             if v == "wall":
@@ -300,72 +502,57 @@ def _build(ld: _Loader, sha: str) -> Scene:
             elif isinstance(v, str) and v in index:
                 idx.append(index[v])
             else:
-                near = _close(v, index) if isinstance(v, str) else ""
-                raise ld.err(key, f"{v!r} is not a mass{near}; accepted: {accepted_ends}")
+                raise ld.bad(key, v, f"not a mass{did_you_mean(v, index)}", accepted_ends)
         if idx[0] == idx[1]:
             what = "both ends are walls" if idx[0] == WALL else f"joins {value[0]!r} to itself"
-            raise ld.err(key, f"{value!r} {what}; accepted: two different ends")
+            raise ld.bad(key, value, what, "two different ends")
         return idx[0], idx[1]
 
     springs = []
     for j, s in enumerate(ld.array_of_tables("springs")):
         key = f"springs[{j}]"
-        if chain is not None:
-            raise ld.err(key, "not accepted with [chain]")
-        ld.keys(s, SPRING_KEYS, key, required=("between", "k"))
+        ld.keys(s, SPRING_KEYS, key, required=("between", "k"), what="a [[springs]] entry")
         a, b = ends(f"{key}.between", s["between"])
-        k = ld.expression(f"{key}.k", s["k"], pnames, positive=True, env=env)
-        k3 = ld.expression(f"{key}.k3", s["k3"], pnames, nonzero=True, env=env) if "k3" in s else None
+        k = ld.expression(f"{key}.k", s["k"], pnames, positive=True, bounded=True, env=env)
+        k3 = (ld.expression(f"{key}.k3", s["k3"], pnames, nonzero=True, bounded=True, env=env)
+              if "k3" in s else None)
         springs.append(Spring(a, b, k, k3, key))
 
     dampers = []
     for j, d in enumerate(ld.array_of_tables("dampers")):
         key = f"dampers[{j}]"
         if chain is not None:
-            raise ld.err(key, "dampers are not yet accepted with [chain]")
-        ld.keys(d, DAMPER_KEYS, key, required=("between", "c"))
+            raise ld.bad(key, "[[dampers]] with [chain]", "not yet supported", "[[dampers]] with [masses]")
+        ld.keys(d, DAMPER_KEYS, key, required=("between", "c"), what="a [[dampers]] entry")
         a, b = ends(f"{key}.between", d["between"])
-        c = ld.expression(f"{key}.c", d["c"], pnames, positive=True, env=env)
+        c = ld.expression(f"{key}.c", d["c"], pnames, positive=True, bounded=True, env=env)
         dampers.append(Damper(a, b, c, key))
 
     forces = []
+    times = np.linspace(0.0, dt * steps, 257)
     for j, f in enumerate(ld.array_of_tables("forces")):
         key = f"forces[{j}]"
         if chain is not None:
-            raise ld.err(key, "forces are not yet accepted with [chain]")
-        ld.keys(f, FORCE_KEYS, key, required=("on", "f"))
+            raise ld.bad(key, "[[forces]] with [chain]", "not yet supported", "[[forces]] with [masses]")
+        ld.keys(f, FORCE_KEYS, key, required=("on", "f"), what="a [[forces]] entry")
         on = f["on"]
         if not isinstance(on, str) or on not in index:
-            near = _close(on, index) if isinstance(on, str) else ""
-            raise ld.err(f"{key}.on", f"{on!r} is not a mass{near}; accepted: "
-                                      f"{', '.join(repr(m) for m in mass_names)}")
-        expr = ld.expression(f"{key}.f", f["f"], pnames | {"t"}, env={**env, "t": 0.0})
+            raise ld.bad(f"{key}.on", on, f"not a mass{did_you_mean(on, index)}",
+                         ", ".join(repr(m) for m in mass_names))
+        expr = ld.expression(f"{key}.f", f["f"], pnames | {"t"}, env={**env, "t": times})
         forces.append(Force(index[on], expr, key))
 
     gravity = None
     if "gravity" in data:
-        g = ld.table("gravity")
-        ld.keys(g, GRAVITY_KEYS, "gravity", required=("g",))
-        gravity = ld.expression("gravity.g", g["g"], pnames, nonzero=True, env=env)
+        g = ld.table("gravity", example=' with g = "g"')
+        ld.keys(g, GRAVITY_KEYS, "gravity", required=("g",), what="[gravity]")
+        gravity = ld.expression("gravity.g", g["g"], pnames, nonzero=True, bounded=True, env=env)
 
-    sim = ld.table("simulation")
-    ld.keys(sim, SIMULATION_KEYS, "simulation")
-    dt = float(ld.number("simulation.dt", sim.get("dt", 0.1), positive=True))
-    steps = int(ld.number("simulation.steps", sim.get("steps", 1000), positive=True, integer=True))
-    record_every = int(ld.number("simulation.record_every", sim.get("record_every", 1),
-                                 positive=True, integer=True))
-    check_memory(ld.file, n, steps, record_every)
-
-    init = ld.table("initial", required=True)
-    ld.keys(init, INITIAL_KEYS, "initial", required=("x", "v"))
+    init = ld.table("initial", required=True, example=" with x = [...] and v = [...]")
+    ld.keys(init, INITIAL_KEYS, "initial", required=("x", "v"), what="[initial]")
     x0 = _initial(ld, "initial.x", init["x"], n, chain is not None, pnames, env)
     v0 = _initial(ld, "initial.v", init["v"], n, chain is not None, pnames, env)
 
-    used = set()
-    for e in (*mass_exprs, *(s.k for s in springs), *(s.k3 for s in springs if s.k3),
-              *(d.c for d in dampers), *(f.f for f in forces), *([gravity] if gravity else []),
-              *((chain.mass, chain.k) if chain else ()), *((chain.k3,) if chain and chain.k3 else ())):
-        used |= e.symbols()
     return Scene(file=ld.file, sha256=sha, name=name, description=description,
                  parameters=parameters, mass_names=mass_names, mass_exprs=mass_exprs,
                  springs=tuple(springs), dampers=tuple(dampers), forces=tuple(forces),
@@ -373,51 +560,78 @@ def _build(ld: _Loader, sha: str) -> Scene:
                  record_every=record_every)
 
 
-def check_memory(file: str | None, n: int, steps: int, record_every: int, methods: int = 2) -> None:
-    """Refuse runs whose recorded trajectories would not fit in memory."""
+def check_memory(file: str | None, n: int, steps: int, record_every: int, methods: int = 2,
+                 key: str = "simulation.steps") -> None:
+    """Refuse runs whose recorded trajectories would not fit in memory.
+
+    Parameters
+    ----------
+    file : str or None
+        The scene file, for the message.
+    n, steps, record_every, methods : int
+        Masses, steps, the recording stride and the number of methods run.
+    key : str
+        What to name in the message (``--steps`` when the option set it).
+
+    Raises
+    ------
+    SceneError
+        Saying how much memory the trajectories would need.
+    """
     frames = steps // record_every + 1
     need = frames * n * 8 * 2 * methods
     if need > MAX_RECORDED_BYTES:
-        raise SceneError(file, "simulation.steps",
-                         f"{steps} steps x {n} masses (recorded every {record_every}) would need "
-                         f"{need / 2**30:.1f} GiB for the trajectories; accepted: at most "
-                         f"{MAX_RECORDED_BYTES / 2**30:.0f} GiB - raise simulation.record_every "
+        raise SceneError(file, key,
+                         f"{steps}: {steps} steps x {n} masses (recorded every {record_every}, "
+                         f"{methods} methods) would need {_human_bytes(need)} for the trajectories; "
+                         f"accepted: at most {_human_bytes(MAX_RECORDED_BYTES)} - raise record_every "
                          f"or lower the steps")
 
 
 def _chain(ld: _Loader, pnames: frozenset[str], env: dict) -> Chain:
     c = ld.table("chain")
-    ld.keys(c, CHAIN_KEYS, "chain", required=("n", "mass", "k"))
-    n = int(ld.number("chain.n", c["n"], positive=True, integer=True))
-    if n > 10**7:
-        raise ld.err("chain.n", f"{n} is not accepted; accepted: 1 to 10000000 masses")
-    names = pnames | {"i"}
-    mass = ld.expression("chain.mass", c["mass"], names, positive=True, env=env, index_range=n)
-    k = ld.expression("chain.k", c["k"], names, positive=True, env=env, index_range=n)
-    k3 = (ld.expression("chain.k3", c["k3"], names, env=env, index_range=n) if "k3" in c else None)
+    ld.keys(c, CHAIN_KEYS, "chain", required=("n", "mass", "k"), what="[chain]")
+    n = int(ld.number("chain.n", c["n"], positive=True, integer=True, maximum=MAX_CHAIN))
     left, right = c.get("left", "free"), c.get("right", "free")
     for key, v in (("chain.left", left), ("chain.right", right)):
-        if v not in CHAIN_ENDS:
-            raise ld.err(key, f"{v!r} is not accepted; accepted: {', '.join(CHAIN_ENDS)}")
+        if not isinstance(v, str) or v not in CHAIN_ENDS:
+            raise ld.bad(key, v, f"not a chain end{did_you_mean(v, CHAIN_ENDS)}", ", ".join(CHAIN_ENDS))
     if (left == "ring") != (right == "ring"):
-        raise ld.err("chain.right", "a ring closes both ends; set left = right = \"ring\"")
+        raise ld.bad("chain.right" if left == "ring" else "chain.left", right if left == "ring" else left,
+                     "a ring closes both ends", 'left = right = "ring"')
+    names = pnames | {"i"}
+    # springs: i = 0 .. n-2 between masses i, i+1; i = -1 for a left wall; i = n-1 for a
+    # right wall or the ring's closing spring
+    spring_idx = range(-1 if left == "wall" else 0, n if right in ("wall", "ring") else n - 1)
+    mass = ld.expression("chain.mass", c["mass"], names, positive=True, bounded=True, env=env,
+                         index_range=range(n))
+    k = ld.expression("chain.k", c["k"], names, positive=True, bounded=True, env=env,
+                      index_range=spring_idx)
+    k3 = (ld.expression("chain.k3", c["k3"], names, bounded=False, env=env, index_range=spring_idx)
+          if "k3" in c else None)
     return Chain(n, mass, k, k3, left, right)
 
 
 def _initial(ld: _Loader, key: str, value, n: int, chain: bool, pnames, env) -> np.ndarray:
     if isinstance(value, list):
         if len(value) != n:
-            raise ld.err(key, f"has {len(value)} values; accepted: {n} (one per mass, in mass order)")
+            raise ld.bad(key, value, f"{len(value)} values for {n} masses",
+                         f"a list of {n} numbers (one per mass, in mass order)")
         out = np.empty(n)
         for j, v in enumerate(value):
             out[j] = ld.number(f"{key}[{j}]", v)
         return out
     if chain and isinstance(value, (str, int, float)) and not isinstance(value, bool):
-        expr = ld.expression(key, value, pnames | {"i", "n"}, env=env, index_range=n)
-        env2 = {**env, "i": np.arange(n, dtype=float), "n": float(n)}
-        return np.broadcast_to(np.asarray(expr.evaluate(env2), dtype=float), (n,)).copy()
-    accepted = f"a list of {n} numbers" + (" or an expression of i and n" if chain else "")
-    raise ld.err(key, f"{value!r} is not accepted; accepted: {accepted}")
+        allowed = pnames | {"i", "n"}
+        expr = ld.expression(key, value, allowed, env={**env, "n": float(n)}, index_range=range(n))
+        out = np.empty(n)
+        for s in range(0, n, _CHUNK):
+            i = np.arange(s, min(s + _CHUNK, n), dtype=float)
+            out[s:s + len(i)] = np.broadcast_to(expr.evaluate({**env, "n": float(n), "i": i}), i.shape)
+        return out
+    accepted = f"a list of {n} numbers" + (f" or an expression of {accepted_form(pnames | {'i', 'n'})}"
+                                            if chain else "")
+    raise ld.bad(key, value, "not a list of numbers", accepted)
 
 
 def bundled_scene_dir() -> Path:
@@ -430,4 +644,4 @@ def bundled_scenes() -> list[Path]:
 
 
 __all__ = ["Scene", "Spring", "Damper", "Force", "Chain", "WALL", "load_scene", "bundled_scenes",
-           "bundled_scene_dir", "check_memory", "Num"]
+           "bundled_scene_dir", "check_memory", "Num", "RESERVED", "did_you_mean"]
