@@ -30,6 +30,8 @@ import sympy as sp
 from .model import Model
 
 DEFAULT_BUDGET = 20.0
+#: Largest block (after rigid modes and mirror symmetry) whose determinant is expanded symbolically.
+MAX_SYMBOLIC_BLOCK = 6
 
 
 class BudgetExceeded(Exception):
@@ -172,6 +174,8 @@ def _normalise(vec: list[sp.Expr]) -> tuple[sp.Expr, ...]:
 
 def _solve_block(model: Model, B: sp.Matrix, lam: sp.Symbol, n_rigid_in_block: int,
                  max_radical_degree: int) -> list[Mode]:
+    if B.shape[1] - n_rigid_in_block > MAX_SYMBOLIC_BLOCK:
+        raise BudgetExceeded  # characteristic polynomial of degree > 6: no closed form worth printing
     Kb = (B.T * model.K * B).applyfunc(sp.expand)
     Mb = (B.T * model.M * B).applyfunc(sp.expand)
     A = Kb - lam * Mb
@@ -261,8 +265,9 @@ def closed_form_modes(model: Model, budget: float | None = DEFAULT_BUDGET,
                 modes.extend(_solve_block(model, B, lam, n_rigid, max_radical_degree))
         closed = True
     except BudgetExceeded:
-        notes.append(f"no closed form within the {budget:g} s budget or by radicals; "
-                     "eigenvalues below are numeric (CRootOf) at the scene's parameter values")
+        notes.append(f"no closed form within the {budget:g} s budget, by radicals or for blocks larger "
+                     f"than {MAX_SYMBOLIC_BLOCK}; "
+                     "eigenvalues below are numeric (symmetric generalized eigensolver) at the scene's parameter values")
         modes = [m for m in modes if m.rigid] + _numeric_modes(model, lam, len(rigid))
         closed = False
     values = model.scene.parameters

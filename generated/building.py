@@ -106,29 +106,29 @@ def acceleration(x, F0, c, k, m):
     ndarray, shape (N, ...)
     """
     x_floor1, x_floor2, x_floor3 = x
-    out = numpy.empty(numpy.shape(x))
-    out[0] = (-k*x_floor1 - k*(x_floor1 - x_floor2))/m
-    out[1] = (k*(x_floor1 - x_floor2) - k*(x_floor2 - x_floor3))/m
-    out[2] = k*(x_floor2 - x_floor3)/m
-    return out
+    _out = numpy.empty(numpy.shape(x))
+    _out[0] = (-k*x_floor1 - k*(x_floor1 - x_floor2))/m
+    _out[1] = (k*(x_floor1 - x_floor2) - k*(x_floor2 - x_floor3))/m
+    _out[2] = k*(x_floor2 - x_floor3)/m
+    return _out
 
 
 def damping_acceleration(v, F0, c, k, m):
     """Acceleration -M^-1 C v from the dampers; v and result have shape (N, ...)."""
     v_floor1, v_floor2, v_floor3 = v
-    out = numpy.empty(numpy.shape(v))
-    out[0] = -c*v_floor1/m
-    out[1] = 0
-    out[2] = 0
-    return out
+    _out = numpy.empty(numpy.shape(v))
+    _out[0] = -c*v_floor1/m
+    _out[1] = 0
+    _out[2] = 0
+    return _out
 
 
 def external_acceleration(t, F0, c, k, m):
     """Acceleration M^-1 F(t) from the external forces; t scalar or array, result (N, *t.shape)."""
     t = numpy.asarray(t, dtype=float)
-    out = numpy.zeros((N,) + t.shape)
-    out[2] = F0*numpy.cos(2*numpy.sqrt(k)*t*numpy.sin((1/14)*numpy.pi)/numpy.sqrt(m))/m
-    return out
+    _out = numpy.zeros((N,) + t.shape)
+    _out[2] = F0*numpy.cos(2*numpy.sqrt(k)*t*numpy.sin((1/14)*numpy.pi)/numpy.sqrt(m))/m
+    return _out
 
 FORCING_HARMONIC = True
 
@@ -142,11 +142,11 @@ def forcing_harmonics(F0, c, k, m):
     cos_amp, sin_amp : ndarray, shape (H, N)
     const : ndarray, shape (N,)
     """
-    omega = numpy.array([2*numpy.sqrt(k)*numpy.sin((1/14)*numpy.pi)/numpy.sqrt(m)], dtype=float)
-    cos_amp = numpy.array([numpy.array([0, 0, F0], dtype=float)]).reshape(len(omega), N)
-    sin_amp = numpy.array([numpy.array([0, 0, 0], dtype=float)]).reshape(len(omega), N)
-    const = numpy.array([0, 0, 0], dtype=float)
-    return omega, cos_amp, sin_amp, const
+    _omega = numpy.array([2*numpy.sqrt(k)*numpy.sin((1/14)*numpy.pi)/numpy.sqrt(m)], dtype=float)
+    _cos = numpy.array([numpy.array([0, 0, F0], dtype=float)]).reshape(len(_omega), N)
+    _sin = numpy.array([numpy.array([0, 0, 0], dtype=float)]).reshape(len(_omega), N)
+    _const = numpy.array([0, 0, 0], dtype=float)
+    return _omega, _cos, _sin, _const
 
 
 def energy(x, v, F0, c, k, m):

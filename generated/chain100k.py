@@ -32,43 +32,44 @@ def masses(k, m, n=N):
     return numpy.broadcast_to(numpy.asarray(m, dtype=float), (n,)).copy()
 
 
-def _k(i, k, m):
+def _spring_k(i, k, m):
+    """Stiffness k(i) of the spring between masses i and i+1 (i = -1: left wall)."""
     return numpy.asarray(k, dtype=float)
 
 
 def spring_ends(n=N):
     """Spring ends (mass indices, -1 = wall) in spring_constants() order, shape (S, 2)."""
     i = numpy.arange(n - 1)
-    ends = [numpy.stack([i, i + 1], axis=1)]
-    return numpy.concatenate(ends).astype(numpy.intp)
+    _parts = [numpy.stack([i, i + 1], axis=1)]
+    return numpy.concatenate(_parts).astype(numpy.intp)
 
 
 def spring_constants(k, m, n=N):
     """Stiffness of each spring in spring_ends() order, shape (S,)."""
     i = numpy.arange(n - 1, dtype=float)
-    parts = [numpy.broadcast_to(_k(i, k=k, m=m), (n - 1,))]
-    return numpy.concatenate(parts).astype(float)
+    _parts = [numpy.broadcast_to(_spring_k(i, k=k, m=m), (n - 1,))]
+    return numpy.concatenate(_parts).astype(float)
 
 
 def make_acceleration(k, m, n=N):
     """A function a(x) for this chain with coefficients precomputed; x shape (n, ...).
 
     The stencil: the spring between i and i+1 pulls with s_i = k_i d_i [+ k3_i d_i³],
-    d_i = x_{i+1} − x_i; mass i feels s_i − s_{i−1}, walls and ring closure at the ends."""
+    d_i = x_{i+1} − x_i; mass i feels s_i − s_{i−1}; walls and the ring closure act at the ends."""
     i = numpy.arange(n - 1, dtype=float)
-    inv_m = 1.0 / masses(k=k, m=m, n=n)
-    inv_m = float(inv_m[0])
-    k = float(_k(0.0, k=k, m=m))
+    _inv_m = 1.0 / masses(k=k, m=m, n=n)
+    _inv_m = float(_inv_m[0])
+    _ks = float(_spring_k(0.0, k=k, m=m))
 
     def acceleration(x):
-        f = numpy.empty(numpy.shape(x))
-        d = x[1:] - x[:-1]
-        s = k * d
-        f[:-1] = s
-        f[-1] = 0.0
-        f[1:] -= s
-        f *= inv_m
-        return f
+        _f = numpy.empty(numpy.shape(x))
+        _d = x[1:] - x[:-1]
+        _s = _ks * _d
+        _f[:-1] = _s
+        _f[-1] = 0.0
+        _f[1:] -= _s
+        _f *= _inv_m
+        return _f
 
     return acceleration
 
@@ -81,38 +82,38 @@ def acceleration(x, k, m):
 def energy(x, v, k, m):
     """Total energy; x, v shape (n, ...) -> (...)."""
     n = numpy.shape(x)[0]
-    extra = (1,) * (numpy.ndim(x) - 1)
-    m = masses(k=k, m=m, n=n).reshape((n,) + extra)
-    kk = spring_constants(k=k, m=m, n=n)
-    ends = spring_ends(n)
-    xa = numpy.where((ends[:, 0] >= 0).reshape((-1,) + extra), x[ends[:, 0]], 0.0)
-    xb = numpy.where((ends[:, 1] >= 0).reshape((-1,) + extra), x[ends[:, 1]], 0.0)
-    d = xb - xa
-    e = 0.5 * numpy.sum(m * v**2, axis=0) + 0.5 * numpy.sum(kk.reshape((-1,) + extra) * d**2, axis=0)
-    return e
+    _extra = (1,) * (numpy.ndim(x) - 1)
+    _m = masses(k=k, m=m, n=n).reshape((n,) + _extra)
+    _kk = spring_constants(k=k, m=m, n=n)
+    _ends = spring_ends(n)
+    _xa = numpy.where((_ends[:, 0] >= 0).reshape((-1,) + _extra), x[_ends[:, 0]], 0.0)
+    _xb = numpy.where((_ends[:, 1] >= 0).reshape((-1,) + _extra), x[_ends[:, 1]], 0.0)
+    _d = _xb - _xa
+    _e = 0.5 * numpy.sum(_m * v**2, axis=0) + 0.5 * numpy.sum(_kk.reshape((-1,) + _extra) * _d**2, axis=0)
+    return _e
 
 
 def stiffness_bands(k, m, n=N):
     """Diagonal (n,) and first off-diagonal (n-1,) of K (ring closure not included)."""
-    kk = spring_constants(k=k, m=m, n=n)
-    ends = spring_ends(n)
-    diag = numpy.zeros(n)
-    for col in (0, 1):
-        idx = ends[:, col]
-        numpy.add.at(diag, idx[idx >= 0], kk[idx >= 0])
-    inner = (ends[:, 0] >= 0) & (ends[:, 1] >= 0) & (numpy.abs(ends[:, 0] - ends[:, 1]) == 1)
-    off = numpy.zeros(n - 1)
-    off[numpy.minimum(ends[inner, 0], ends[inner, 1])] = -kk[inner]
-    return diag, off
+    _kk = spring_constants(k=k, m=m, n=n)
+    _ends = spring_ends(n)
+    _diag = numpy.zeros(n)
+    for _col in (0, 1):
+        _idx = _ends[:, _col]
+        numpy.add.at(_diag, _idx[_idx >= 0], _kk[_idx >= 0])
+    _inner = (_ends[:, 0] >= 0) & (_ends[:, 1] >= 0) & (numpy.abs(_ends[:, 0] - _ends[:, 1]) == 1)
+    _off = numpy.zeros(n - 1)
+    _off[numpy.minimum(_ends[_inner, 0], _ends[_inner, 1])] = -_kk[_inner]
+    return _diag, _off
 
 
 def stiffness_matrix(k, m, n=N):
     """Dense K, shape (n, n); only for n <= MAX_DENSE."""
     if n > MAX_DENSE:
         raise ValueError(f'stiffness_matrix: n = {n} > MAX_DENSE = {MAX_DENSE}; use stiffness_bands()')
-    diag, off = stiffness_bands(k=k, m=m, n=n)
-    K = numpy.diag(diag) + numpy.diag(off, 1) + numpy.diag(off, -1)
-    return K
+    _diag, _off = stiffness_bands(k=k, m=m, n=n)
+    _K = numpy.diag(_diag) + numpy.diag(_off, 1) + numpy.diag(_off, -1)
+    return _K
 
 
 def mass_matrix(k, m, n=N):
@@ -124,5 +125,5 @@ def mass_matrix(k, m, n=N):
 
 def omega2(k, m, n=N):
     """Closed-form squared angular frequencies, ascending, shape (n,)."""
-    j = numpy.arange(0, n + 0, dtype=float)
-    return numpy.sort(numpy.broadcast_to(4*k*numpy.sin((1/2)*numpy.pi*j/n)**2/m, (n,)))
+    _j = numpy.arange(0, n + 0, dtype=float)
+    return numpy.sort(numpy.broadcast_to(4*k*numpy.sin((1/2)*numpy.pi*_j/n)**2/m, (n,)))

@@ -95,11 +95,11 @@ def acceleration(x, k, kappa, m):
     ndarray, shape (N, ...)
     """
     x_m1, x_m2, x_m3 = x
-    out = numpy.empty(numpy.shape(x))
-    out[0] = (-k*x_m1 - k*(x_m1 - x_m2) - kappa*x_m1**3 - kappa*(x_m1 - x_m2)**3)/m
-    out[1] = (k*(x_m1 - x_m2) - k*(x_m2 - x_m3) + kappa*(x_m1 - x_m2)**3 - kappa*(x_m2 - x_m3)**3)/m
-    out[2] = (-k*x_m3 + k*(x_m2 - x_m3) - kappa*x_m3**3 + kappa*(x_m2 - x_m3)**3)/m
-    return out
+    _out = numpy.empty(numpy.shape(x))
+    _out[0] = (-k*x_m1 - k*(x_m1 - x_m2) - kappa*x_m1**3 - kappa*(x_m1 - x_m2)**3)/m
+    _out[1] = (k*(x_m1 - x_m2) - k*(x_m2 - x_m3) + kappa*(x_m1 - x_m2)**3 - kappa*(x_m2 - x_m3)**3)/m
+    _out[2] = (-k*x_m3 + k*(x_m2 - x_m3) - kappa*x_m3**3 + kappa*(x_m2 - x_m3)**3)/m
+    return _out
 
 
 def energy(x, v, k, kappa, m):

@@ -90,11 +90,11 @@ def acceleration(x, g, k, m):
     ndarray, shape (N, ...)
     """
     x_m1, x_m2, x_m3 = x
-    out = numpy.empty(numpy.shape(x))
-    out[0] = (g*m - k*x_m1 - k*(x_m1 - x_m2))/m
-    out[1] = (g*m + k*(x_m1 - x_m2) - k*(x_m2 - x_m3))/m
-    out[2] = (1/2)*(2*g*m + k*(x_m2 - x_m3))/m
-    return out
+    _out = numpy.empty(numpy.shape(x))
+    _out[0] = (g*m - k*x_m1 - k*(x_m1 - x_m2))/m
+    _out[1] = (g*m + k*(x_m1 - x_m2) - k*(x_m2 - x_m3))/m
+    _out[2] = (1/2)*(2*g*m + k*(x_m2 - x_m3))/m
+    return _out
 
 
 def gravity_forces(g, k, m):

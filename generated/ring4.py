@@ -94,12 +94,12 @@ def acceleration(x, k, m):
     ndarray, shape (N, ...)
     """
     x_m1, x_m2, x_m3, x_m4 = x
-    out = numpy.empty(numpy.shape(x))
-    out[0] = (k*(-x_m1 + x_m4) - k*(x_m1 - x_m2))/m
-    out[1] = (k*(x_m1 - x_m2) - k*(x_m2 - x_m3))/m
-    out[2] = (k*(x_m2 - x_m3) - k*(x_m3 - x_m4))/m
-    out[3] = (-k*(-x_m1 + x_m4) + k*(x_m3 - x_m4))/m
-    return out
+    _out = numpy.empty(numpy.shape(x))
+    _out[0] = (k*(-x_m1 + x_m4) - k*(x_m1 - x_m2))/m
+    _out[1] = (k*(x_m1 - x_m2) - k*(x_m2 - x_m3))/m
+    _out[2] = (k*(x_m2 - x_m3) - k*(x_m3 - x_m4))/m
+    _out[3] = (-k*(-x_m1 + x_m4) + k*(x_m3 - x_m4))/m
+    return _out
 
 
 def energy(x, v, k, m):
