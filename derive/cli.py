@@ -134,8 +134,11 @@ def _simulate(scene, args, out: Path, quiet_json: bool) -> dict:
     summary.update({"scene": scene.name, "module": origin, "dt": dt, "steps": steps,
                     "t_end": steps * dt, "npz": str(npz), "figures": [str(p) for p in figures]})
     if not quiet_json:
-        print(f"simulated {scene.name!r}: {len(methods)} method(s), dt = {dt:g}, {steps} steps, "
-              f"t_end = {steps * dt:g} (module: {origin})")
+        applies = "modal (exact) and every integrator" if system.exact_available else (
+            "integrators only (" + ("cubic springs" if not system.linear else "non-harmonic forces")
+            + ": no exact solution)")
+        print(f"simulated {scene.name!r}: {', '.join(methods)}; dt = {dt:g}, {steps} steps, "
+              f"t_end = {steps * dt:g} (module: {origin}); methods that apply: {applies}")
         for name, rec in summary["methods"].items():
             line = f"  {name:<8} {rec['seconds'] * 1e3:8.2f} ms"
             if "max_position_difference" in rec:

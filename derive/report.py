@@ -34,7 +34,13 @@ def equation_lines(model: Model) -> list[str]:
     lines = []
     for i, name in enumerate(model.scene.mass_names):
         terms = [t for t in model.terms if t.coordinate == i]
-        rhs = "   ".join(f"{'+' if j else ''}{sp.sstr(t.force)}  [{t.key}]" for j, t in enumerate(terms))
+        parts = []
+        for j, t in enumerate(terms):
+            text = sp.sstr(t.force)
+            if j:
+                text = f"- {text[1:]}" if text.startswith("-") else f"+ {text}"
+            parts.append(f"{text}  [{t.key}]")
+        rhs = "   ".join(parts)
         lines.append(f"{sp.sstr(model.masses[i])}*{model.a[i]} = {rhs or '0'}")
     return lines
 
@@ -191,7 +197,11 @@ def render_text(model: Model, modes: ModeSet) -> str:
            f"V = {sp.sstr(model.V)}"]
     if model.dampers:
         out.append(f"R = {sp.sstr(model.R)}   (Rayleigh dissipation)")
-    out += [f"L = T - V", "", "Equations of motion (Euler-Lagrange; each term traced to its scene entry):"]
+    lhs = "M x''" + (" + C x'" if model.C is not None else "") + " + K x" + (
+        " + f_nl(x)" if Effect.CUBIC in model.effects else "")
+    rhs = " + ".join([*(["F(t)"] if model.forces else []), *(["M g"] if model.g is not None else [])]) or "0"
+    out += ["L = T - V", "", f"Equations of motion: {lhs} = {rhs}",
+            "Per mass (Euler-Lagrange; each term traced to its scene entry):"]
     out += ["    " + line for line in equation_lines(model)]
     if n <= MAX_MATRIX:
         out += ["", "M = d²T/dv² =", _indent(_pretty(model.M)), "",
