@@ -50,11 +50,25 @@ class Progress:
         sys.stderr.flush()
 
 
+def record_indices(steps: int, record_every: int) -> np.ndarray:
+    """Step indices kept by :func:`integrate`: every ``record_every``-th, and always 0 and ``steps``."""
+    if steps < 0 or record_every < 1:
+        raise ValueError(f"need steps >= 0 and record_every >= 1, got {steps}, {record_every}")
+    idx = np.arange(0, steps + 1, record_every)
+    if idx[-1] != steps:
+        idx = np.append(idx, steps)
+    return idx
+
+
 def integrate(integrator: Integrator, problem: Problem, x0: np.ndarray, v0: np.ndarray, h: float,
               steps: int, record_every: int = 1,
               on_frame: Callable[[int, np.ndarray, np.ndarray], None] | None = None,
               progress: Progress | None = None) -> Trajectory:
     """Run ``steps`` steps of size ``h`` from (x0, v0).
+
+    The loop runs the integrator's array kernel (:meth:`Integrator.kernel`,
+    built once) rather than building a :class:`State` per step; recorded
+    states are written into preallocated arrays.
 
     Parameters
     ----------
@@ -73,35 +87,38 @@ def integrate(integrator: Integrator, problem: Problem, x0: np.ndarray, v0: np.n
         ``t = i·h`` at the recorded indices; x, v shape (S, N, B) (B = 1 for 1-D input).
     """
     x0 = np.asarray(x0, dtype=float)
-    squeeze = x0.ndim == 1
-    if squeeze:
-        x0 = x0[:, None]
-        v0 = np.asarray(v0, dtype=float)[:, None]
-    idx = list(range(0, steps + 1, record_every))
-    if idx[-1] != steps:
-        idx.append(steps)
-    keep = set(idx)
-    xs, vs = [], []
+    v0 = np.asarray(v0, dtype=float)
+    if x0.ndim == 1:
+        x0, v0 = x0[:, None], v0[:, None]
+    idx = record_indices(steps, record_every)
     state = integrator.init(problem, x0, v0)
-
-    def record(st):
-        if on_frame is not None:
-            on_frame(st.i, st.x, st.v)
-        else:
-            xs.append(st.x)
-            vs.append(st.v)
-
-    record(state)
-    for _ in range(steps):
-        state = integrator.step(problem, state, h)
-        if state.i in keep:
-            record(state)
-        if progress is not None and state.i % 256 == 0:
-            progress.update(state.i)
+    kernel = integrator.kernel(problem, h)
+    x, v, a = state.x, state.v, state.a
+    keep = on_frame is None
+    if keep:
+        xs = np.empty((idx.shape[0],) + x.shape)
+        vs = np.empty_like(xs)
+        xs[0], vs[0] = x, v
+    else:
+        on_frame(0, x, v)
+    targets = idx.tolist()
+    j = 1
+    nxt = targets[1] if len(targets) > 1 else -1
+    for i in range(steps):
+        x, v, a = kernel(x, v, a, i)
+        if i + 1 == nxt:
+            if keep:
+                xs[j], vs[j] = x, v
+            else:
+                on_frame(nxt, x, v)
+            j += 1
+            nxt = targets[j] if j < len(targets) else -1
+        if progress is not None and not (i + 1) & 255:
+            progress.update(i + 1)
     if progress is not None:
         progress.update(steps)
-    t = np.asarray(idx, dtype=float) * h
-    evals = 1 + int(round(integrator.evals_per_step * steps))
-    if on_frame is not None:
+    t = idx.astype(float) * h
+    evals = integrator.force_evals(problem, h, steps)
+    if not keep:
         return Trajectory(t, np.empty((0,)), np.empty((0,)), evals)
-    return Trajectory(t, np.stack(xs), np.stack(vs), evals)
+    return Trajectory(t, xs, vs, evals)

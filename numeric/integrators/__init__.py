@@ -1,9 +1,34 @@
-"""Step-based integrators, one module each, behind :class:`~numeric.integrators.base.Integrator`."""
+"""Integrators, one module each, behind :class:`~numeric.integrators.base.Integrator`.
 
-from .base import Integrator, Problem, State
+Fixed-step methods (``INTEGRATORS``) take a step ``h``; the adaptive SciPy
+peers (``ADAPTIVE``) take tolerances and have their own small interface
+(:class:`~numeric.integrators.ivp.AdaptiveMethod`).
+"""
+
+from .base import Integrator, LinearChain, Problem, State
+from .blanes_moan4 import BlanesMoan4
+from .blanes_moan6 import BlanesMoan6
+from .chebyshev import ChebyshevPropagator
+from .expm import MatrixExponential
+from .ivp import DOP853, LSODA, RK45, AdaptiveMethod, AdaptiveResult
+from .kahan_li import KahanLi8
+from .rk4 import RK4
 from .verlet import VelocityVerlet
+from .yoshida import Yoshida4
 
-#: The one table from command-line names to integrator classes.
-INTEGRATORS: dict[str, type[Integrator]] = {cls.name: cls for cls in (VelocityVerlet,)}
+#: The one table from command-line names to fixed-step integrator classes.
+INTEGRATORS: dict[str, type[Integrator]] = {
+    cls.name: cls
+    for cls in (VelocityVerlet, Yoshida4, BlanesMoan4, BlanesMoan6, KahanLi8, RK4,
+                MatrixExponential, ChebyshevPropagator)
+}
 
-__all__ = ["Integrator", "Problem", "State", "VelocityVerlet", "INTEGRATORS"]
+#: Command-line names of the adaptive (tolerance-driven) methods.
+ADAPTIVE: dict[str, type[AdaptiveMethod]] = {cls.name: cls for cls in (RK45, DOP853, LSODA)}
+
+__all__ = [
+    "Integrator", "Problem", "State", "LinearChain", "INTEGRATORS", "ADAPTIVE",
+    "VelocityVerlet", "Yoshida4", "BlanesMoan4", "BlanesMoan6", "KahanLi8", "RK4",
+    "MatrixExponential", "ChebyshevPropagator", "AdaptiveMethod", "AdaptiveResult",
+    "RK45", "DOP853", "LSODA",
+]
