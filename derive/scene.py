@@ -61,6 +61,8 @@ RESERVED_PREFIXES = ("x_", "v_", "a_")
 #: Names a mass may not take (a mass name appears only inside x_<name>, v_<name>).
 MASS_RESERVED = FREE_NAMES | {"wall", "np", "numpy", *FUNCTIONS, *CONSTANTS}
 MAX_NAME = 64
+#: Soft keywords of any supported Python (``type`` is one from 3.12 on).
+SOFT_KEYWORDS = frozenset({"_", "case", "match", "type", *keyword.softkwlist})
 
 #: Largest number of bytes all recorded trajectories of one run may hold.
 MAX_RECORDED_BYTES = 4 * 2**30
@@ -275,7 +277,7 @@ class _Loader:
             raise self.bad(key, value, f"not an identifier", accepted)
         if len(value) > MAX_NAME:
             raise self.bad(key, value, f"longer than {MAX_NAME} characters", accepted)
-        if keyword.iskeyword(value) or keyword.issoftkeyword(value):
+        if keyword.iskeyword(value) or value in SOFT_KEYWORDS:
             raise self.bad(key, value, "a Python keyword", f"another {what}, e.g. {value}_1")
         if value.startswith("_"):
             raise self.bad(key, value, "starts with '_' (kept for generated code)", accepted)
