@@ -32,6 +32,8 @@ from .model import Model
 DEFAULT_BUDGET = 20.0
 #: Largest block (after rigid modes and mirror symmetry) whose determinant is expanded symbolically.
 MAX_SYMBOLIC_BLOCK = 6
+#: Largest closed-form root (SymPy operation count) worth printing and generating.
+MAX_ROOT_OPS = 120
 
 
 class BudgetExceeded(Exception):
@@ -193,6 +195,8 @@ def _solve_block(model: Model, B: sp.Matrix, lam: sp.Symbol, n_rigid_in_block: i
         roots = _cubic_real_roots(fpoly) if fpoly.degree() == 3 else sp.roots(fpoly, lam, multiple=True)
         if len(roots) != fpoly.degree():
             raise BudgetExceeded
+        if any(sp.count_ops(r) > MAX_ROOT_OPS for r in roots):
+            raise BudgetExceeded  # a closed form nobody can read: numeric values instead
         for root in roots:
             root = sp.factor(sp.radsimp(root)) if fpoly.degree() == 1 else root
             if mult == 1:
@@ -261,7 +265,8 @@ def closed_form_modes(model: Model, budget: float | None = DEFAULT_BUDGET,
         with time_budget(budget):
             for B in _blocks(model):
                 # rigid translations lie in the symmetric block (uniform vectors are mirror-symmetric)
-                n_rigid = sum(1 for s in rigid if _in_span(B, s))
+                # the rigid space is mirror-invariant: its share of this block has dimension rank(Bᵀ R)
+                n_rigid = (B.T * sp.Matrix.hstack(*[sp.Matrix(s) for s in rigid])).rank() if rigid else 0
                 modes.extend(_solve_block(model, B, lam, n_rigid, max_radical_degree))
         closed = True
     except BudgetExceeded:
@@ -272,8 +277,26 @@ def closed_form_modes(model: Model, budget: float | None = DEFAULT_BUDGET,
         closed = False
     values = model.scene.parameters
     subs = {model.params[k]: v for k, v in values.items()}
+    modes = _merge_equal(modes, subs)
     modes.sort(key=lambda m: (float(sp.re(sp.N(m.omega2.subs(subs), 30))), str(m.omega2)))
     return ModeSet(tuple(modes), closed, tuple(notes))
+
+
+def _merge_equal(modes: list[Mode], subs: dict) -> list[Mode]:
+    """Merge modes whose ω² are equal (e.g. one from each mirror block) into one repeated mode."""
+    out: list[Mode] = []
+    for mode in modes:
+        value = complex(sp.N(mode.omega2.subs(subs), 30))
+        for j, other in enumerate(out):
+            ov = complex(sp.N(other.omega2.subs(subs), 30))
+            if abs(value - ov) <= 1e-12 * max(abs(value), abs(ov), 1e-300) and (
+                    mode.rigid == other.rigid) and sp.cancel(mode.omega2 - other.omega2) == 0:
+                out[j] = Mode(other.omega2, other.multiplicity + mode.multiplicity,
+                              other.shapes + mode.shapes, other.rigid, other.exact and mode.exact)
+                break
+        else:
+            out.append(mode)
+    return out
 
 
 def _in_span(B: sp.Matrix, s) -> bool:
