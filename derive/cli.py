@@ -126,7 +126,7 @@ def _simulate(scene, args, out: Path, quiet_json: bool) -> dict:
         npz, figures = Path(summary["npz"]), [Path(p) for p in summary["figures"]]
     else:
         runs = run_methods(system, scene.x0, scene.v0, dt, steps, methods, record_every,
-                           spectrum_source=args.spectrum)
+                           spectrum_source=args.spectrum, rtol=args.rtol, atol=args.atol)
         summary = compare(system, runs)
         npz = out / f"{scene.name}.npz"
         write_npz(npz, runs)
@@ -142,7 +142,7 @@ def _simulate(scene, args, out: Path, quiet_json: bool) -> dict:
         print(f"simulated {scene.name!r}: {', '.join(methods)}; dt = {dt:g}, {steps} steps, "
               f"t_end = {steps * dt:g} (module: {origin}); methods that apply: {applies}")
         for name, rec in summary["methods"].items():
-            line = f"  {name:<8} {rec['seconds'] * 1e3:8.2f} ms"
+            line = f"  {name:<13} {rec['seconds'] * 1e3:9.2f} ms"
             if "max_position_difference" in rec:
                 line += (f"   max |x - x_exact| = {rec['max_position_difference']:.3e}"
                          f"   max |v - v_exact| = {rec['max_velocity_difference']:.3e}")
@@ -190,7 +190,7 @@ def cmd_run(args) -> int:
         print(f"generated module {path} is STALE: regenerate with `springchain derive` in the repository root")
     print()
     args.method, args.dt, args.steps, args.record_every = None, None, None, None
-    args.spectrum, args.no_figures = "svd", False
+    args.spectrum, args.no_figures, args.rtol, args.atol = "svd", False, 1e-10, 1e-12
     _simulate(scene, args, Path(args.out), False)
     print(f"\nfigures and data are in {Path(args.out).resolve()}  ({time.perf_counter() - t0:.2f} s in all)")
     return 0
@@ -247,6 +247,10 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("--spectrum", choices=("svd", "closed-form"), default="svd",
                    help="modes for the exact solution: SVD of the spring factor (accurate, default) or the "
                         "generated closed forms")
+    s.add_argument("--rtol", type=_positive_float("--rtol"), default=1e-10,
+                   help="relative tolerance of the adaptive methods rk45, dop853, lsoda (default: %(default)g)")
+    s.add_argument("--atol", type=_positive_float("--atol"), default=1e-12,
+                   help="absolute tolerance of the adaptive methods (default: %(default)g)")
     s.add_argument("--out", default="springchain-out", help="output folder (default: %(default)s)")
     s.add_argument("--no-figures", action="store_true", help="write only the NPZ")
     s.add_argument("--json", action="store_true", help="print a JSON summary instead of text")

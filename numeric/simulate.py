@@ -14,7 +14,7 @@ from .effects import EffectSplitting
 from .linear_exact import AugmentedLinear
 from .errors import RunRefused
 from .files import atomic_path
-from .integrators import INTEGRATORS
+from .integrators import ADAPTIVE, INTEGRATORS
 from .integrators.base import Problem
 from .modal import ModalSolution
 from .spectrum import Spectrum, spectrum, spectrum_from_closed_form
@@ -25,7 +25,7 @@ EXACT = "modal"
 
 def method_names() -> list[str]:
     """Every method selectable by name (``--method``), the exact one first."""
-    return [EXACT, *INTEGRATORS]
+    return [EXACT, *INTEGRATORS, *ADAPTIVE]
 
 
 @dataclass(frozen=True)
@@ -58,12 +58,20 @@ def check_stable(omega_max: float, h: float, method: str, limit: float = 2.0) ->
 
 
 def problem_for(system: System) -> Problem:
-    return Problem(system.acceleration_fn)
+    """The conservative problem (with the chain operator when the scene is plain linear)."""
+    return Problem.from_system(system)
+
+
+def full_problem(system: System) -> Problem:
+    """Conservative + damping + external forces, for methods that take them all (adaptive)."""
+    Ad = system.damping_rate_matrix()
+    return Problem(system.acceleration_fn, damping=None if Ad is None else (lambda v: Ad @ v),
+                   external=system.external_fn)
 
 
 def run_methods(system: System, x0: np.ndarray, v0: np.ndarray, h: float, steps: int,
                 methods: list[str], record_every: int = 1, spectrum_source: str = "svd",
-                progress: bool | None = None) -> dict[str, Run]:
+                progress: bool | None = None, rtol: float = 1e-10, atol: float = 1e-12) -> dict[str, Run]:
     """Run each named method from (x0, v0) on the grid t = i·h, i = 0..steps.
 
     Parameters
@@ -100,6 +108,11 @@ def run_methods(system: System, x0: np.ndarray, v0: np.ndarray, h: float, steps:
             else:
                 x, v = AugmentedLinear.from_system(system).solve(x0, v0, t, h * record_every)
             out[name] = Run(name, t, x, v, time.perf_counter() - t0, 0)
+            continue
+        if name in ADAPTIVE:
+            t0 = time.perf_counter()
+            res = ADAPTIVE[name]().solve(full_problem(system), x0, v0, t, rtol, atol)
+            out[name] = Run(name, t, res.x[..., 0], res.v[..., 0], time.perf_counter() - t0, res.force_evals)
             continue
         integrator = INTEGRATORS[name]()
         if not plain:
