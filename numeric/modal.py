@@ -6,7 +6,10 @@ In mass-weighted modal coordinates each mode is ``q̈ = -ω² q``, solved by
     q̇(t) = -q0 · ω²t·sinc(ωt) + q̇0 cos(ωt)
 
 which never divides by ω: a rigid-body mode (ω = 0 exactly, by structure)
-is the uniform drift ``x_cm(0) + v_cm·t`` with no special case.
+is the uniform drift ``x_cm(0) + v_cm·t`` with no special case. The elastic
+modes are orthogonal to the rigid ones to roundoff (see
+:mod:`numeric.spectrum`), so they carry no momentum and do not move the
+centre of mass of a free piece.
 """
 
 from __future__ import annotations
@@ -15,22 +18,21 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from .special import tsinc
 from .spectrum import Spectrum
 
-
-def tsinc(omega: np.ndarray, t: np.ndarray) -> np.ndarray:
-    """``sin(ω t)/ω`` written as ``t·sinc(ωt)``: finite and exact at ω = 0."""
-    return t * np.sinc(omega * t / np.pi)
+__all__ = ["ModalSolution", "tsinc"]
 
 
 @dataclass(frozen=True)
 class ModalSolution:
     """Exact trajectory from initial displacements and velocities.
 
-    Parameters
+    Attributes
     ----------
     spectrum : Spectrum
-    x0, v0 : ndarray, shape (N,) or (N, B)
+    q0, p0 : ndarray, shape (N,) or (N, B)
+        Initial modal coordinates and velocities (mass-weighted).
     """
 
     spectrum: Spectrum
@@ -39,10 +41,31 @@ class ModalSolution:
 
     @classmethod
     def from_initial(cls, spectrum: Spectrum, x0: np.ndarray, v0: np.ndarray) -> "ModalSolution":
+        """The solution through displacements ``x0`` and velocities ``v0``, shape (N,) or (N, B)."""
         r = np.sqrt(spectrum.masses)
         r = r.reshape(r.shape + (1,) * (np.ndim(x0) - 1))
         E = spectrum.vectors
         return cls(spectrum, np.tensordot(E.T, r * x0, axes=1), np.tensordot(E.T, r * v0, axes=1))
+
+    def _modal(self, t):
+        """Modal coordinates, velocities and ω reshaped for broadcasting against t of shape (S,)."""
+        t = np.asarray(t, dtype=float)
+        w = self.spectrum.omega
+        extra = (1,) * (self.q0.ndim - 1)
+        tt = t.reshape(t.shape + (1,) + extra)
+        ww = w.reshape(w.shape + extra)
+        c = np.cos(ww * tt)
+        s = tsinc(ww, tt)
+        q = self.q0 * c + self.p0 * s
+        p = -self.q0 * (ww**2) * s + self.p0 * c
+        return t, q, p, ww
+
+    def _physical(self, t: np.ndarray, y: np.ndarray) -> np.ndarray:
+        """``M^-1/2 E y`` with the mode axis of y (just after the time axes) contracted."""
+        extra = (1,) * (self.q0.ndim - 1)
+        E = self.spectrum.vectors
+        r = np.sqrt(self.spectrum.masses).reshape((-1,) + extra)
+        return np.moveaxis(np.tensordot(E, y, axes=([1], [t.ndim])), 0, t.ndim) / r
 
     def at(self, t) -> tuple[np.ndarray, np.ndarray]:
         """Positions and velocities at times ``t``.
@@ -55,17 +78,25 @@ class ModalSolution:
         -------
         x, v : ndarray, shape (N, ...) for scalar t, or (S, N, ...) for an array of times
         """
-        t = np.asarray(t, dtype=float)
-        w = self.spectrum.omega
-        extra = (1,) * (self.q0.ndim - 1)
-        tt = t.reshape(t.shape + (1,) + extra)
-        ww = w.reshape(w.shape + extra)
-        c = np.cos(ww * tt)
-        s = tsinc(ww, tt)
-        q = self.q0 * c + self.p0 * s
-        p = -self.q0 * (ww**2) * s + self.p0 * c
-        E = self.spectrum.vectors
-        r = np.sqrt(self.spectrum.masses).reshape((-1,) + extra)
-        x = np.moveaxis(np.tensordot(E, q, axes=([1], [t.ndim])), 0, t.ndim) / r
-        v = np.moveaxis(np.tensordot(E, p, axes=([1], [t.ndim])), 0, t.ndim) / r
-        return x, v
+        t, q, p, _ = self._modal(t)
+        return self._physical(t, q), self._physical(t, p)
+
+    def acceleration_at(self, t) -> np.ndarray:
+        """Accelerations ``ẍ = -M^-1/2 E Ω² q`` at times ``t`` (analytic, no differencing).
+
+        Parameters
+        ----------
+        t : float or ndarray, shape (S,)
+
+        Returns
+        -------
+        a : ndarray, shape as ``x`` from :meth:`at`
+        """
+        t, q, _, ww = self._modal(t)
+        return self._physical(t, -(ww**2) * q)
+
+    @property
+    def energy(self) -> np.ndarray:
+        """The conserved energy ``½ Σ (q̇0² + ω² q0²)``, shape () or (B,)."""
+        w2 = self.spectrum.omega2.reshape((-1,) + (1,) * (self.q0.ndim - 1))
+        return 0.5 * np.sum(self.p0**2 + w2 * self.q0**2, axis=0)
