@@ -50,6 +50,27 @@ class Progress:
         sys.stderr.flush()
 
 
+def step_grid(t_end: float, h_target: float) -> tuple[float, int]:
+    """The fixed-step grid over ``[0, t_end]``: ``n = ceil(t_end/h_target)``, ``h = t_end/n``.
+
+    A quotient within 1e-9 steps of an integer counts as that integer (so
+    ``t_end = 100, h_target = 0.1`` gives 1000 steps whatever the rounding).
+
+    Returns
+    -------
+    h : float
+        The step actually used (≤ h_target up to roundoff).
+    n : int
+        Number of steps; times are ``t = i·h``, ``i = 0..n``.
+    """
+    t_end, h_target = float(t_end), float(h_target)
+    if not (np.isfinite(t_end) and t_end > 0 and np.isfinite(h_target) and h_target > 0):
+        raise ValueError(f"need t_end > 0 and h_target > 0 (finite), got {t_end!r}, {h_target!r}")
+    q = t_end / h_target
+    n = max(1, int(np.ceil(q - 1e-9 * max(1.0, q))))
+    return t_end / n, n
+
+
 def record_indices(steps: int, record_every: int) -> np.ndarray:
     """Step indices kept by :func:`integrate`: every ``record_every``-th, and always 0 and ``steps``."""
     if steps < 0 or record_every < 1:
