@@ -123,7 +123,7 @@ class ChebyshevPropagator(Integrator):
 
     name = "chebyshev"
     order = math.inf
-    symplectic = False  # exact flow up to roundoff, which is symplectic only to roundoff
+    symplectic = True  # the exact flow (to roundoff), like expm
     evals_per_step = math.nan  # depends on h·ω_max: see evals_for
     init_evals = 0
     stability_limit = math.inf
