@@ -223,6 +223,31 @@ def render_module(model: Model, modes: ModeSet, *, bundled: bool = True) -> str:
     for i in range(n):
         w(f"    _out[{i}] = {_p(cons[i] / model.masses[i])}")
     w("    return _out")
+    w("")
+    w("")
+    kwcall = ", ".join(f"{p}={p}" for p in params)
+    w(f"def make_acceleration({sig}):")
+    if sc.linear:
+        w('    """acceleration() with the parameters bound: -M⁻¹K' + (" and g" if model.g is not None else "")
+          + ' formed once; x shape (N,) or (N, B)."""')
+        w(f"    _inv_m = 1.0 / masses({kwcall})")
+        w(f"    _A = -_inv_m[:, None] * stiffness_matrix({kwcall})")
+        if model.g is not None:
+            w(f"    _g = (_inv_m * gravity_forces({kwcall}))[:, None]")
+            w("")
+            w("    def bound(x):")
+            w("        return _A @ x + (_g if numpy.ndim(x) == 2 else _g[:, 0])")
+        else:
+            w("")
+            w("    def bound(x):")
+            w("        return _A @ x")
+    else:
+        w('    """acceleration() with the parameters bound (nonlinear springs: the expressions above)."""')
+        w("")
+        w("    def bound(x):")
+        w(f"        return acceleration(x{', ' + kwcall if kwcall else ''})")
+    w("")
+    w("    return bound")
     if model.dampers:
         damp = model.force_expressions(Effect.DAMPER)
         w("")

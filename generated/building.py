@@ -113,6 +113,17 @@ def acceleration(x, F0, c, k, m):
     return _out
 
 
+def make_acceleration(F0, c, k, m):
+    """acceleration() with the parameters bound: -M⁻¹K formed once; x shape (N,) or (N, B)."""
+    _inv_m = 1.0 / masses(F0=F0, c=c, k=k, m=m)
+    _A = -_inv_m[:, None] * stiffness_matrix(F0=F0, c=c, k=k, m=m)
+
+    def bound(x):
+        return _A @ x
+
+    return bound
+
+
 def damping_acceleration(v, F0, c, k, m):
     """Acceleration -M^-1 C v from the dampers; v and result have shape (N, ...)."""
     v_floor1, v_floor2, v_floor3 = v

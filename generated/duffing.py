@@ -102,6 +102,15 @@ def acceleration(x, k, kappa, m):
     return _out
 
 
+def make_acceleration(k, kappa, m):
+    """acceleration() with the parameters bound (nonlinear springs: the expressions above)."""
+
+    def bound(x):
+        return acceleration(x, k=k, kappa=kappa, m=m)
+
+    return bound
+
+
 def energy(x, v, k, kappa, m):
     """Total energy T + V; x, v shape (N, ...), result shape (...)."""
     x_m1, x_m2, x_m3 = x

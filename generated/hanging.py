@@ -97,6 +97,18 @@ def acceleration(x, g, k, m):
     return _out
 
 
+def make_acceleration(g, k, m):
+    """acceleration() with the parameters bound: -M⁻¹K and g formed once; x shape (N,) or (N, B)."""
+    _inv_m = 1.0 / masses(g=g, k=k, m=m)
+    _A = -_inv_m[:, None] * stiffness_matrix(g=g, k=k, m=m)
+    _g = (_inv_m * gravity_forces(g=g, k=k, m=m))[:, None]
+
+    def bound(x):
+        return _A @ x + (_g if numpy.ndim(x) == 2 else _g[:, 0])
+
+    return bound
+
+
 def gravity_forces(g, k, m):
     """Constant gravity force m_i*g on each mass (+x direction), shape (N,)."""
     return numpy.array([g*m, g*m, 2*g*m], dtype=float)

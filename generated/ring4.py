@@ -102,6 +102,17 @@ def acceleration(x, k, m):
     return _out
 
 
+def make_acceleration(k, m):
+    """acceleration() with the parameters bound: -M⁻¹K formed once; x shape (N,) or (N, B)."""
+    _inv_m = 1.0 / masses(k=k, m=m)
+    _A = -_inv_m[:, None] * stiffness_matrix(k=k, m=m)
+
+    def bound(x):
+        return _A @ x
+
+    return bound
+
+
 def energy(x, v, k, m):
     """Total energy T + V; x, v shape (N, ...), result shape (...)."""
     x_m1, x_m2, x_m3, x_m4 = x

@@ -68,7 +68,7 @@ class System:
         """a(x) with everything that does not depend on x computed once."""
         mod, p = self.module, self.params
         if hasattr(mod, "make_acceleration"):
-            return mod.make_acceleration(**p, n=self.n)
+            return mod.make_acceleration(**p, n=self.n) if self.chain else mod.make_acceleration(**p)
         return lambda x: mod.acceleration(x, **p)
 
     @property
