@@ -17,6 +17,9 @@ from sympy.printing.numpy import NumPyPrinter
 from .model import Effect, Model
 from .modes import ModeSet
 
+#: Scenes with more masses get matrices assembled from the spring list, not printed entry by entry.
+MAX_PRINTED_MATRIX = 12
+
 _SAFE_FILE = re.compile(r"^[A-Za-z0-9_.\-]{1,100}$")
 
 
@@ -157,25 +160,49 @@ def render_module(model: Model, modes: ModeSet, *, bundled: bool = True) -> str:
         w(f"    return {_array([_p(c) for _, _, c, _ in model.dampers])}")
     w("")
     w("")
+    kwcall = ", ".join(f"{p}={p}" for p in params)
+    dense = n <= MAX_PRINTED_MATRIX
     w(f"def mass_matrix({sig}):")
     w('    """M = d²T/dv², shape (N, N)."""')
-    w(f"    return {_matrix(model.M)}")
+    w(f"    return {_matrix(model.M)}" if dense else f"    return numpy.diag(masses({kwcall}))")
     w("")
     w("")
     w(f"def stiffness_matrix({sig}):")
     w('    """K = d²V/dx² at x = 0, shape (N, N)."""')
-    w(f"    return {_matrix(model.K)}")
+    if dense:
+        w(f"    return {_matrix(model.K)}")
+    else:
+        w(f"    return _assemble(SPRING_ENDS, spring_constants({kwcall}))")
     if model.C is not None:
         w("")
         w("")
         w(f"def damping_matrix({sig}):")
         w('    """C = d²R/dv² (Rayleigh dissipation), shape (N, N)."""')
-        w(f"    return {_matrix(model.C)}")
+        if dense:
+            w(f"    return {_matrix(model.C)}")
+        else:
+            w(f"    return _assemble(DAMPER_ENDS, damper_constants({kwcall}))")
     w("")
     w("")
     w(f"def dynamical_matrix({sig}):")
     w('    """D = M^-1/2 K M^-1/2, shape (N, N)."""')
-    w(f"    return {_matrix(model.D)}")
+    if dense:
+        w(f"    return {_matrix(model.D)}")
+    else:
+        w(f"    _r = 1.0 / numpy.sqrt(masses({kwcall}))")
+        w(f"    return stiffness_matrix({kwcall}) * _r[:, None] * _r[None, :]")
+    if not dense:
+        w("")
+        w("")
+        w("def _assemble(ends, values):")
+        w('    """Σ_e c_e b_e b_eᵀ over elements with ends (a, b) (-1 = wall): an (N, N) matrix."""')
+        w("    _ends = numpy.asarray(ends, dtype=numpy.intp).reshape(-1, 2)")
+        w("    _out = numpy.zeros((N, N))")
+        w("    for _ci, _si in ((0, 1.0), (1, -1.0)):")
+        w("        for _cj, _sj in ((0, 1.0), (1, -1.0)):")
+        w("            _ok = (_ends[:, _ci] >= 0) & (_ends[:, _cj] >= 0)")
+        w("            numpy.add.at(_out, (_ends[_ok, _ci], _ends[_ok, _cj]), _si * _sj * values[_ok])")
+        w("    return _out")
     w("")
     w("")
     flat = [(mode, s) for mode in modes.modes for s in mode.shapes]
@@ -225,22 +252,41 @@ def render_module(model: Model, modes: ModeSet, *, bundled: bool = True) -> str:
     w("    return _out")
     w("")
     w("")
-    kwcall = ", ".join(f"{p}={p}" for p in params)
     w(f"def make_acceleration({sig}):")
     if sc.linear:
         w('    """acceleration() with the parameters bound: -M⁻¹K' + (" and g" if model.g is not None else "")
           + ' formed once; x shape (N,) or (N, B)."""')
         w(f"    _inv_m = 1.0 / masses({kwcall})")
-        w(f"    _A = -_inv_m[:, None] * stiffness_matrix({kwcall})")
-        if model.g is not None:
-            w(f"    _g = (_inv_m * gravity_forces({kwcall}))[:, None]")
+        if not dense:  # incidence form: no N x N matrix
+            w("    _ends = numpy.asarray(SPRING_ENDS, dtype=numpy.intp).reshape(-1, 2)")
+            w("    _a, _b = _ends[:, 0], _ends[:, 1]")
+            w(f"    _k = spring_constants({kwcall})")
+            w("    _ia, _ib = numpy.flatnonzero(_a >= 0), numpy.flatnonzero(_b >= 0)")
+            if model.g is not None:
+                w(f"    _g = _inv_m * gravity_forces({kwcall})")
             w("")
             w("    def bound(x):")
-            w("        return _A @ x + (_g if numpy.ndim(x) == 2 else _g[:, 0])")
+            w("        _x = numpy.asarray(x, dtype=float)")
+            w("        _xe = numpy.concatenate([_x, numpy.zeros((1,) + _x.shape[1:])])  # row -1 = wall")
+            w("        _s = _k.reshape((-1,) + (1,) * (_x.ndim - 1)) * (_xe[_a] - _xe[_b])")
+            w("        _f = numpy.zeros_like(_x)")
+            w("        numpy.add.at(_f, _a[_ia], -_s[_ia])")
+            w("        numpy.add.at(_f, _b[_ib], _s[_ib])")
+            w("        _f *= _inv_m.reshape((-1,) + (1,) * (_x.ndim - 1))")
+            if model.g is not None:
+                w("        _f += _g.reshape((-1,) + (1,) * (_x.ndim - 1))")
+            w("        return _f")
         else:
-            w("")
-            w("    def bound(x):")
-            w("        return _A @ x")
+            w(f"    _A = -_inv_m[:, None] * stiffness_matrix({kwcall})")
+            if model.g is not None:
+                w(f"    _g = (_inv_m * gravity_forces({kwcall}))[:, None]")
+                w("")
+                w("    def bound(x):")
+                w("        return _A @ x + (_g if numpy.ndim(x) == 2 else _g[:, 0])")
+            else:
+                w("")
+                w("    def bound(x):")
+                w("        return _A @ x")
     else:
         w('    """acceleration() with the parameters bound (nonlinear springs: the expressions above)."""')
         w("")
