@@ -1,0 +1,674 @@
+"""Fused velocity-Verlet steps for ``[chain]`` modules: one pass over memory per step.
+
+A generated chain module (:mod:`derive.chain`) evaluates its acceleration
+with NumPy slices, one ufunc (one pass over memory) at a time; a Verlet step
+built on it makes about ten passes. Here the whole step is one sweep over
+the chain in cache-sized blocks of rows: a block is drifted
+(``x ← x + h v + h²/2 a``) and then the rows whose three neighbours are all
+drifted are kicked (``a' = a(x)``, ``v ← v + h/2 (a + a')``), so each row
+of ``x``, ``v`` and ``a`` leaves main memory once and comes back once.
+
+Two sweeps are provided:
+
+* :meth:`FusedVerlet.step` — one velocity-Verlet step on ``(x, v, a)``
+  (the :class:`~numeric.integrators.base.Integrator` kernel contract; reads
+  and writes 24 bytes per mass, 48 in all, one stencil per mass).
+* :meth:`FusedVerlet.advance` — many steps in the equivalent "half-step
+  velocity" form ``w = v + h/2 a``: ``x ← x + h w;  w ← w + h a(x)``. The
+  state in memory is ``(x, w)``: 16 bytes read and 16 written per mass and
+  step, i.e. the 32-byte-per-mass floor, and still one stencil per mass.
+  ``v`` and ``a`` are restored at the end (two extra sweeps per call), so
+  the result is velocity Verlet to rounding.
+
+The compiled path needs numba (the optional ``fast`` extra); it is imported
+lazily, and without it the same API runs plain NumPy on the module's own
+stencil (:data:`Backend.NUMPY`), which is also what the tests compare with.
+
+Chain ends follow the generated modules: ``free``, ``wall`` (a spring
+``k(-1)`` to a wall on the left, ``k(n-1)`` on the right) or ``ring`` (the
+spring ``k(n-1)`` closes n-1 to 0); masses and springs may depend on the
+index (then read from arrays) and springs may be cubic (``k d + k3 d³``).
+"""
+
+from __future__ import annotations
+
+import enum
+import functools
+import math
+from dataclasses import dataclass, field
+from types import ModuleType
+from typing import Callable
+
+import numpy as np
+
+from .errors import RunRefused
+
+#: Elements (rows × batch) per cache block of a sweep: 8192 doubles = 64 KiB per array (L2-resident).
+BLOCK_ELEMENTS = 8192
+
+
+class Backend(enum.Enum):
+    """How a step is computed."""
+
+    NUMBA = "numba"  #: fused compiled sweep (needs numba)
+    NUMPY = "numpy"  #: the module's NumPy stencil, one ufunc pass at a time
+
+
+class End(enum.IntEnum):
+    """A chain end (the integer value is what the compiled kernels see)."""
+
+    FREE = 0
+    WALL = 1
+    RING = 2
+
+
+class _Mode(enum.IntEnum):
+    """What a sweep's kick does with the new acceleration A (compile-time constant)."""
+
+    VERLET = 0  #: v ← v + h/2 (a + A); a ← A
+    LEAPFROG = 1  #: w ← w + h A
+    FORCE = 2  #: a ← A
+
+
+@functools.lru_cache(maxsize=1)
+def available() -> bool:
+    """Whether numba can be imported (the fused :data:`Backend.NUMBA` path)."""
+    try:
+        import numba  # noqa: F401
+    except Exception:  # ImportError, or a numba/llvmlite that fails to load
+        return False
+    return True
+
+
+def default_backend() -> Backend:
+    """:data:`Backend.NUMBA` when numba is available, else :data:`Backend.NUMPY`."""
+    return Backend.NUMBA if available() else Backend.NUMPY
+
+
+# -- coefficients ------------------------------------------------------------------------
+def _cubic_constants(module: ModuleType, values: dict[str, float], n: int) -> np.ndarray:
+    """Cubic coefficients k3 of a chain module's springs in ``spring_constants()`` order, shape (S,).
+
+    Uses a public ``spring_cubic_constants(**params, n)`` if the module has
+    one; otherwise the generator's per-spring helper ``_spring_k3(i, **params)``
+    (spring i joins i and i+1; -1 the left wall, n-1 the right wall or the ring closure).
+    """
+    public = getattr(module, "spring_cubic_constants", None)
+    if public is not None:
+        return np.asarray(public(**values, n=n), dtype=float)
+    helper = getattr(module, "_spring_k3", None) or getattr(module, "_k3", None)
+    if helper is None:
+        raise RunRefused(f"chain module {getattr(module, 'SCENE', '?')!r} declares cubic springs but exposes "
+                         "no cubic coefficients; regenerate it with `springchain derive`")
+    left, right = str(module.LEFT), str(module.RIGHT)
+    idx = np.arange(-1 if left == "wall" else 0, n if right in ("wall", "ring") else n - 1, dtype=float)
+    return np.array(np.broadcast_to(np.asarray(helper(idx, **values), dtype=float), idx.shape))
+
+
+@dataclass(frozen=True)
+class ChainCoefficients:
+    """The numbers of a chain's stencil at fixed parameter values.
+
+    Attributes
+    ----------
+    n : int
+        Number of masses.
+    left, right : End
+        The ends (``RING`` on both or neither).
+    inv_mass : ndarray, shape (n,), or (1,) for a uniform chain
+        ``1/m_i``.
+    k : ndarray, shape (max(n-1, 1),), or (1,) for a uniform chain
+        Spring ``i`` joins masses ``i`` and ``i+1``.
+    k3 : ndarray, same shape as ``k``, or None
+        Cubic coefficients (None for a linear chain).
+    k_left, k_right : float
+        The left wall spring; the right wall spring or the ring's closing spring (0 if absent).
+    k3_left, k3_right : float
+        Their cubic coefficients (0 if absent or linear).
+    uniform : bool
+        Coefficients independent of the index (arrays of length 1).
+    """
+
+    n: int
+    left: End
+    right: End
+    inv_mass: np.ndarray = field(repr=False)
+    k: np.ndarray = field(repr=False)
+    k3: np.ndarray | None = field(repr=False)
+    k_left: float
+    k_right: float
+    k3_left: float
+    k3_right: float
+    uniform: bool
+
+    @classmethod
+    def from_module(cls, module: ModuleType, params: dict[str, float] | None = None,
+                    n: int | None = None) -> "ChainCoefficients":
+        """Read the coefficients from a generated ``[chain]`` module.
+
+        Parameters
+        ----------
+        module : module
+            A generated chain module (``CHAIN = True``).
+        params : dict, optional
+            Parameter values overriding ``module.DEFAULTS``.
+        n : int, optional
+            Number of masses (default ``module.N``).
+        """
+        if not getattr(module, "CHAIN", False):
+            raise RunRefused("the fused chain step needs a [chain] scene's generated module")
+        values = dict(module.DEFAULTS)
+        values.update(params or {})
+        n = int(module.N if n is None else n)
+        if n < 1:
+            raise ValueError(f"a chain needs n >= 1 masses, got {n}")
+        left, right = End[str(module.LEFT).upper()], End[str(module.RIGHT).upper()]
+        uniform = bool(module.UNIFORM)
+        m = np.asarray(module.masses(**values, n=n), dtype=float)
+        ks = np.asarray(module.spring_constants(**values, n=n), dtype=float)
+        off = 1 if left is End.WALL else 0
+        inner = ks[off:off + n - 1]
+        k_left = float(ks[0]) if left is End.WALL else 0.0
+        k_right = float(ks[-1]) if right in (End.WALL, End.RING) else 0.0
+        k3 = None
+        k3_left = k3_right = 0.0
+        if not bool(module.LINEAR):
+            k3s = _cubic_constants(module, values, n)  # spring_constants() order
+            k3 = np.array(k3s[off:off + n - 1])
+            if left is End.WALL:
+                k3_left = float(k3s[0])
+            if right in (End.WALL, End.RING):
+                k3_right = float(k3s[-1])
+        if uniform:
+            inv = np.array([1.0 / m[0]])
+            kk = np.array([inner[0] if n > 1 else (k_right or k_left or 0.0)])
+            k3a = None if k3 is None else np.array([k3[0] if n > 1 else (k3_right or k3_left)])
+        else:
+            inv = 1.0 / m
+            kk = inner.copy() if n > 1 else np.zeros(1)
+            k3a = None if k3 is None else (k3.copy() if n > 1 else np.zeros(1))
+        return cls(n, left, right, inv, kk, k3a, k_left, k_right, k3_left, k3_right, uniform)
+
+    @property
+    def cubic(self) -> bool:
+        return self.k3 is not None
+
+    @property
+    def omega_max_bound(self) -> float:
+        """Gershgorin bound on ω_max: ``√(max_i 2 (k_{i-1} + k_i)/m_i)`` (≥ the true ω_max)."""
+        ks = [np.max(self.k) if self.n > 1 else 0.0, self.k_left, self.k_right]
+        return math.sqrt(2.0 * 2.0 * max(ks) * float(np.max(self.inv_mass)))
+
+    def kernel_args(self) -> tuple:
+        """The positional coefficient arguments of the compiled sweeps."""
+        k3 = self.k3 if self.k3 is not None else np.zeros(1)
+        return (self.n, self.inv_mass, self.k, k3, self.k_left, self.k_right, self.k3_left, self.k3_right,
+                int(self.left), int(self.right))
+
+
+# -- compiled sweeps -----------------------------------------------------------------------
+@functools.lru_cache(maxsize=None)
+def _compiled(uniform: bool, cubic: bool):
+    """The numba sweeps specialised for (uniform, cubic); compiled on first call.
+
+    ``uniform`` and ``cubic`` are closure constants, so the branches on them
+    vanish at compile time and the inner loops vectorise; what a kick does
+    (:class:`_Mode`) is a run-time argument tested outside the inner loops.
+    Arrays are flat C-contiguous float64 views of (n, nb) states; row ``i``
+    is elements ``i*nb … i*nb + nb - 1``.
+
+    Returns ``(force, sweep, half_kick)``.
+    """
+    import numba
+
+    UNI = uniform
+    CUB = cubic
+    FREE, WALL = int(End.FREE), int(End.WALL)
+    VERLET, LEAPFROG, FORCE = int(_Mode.VERLET), int(_Mode.LEAPFROG), int(_Mode.FORCE)
+    RING = int(End.RING)
+
+    @numba.njit
+    def spring(x, j, b, nb, n, k, k3, kl, kr, k3l, k3r, left, right):
+        """Force ``k d + k3 d³`` of spring j (-1 … n-1, ends included), d its extension."""
+        if j < 0:
+            if left == FREE:
+                return 0.0
+            if left == WALL:
+                d = x[b]
+                s = kl * d
+                if CUB:
+                    s += k3l * d * d * d
+                return s
+            j = n - 1  # a ring: spring -1 is the closing spring n-1
+        if j >= n - 1:
+            if right == FREE:
+                return 0.0
+            last = (n - 1) * nb + b
+            if right == WALL:
+                d = -x[last]
+            else:
+                d = x[b] - x[last]
+            s = kr * d
+            if CUB:
+                s += k3r * d * d * d
+            return s
+        e = j * nb + b
+        d = x[e + nb] - x[e]
+        s = (k[0] if UNI else k[j]) * d
+        if CUB:
+            s += (k3[0] if UNI else k3[j]) * d * d * d
+        return s
+
+    @numba.njit
+    def kick_end(x, v, a, i, nb, n, im, k, k3, kl, kr, k3l, k3r, left, right, c, mode):
+        """Kick one row (any row, ends included) through the scalar spring function."""
+        mi = im[0] if UNI else im[i]
+        for b in range(nb):
+            A = mi * (spring(x, i, b, nb, n, k, k3, kl, kr, k3l, k3r, left, right)
+                      - spring(x, i - 1, b, nb, n, k, k3, kl, kr, k3l, k3r, left, right))
+            e = i * nb + b
+            if mode == VERLET:
+                v[e] = v[e] + c * (a[e] + A)
+                a[e] = A
+            elif mode == LEAPFROG:
+                v[e] = v[e] + c * A
+            else:
+                a[e] = A
+
+    @numba.njit
+    def kick_uniform(xm, xc, xp, vv, aa, kk, kc, mi, c, mode):
+        """Interior rows of a uniform chain (scalars hoisted; neighbours are the views xm, xp)."""
+        if mode == VERLET:
+            for e in range(xc.shape[0]):
+                d1 = xp[e] - xc[e]
+                d0 = xc[e] - xm[e]
+                s1 = kk * d1
+                s0 = kk * d0
+                if CUB:
+                    s1 += kc * d1 * d1 * d1
+                    s0 += kc * d0 * d0 * d0
+                A = mi * (s1 - s0)
+                vv[e] = vv[e] + c * (aa[e] + A)
+                aa[e] = A
+        elif mode == LEAPFROG:
+            if not CUB:
+                # w ← w + (h k/m)·(Δ⁺x − Δ⁻x): coefficients folded (the sweep equals Verlet to rounding)
+                q = c * mi * kk
+                for e in range(xc.shape[0]):
+                    vv[e] = vv[e] + q * ((xp[e] - xc[e]) - (xc[e] - xm[e]))
+            else:
+                for e in range(xc.shape[0]):
+                    d1 = xp[e] - xc[e]
+                    d0 = xc[e] - xm[e]
+                    A = mi * ((kk * d1 + kc * d1 * d1 * d1) - (kk * d0 + kc * d0 * d0 * d0))
+                    vv[e] = vv[e] + c * A
+        else:
+            for e in range(xc.shape[0]):
+                d1 = xp[e] - xc[e]
+                d0 = xc[e] - xm[e]
+                s1 = kk * d1
+                s0 = kk * d0
+                if CUB:
+                    s1 += kc * d1 * d1 * d1
+                    s0 += kc * d0 * d0 * d0
+                aa[e] = mi * (s1 - s0)
+
+    @numba.njit
+    def kick_indexed(xm, xc, xp, vv, aa, ku, kd, cu, cd, mm, c, mode):
+        """Interior rows of an index-dependent chain, one state (row = element)."""
+        if mode == VERLET:
+            for e in range(xc.shape[0]):
+                d1 = xp[e] - xc[e]
+                d0 = xc[e] - xm[e]
+                s1 = ku[e] * d1
+                s0 = kd[e] * d0
+                if CUB:
+                    s1 += cu[e] * d1 * d1 * d1
+                    s0 += cd[e] * d0 * d0 * d0
+                A = mm[e] * (s1 - s0)
+                vv[e] = vv[e] + c * (aa[e] + A)
+                aa[e] = A
+        elif mode == LEAPFROG:
+            for e in range(xc.shape[0]):
+                d1 = xp[e] - xc[e]
+                d0 = xc[e] - xm[e]
+                s1 = ku[e] * d1
+                s0 = kd[e] * d0
+                if CUB:
+                    s1 += cu[e] * d1 * d1 * d1
+                    s0 += cd[e] * d0 * d0 * d0
+                vv[e] = vv[e] + c * (mm[e] * (s1 - s0))
+        else:
+            for e in range(xc.shape[0]):
+                d1 = xp[e] - xc[e]
+                d0 = xc[e] - xm[e]
+                s1 = ku[e] * d1
+                s0 = kd[e] * d0
+                if CUB:
+                    s1 += cu[e] * d1 * d1 * d1
+                    s0 += cd[e] * d0 * d0 * d0
+                aa[e] = mm[e] * (s1 - s0)
+
+    @numba.njit
+    def kick_row_batch(x, v, a, i, nb, mi, ku, kd, cu, cd, c, mode):
+        """One interior row of an index-dependent chain across the batch."""
+        base = i * nb
+        for b in range(nb):
+            e = base + b
+            d1 = x[e + nb] - x[e]
+            d0 = x[e] - x[e - nb]
+            s1 = ku * d1
+            s0 = kd * d0
+            if CUB:
+                s1 += cu * d1 * d1 * d1
+                s0 += cd * d0 * d0 * d0
+            A = mi * (s1 - s0)
+            if mode == VERLET:
+                v[e] = v[e] + c * (a[e] + A)
+                a[e] = A
+            elif mode == LEAPFROG:
+                v[e] = v[e] + c * A
+            else:
+                a[e] = A
+
+    @numba.njit
+    def kick_rows(x, v, a, r0, r1, nb, n, im, k, k3, kl, kr, k3l, k3r, left, right, c, mode):
+        """Kick rows r0 … r1-1 (0 <= r0 <= r1 <= n): end rows scalar, interior rows vectorised."""
+        if r1 <= r0:
+            return
+        if r0 == 0:
+            kick_end(x, v, a, 0, nb, n, im, k, k3, kl, kr, k3l, k3r, left, right, c, mode)
+            r0 = 1
+        last = r1 == n and r0 <= n - 1
+        if last:
+            r1 = n - 1
+        if r1 > r0:
+            lo = r0 * nb
+            hi = r1 * nb
+            if UNI:  # any batch: neighbours are nb elements apart
+                kick_uniform(x[lo - nb:hi - nb], x[lo:hi], x[lo + nb:hi + nb], v[lo:hi], a[lo:hi],
+                             k[0], k3[0], im[0], c, mode)
+            elif nb == 1:
+                kick_indexed(x[r0 - 1:r1 - 1], x[r0:r1], x[r0 + 1:r1 + 1], v[r0:r1], a[r0:r1],
+                             k[r0:r1], k[r0 - 1:r1 - 1], k3[r0:r1] if CUB else k3[0:0],
+                             k3[r0 - 1:r1 - 1] if CUB else k3[0:0], im[r0:r1], c, mode)
+            else:  # index-dependent and a batch: scalar coefficients per row, the batch vectorised
+                for i in range(r0, r1):
+                    kick_row_batch(x, v, a, i, nb, im[i], k[i], k[i - 1], k3[i] if CUB else 0.0,
+                                   k3[i - 1] if CUB else 0.0, c, mode)
+        if last:
+            kick_end(x, v, a, n - 1, nb, n, im, k, k3, kl, kr, k3l, k3r, left, right, c, mode)
+
+    @numba.njit
+    def force(x, a, nb, n, im, k, k3, kl, kr, k3l, k3r, left, right):
+        """a ← a(x) for all rows."""
+        kick_rows(x, a, a, 0, n, nb, n, im, k, k3, kl, kr, k3l, k3r, left, right, 0.0, FORCE)
+
+    @numba.njit(fastmath={"contract"})
+    def drift_leapfrog(xs, ws, h):
+        for e in range(xs.shape[0]):
+            xs[e] = xs[e] + h * ws[e]
+
+    @numba.njit
+    def sweep(xi, vi, ai, xo, vo, ao, inplace, nb, n, im, k, k3, kl, kr, k3l, k3r, left, right, h, mode, steps):
+        """``steps`` sweeps of velocity Verlet (mode VERLET, on x v a) or of the half-step form (LEAPFROG, on x w).
+
+        Each sweep drifts a block of rows, then kicks the rows whose neighbours
+        are all drifted (lo-1 … hi-2); row n-1 (and a ring's row 0, which needs
+        the new x[n-1]) are kicked after the last block. VERLET may write to
+        other arrays than it reads (``inplace`` False); LEAPFROG works in place.
+        """
+        hh = 0.5 * h * h
+        c = 0.5 * h if mode == VERLET else h
+        rows = max(1, BLOCK_ELEMENTS // nb)
+        first = 1 if left == RING else 0
+        for step in range(steps):
+            lo = 0
+            while lo < n:
+                hi = min(lo + rows, n)
+                s, t = lo * nb, hi * nb
+                if mode == LEAPFROG:
+                    drift_leapfrog(xo[s:t], vo[s:t], h)
+                elif inplace or step > 0:
+                    xs = xo[s:t]
+                    vs = vo[s:t]
+                    as_ = ao[s:t]
+                    for e in range(t - s):
+                        xs[e] = xs[e] + h * vs[e] + hh * as_[e]
+                else:
+                    xin, vin, ain = xi[s:t], vi[s:t], ai[s:t]
+                    xs, vs, as_ = xo[s:t], vo[s:t], ao[s:t]
+                    for e in range(t - s):
+                        xs[e] = xin[e] + h * vin[e] + hh * ain[e]
+                        vs[e] = vin[e]
+                        as_[e] = ain[e]
+                kick_rows(xo, vo, ao, max(lo - 1, first), min(hi - 1, n - 1), nb, n, im, k, k3,
+                          kl, kr, k3l, k3r, left, right, c, mode)
+                lo = hi
+            kick_rows(xo, vo, ao, n - 1, n, nb, n, im, k, k3, kl, kr, k3l, k3r, left, right, c, mode)
+            if first == 1 and n > 1:
+                kick_rows(xo, vo, ao, 0, 1, nb, n, im, k, k3, kl, kr, k3l, k3r, left, right, c, mode)
+
+    @numba.njit
+    def half_kick(v, a, c):
+        """v ← v + c a (entry to / exit from the half-step velocity form)."""
+        for e in range(v.shape[0]):
+            v[e] = v[e] + c * a[e]
+
+    return force, sweep, half_kick
+
+
+@functools.lru_cache(maxsize=1)
+def _stream():
+    import numba
+
+    @numba.njit
+    def stream(x, v, c):
+        for e in range(x.shape[0]):
+            x[e] = x[e] + c * v[e]
+            v[e] = v[e] - c * x[e]
+
+    return stream
+
+
+def stream_update(x: np.ndarray, v: np.ndarray, c: float = 1e-12) -> None:
+    """The memory floor's reference sweep: ``x ← x + c v;  v ← v - c x`` in place, one pass.
+
+    Reads 16 and writes 16 bytes per element pair, the traffic a Verlet step
+    needs at the least (x and v in, x and v out). Compiled with numba when
+    available, else NumPy (three passes; then not a floor).
+
+    Parameters
+    ----------
+    x, v : ndarray, shape (N,), float64, C-contiguous
+    """
+    if available():
+        _stream()(x, v, float(c))
+    else:
+        x += c * v
+        v -= c * x
+
+
+# -- the public object ----------------------------------------------------------------------
+def _flat(arr: np.ndarray, n: int, name: str) -> tuple[np.ndarray, int]:
+    """A flat float64 C-contiguous view of a (n,) or (n, B) array, and B."""
+    if not (isinstance(arr, np.ndarray) and arr.dtype == np.float64 and arr.flags.c_contiguous):
+        raise ValueError(f"{name}: need a C-contiguous float64 ndarray, got "
+                         f"{type(arr).__name__} {getattr(arr, 'dtype', '')}")
+    if arr.ndim not in (1, 2) or arr.shape[0] != n:
+        raise ValueError(f"{name}: need shape ({n},) or ({n}, B), got {arr.shape}")
+    nb = 1 if arr.ndim == 1 else arr.shape[1]
+    if nb < 1:
+        raise ValueError(f"{name}: empty batch, shape {arr.shape}")
+    return arr.reshape(-1), nb
+
+
+@dataclass(frozen=True)
+class FusedVerlet:
+    """Velocity Verlet with step ``h`` on one chain, fused (numba) or on NumPy.
+
+    Build with :meth:`from_module`. States are float64 C-contiguous arrays of
+    shape (n,) or (n, B).
+    """
+
+    coefficients: ChainCoefficients
+    acceleration: Callable[[np.ndarray], np.ndarray] = field(repr=False)
+    h: float
+    backend: Backend
+
+    @classmethod
+    def from_module(cls, module: ModuleType, params: dict[str, float] | None = None, n: int | None = None,
+                    h: float = 1.0, backend: Backend | None = None) -> "FusedVerlet":
+        """Bind a generated ``[chain]`` module, parameters, size and step.
+
+        Parameters
+        ----------
+        backend : Backend, optional
+            Default: :func:`default_backend` (numba if it loads).
+        """
+        h = float(h)
+        if not (math.isfinite(h) and h > 0):
+            raise ValueError(f"step size h must be finite and > 0, got {h!r}")
+        coeffs = ChainCoefficients.from_module(module, params, n)
+        values = dict(module.DEFAULTS)
+        values.update(params or {})
+        backend = default_backend() if backend is None else backend
+        if backend is Backend.NUMBA and not available():
+            raise RunRefused("the fused chain step needs numba: install the `fast` extra "
+                             "(pip install 'springchain[fast]') or use the NumPy backend")
+        return cls(coeffs, module.make_acceleration(**values, n=coeffs.n), h, backend)
+
+    @property
+    def n(self) -> int:
+        return self.coefficients.n
+
+    def _numpy_force(self, x: np.ndarray) -> np.ndarray:
+        """The module's stencil; a 1-D state goes through as (n, 1), the generated modules' state shape."""
+        if x.ndim == 1:
+            return self.acceleration(x[:, None])[:, 0]
+        return self.acceleration(x)
+
+    def _kernels(self):
+        c = self.coefficients
+        return _compiled(c.uniform, c.cubic)
+
+    # -- building blocks ------------------------------------------------------------------
+    def force(self, x: np.ndarray, out: np.ndarray | None = None) -> np.ndarray:
+        """The acceleration a(x); x shape (n,) or (n, B) -> same shape (written into ``out`` if given)."""
+        if self.backend is Backend.NUMPY:
+            a = self._numpy_force(x)
+            if out is None:
+                return a
+            out[...] = a
+            return out
+        xf, nb = _flat(x, self.n, "x")
+        out = np.empty_like(x) if out is None else out
+        af, _ = _flat(out, self.n, "out")
+        self._kernels()[0](xf, af, nb, *self.coefficients.kernel_args())
+        return out
+
+    def step(self, x: np.ndarray, v: np.ndarray, a: np.ndarray, *,
+             inplace: bool = False) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """One velocity-Verlet step from the state (x, v) with a = a(x).
+
+        Parameters
+        ----------
+        x, v, a : ndarray, shape (n,) or (n, B)
+        inplace : bool
+            Update the given arrays and return them (no allocation). Otherwise
+            the inputs are left untouched and new arrays are returned.
+
+        Returns
+        -------
+        x, v, a : ndarray
+            The state one step later and the acceleration there.
+        """
+        h = self.h
+        if self.backend is Backend.NUMPY:
+            xn = x + h * v + (0.5 * h * h) * a
+            an = self._numpy_force(xn)
+            vn = v + (0.5 * h) * (a + an)
+            if not inplace:
+                return xn, vn, an
+            x[...], v[...], a[...] = xn, vn, an
+            return x, v, a
+        xf, nb = _flat(x, self.n, "x")
+        vf, _ = _flat(v, self.n, "v")
+        af, _ = _flat(a, self.n, "a")
+        if inplace:
+            xo, vo, ao = x, v, a
+            xof, vof, aof = xf, vf, af
+        else:
+            xo, vo, ao = np.empty_like(x), np.empty_like(v), np.empty_like(a)
+            xof, vof, aof = xo.reshape(-1), vo.reshape(-1), ao.reshape(-1)
+        self._kernels()[1](xf, vf, af, xof, vof, aof, inplace, nb, *self.coefficients.kernel_args(), h,
+                           int(_Mode.VERLET), 1)
+        return xo, vo, ao
+
+    def advance(self, x: np.ndarray, v: np.ndarray, a: np.ndarray, steps: int) -> tuple[np.ndarray, ...]:
+        """``steps`` velocity-Verlet steps in place, through the half-step velocity ``w = v + h/2 a``.
+
+        Equal to ``steps`` calls of :meth:`step` up to rounding; each step moves
+        32 bytes per mass (x and w in and out). Updates and returns x, v, a.
+        """
+        steps = int(steps)
+        if steps < 0:
+            raise ValueError(f"steps must be >= 0, got {steps}")
+        if steps == 0:
+            return x, v, a
+        h = self.h
+        if self.backend is Backend.NUMPY:
+            v += (0.5 * h) * a
+            for _ in range(steps):
+                x += h * v
+                v += h * self._numpy_force(x)
+            a[...] = self._numpy_force(x)
+            v -= (0.5 * h) * a
+            return x, v, a
+        xf, nb = _flat(x, self.n, "x")
+        vf, _ = _flat(v, self.n, "v")
+        af, _ = _flat(a, self.n, "a")
+        force, sweep, half_kick = self._kernels()
+        args = self.coefficients.kernel_args()
+        half_kick(vf, af, 0.5 * h)
+        sweep(xf, vf, af, xf, vf, af, True, nb, *args, h, int(_Mode.LEAPFROG), steps)
+        force(xf, af, nb, *args)
+        half_kick(vf, af, -0.5 * h)
+        return x, v, a
+
+    # -- the integrator contract -------------------------------------------------------------
+    def kernel(self, *, inplace: bool = False) -> Callable:
+        """A step function ``(x, v, a, i) -> (x, v, a)`` (:data:`numeric.integrators.base.StepKernel`).
+
+        With ``inplace=False`` (the contract's default) inputs are never
+        modified; with ``inplace=True`` they are updated and returned, which
+        is safe for a driver that copies the frames it records (the attribute
+        ``inplace`` on the returned function says which).
+        """
+        def step(x, v, a, i):
+            return self.step(x, v, a, inplace=inplace)
+
+        step.inplace = inplace
+        step.backend = self.backend
+        return step
+
+
+def chain_verlet_kernel(module: ModuleType, params: dict[str, float] | None, n: int | None, h: float, *,
+                        inplace: bool = False, backend: Backend | None = None) -> Callable:
+    """Velocity-Verlet step kernel ``(x, v, a, i) -> (x, v, a)`` for a ``[chain]`` module.
+
+    Compatible with :meth:`numeric.integrators.base.Integrator.kernel` for a
+    conservative chain (no dampers, no external forces). x, v, a have shape
+    (n, B) or (n,), float64, C-contiguous.
+    """
+    return FusedVerlet.from_module(module, params, n, h, backend).kernel(inplace=inplace)
+
+
+def chain_verlet_advance(module: ModuleType, params: dict[str, float] | None, n: int | None, h: float, *,
+                         backend: Backend | None = None) -> Callable:
+    """``advance(x, v, a, steps) -> (x, v, a)``: many Verlet steps in place at the 32-byte floor."""
+    return FusedVerlet.from_module(module, params, n, h, backend).advance
+
+
+__all__ = ["Backend", "End", "ChainCoefficients", "FusedVerlet", "available", "default_backend",
+           "chain_verlet_kernel", "chain_verlet_advance", "stream_update", "BLOCK_ELEMENTS"]

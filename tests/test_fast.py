@@ -1,0 +1,212 @@
+"""The fused chain step (numeric.fast) against the generated NumPy stencil.
+
+* one fused velocity-Verlet step equals the reference step built here from the
+  module's own ``acceleration`` (x + h v + h²/2 a; a' = a(x'); v + h/2 (a + a'))
+  to 1e-14 relative, for free/wall/ring ends, uniform and index-dependent
+  masses and springs, cubic springs, with and without a batch, and for sizes
+  that span several cache blocks;
+* the NumPy fallback (what runs without numba) gives the same numbers;
+* ``advance`` (half-step velocity form) equals repeated steps to rounding;
+* in-place and out-of-place kernels keep their promises about their inputs;
+* bad input is refused with a message.
+"""
+
+from __future__ import annotations
+
+import importlib
+
+import numpy as np
+import pytest
+
+from derive.chain import ChainModel, render_chain_module
+from derive.scene import load_scene
+from numeric import fast
+from numeric.errors import RunRefused
+
+ENDS = [("free", "free"), ("wall", "wall"), ("wall", "free"), ("free", "wall"), ("ring", "ring")]
+BACKENDS = [fast.Backend.NUMPY] + ([fast.Backend.NUMBA] if fast.available() else [])
+
+
+def chain_scene_text(left: str, right: str, uniform: bool, cubic: bool = False, n: int = 50) -> str:
+    mass = "m" if uniform else "m*(1 + 0.5*sin(i))"
+    k = "k" if uniform else "k*(1 + 0.25*(i % 3))"
+    lines = [f'name = "fast_{left}_{right}_{int(uniform)}_{int(cubic)}"', "[parameters]", "m = 1.3", "k = 0.7",
+             "c = 0.2", "[chain]", f"n = {n}", f'mass = "{mass}"', f'k = "{k}"', f'left = "{left}"',
+             f'right = "{right}"']
+    if cubic:
+        lines.append('k3 = "c"' if uniform else 'k3 = "c*(1 + cos(i))"')
+    lines += ["[initial]", 'x = "0.01*sin(pi*(i + 1)/(n + 1))"', 'v = "0"']
+    return "\n".join(lines) + "\n"
+
+
+_MODULES: dict = {}
+
+
+@pytest.fixture(scope="module")
+def chain_module(import_source):
+    """``chain_module(left, right, uniform, cubic)``: a freshly rendered [chain] module."""
+    def get(left, right, uniform, cubic=False):
+        key = (left, right, uniform, cubic)
+        if key not in _MODULES:
+            scene = load_scene("fast.toml", chain_scene_text(left, right, uniform, cubic))
+            _MODULES[key] = import_source(render_chain_module(ChainModel(scene), bundled=False), "fastchain")
+        return _MODULES[key]
+    return get
+
+
+def module_acceleration(module, x, params=None):
+    """The generated stencil's a(x); 1-D states go through as (n, 1) (the modules' state shape)."""
+    p = dict(module.DEFAULTS)
+    p.update(params or {})
+    if x.ndim == 1:
+        return module.acceleration(x[:, None], **p)[:, 0]
+    return module.acceleration(x, **p)
+
+
+def reference_step(module, x, v, a, h, params=None):
+    """Velocity Verlet written out on the module's own acceleration (independent of numeric.fast)."""
+    xn = x + h * v + 0.5 * h * h * a
+    an = module_acceleration(module, xn, params)
+    return xn, v + 0.5 * h * (a + an), an
+
+
+def rel(got, want):
+    return float(np.max(np.abs(got - want)) / max(np.max(np.abs(want)), 1e-300))
+
+
+def state(n, batch, seed=0):
+    rng = np.random.default_rng(seed)
+    shape = (n,) if batch is None else (n, batch)
+    return rng.standard_normal(shape), rng.standard_normal(shape)
+
+
+@pytest.mark.parametrize("backend", BACKENDS, ids=lambda b: b.value)
+@pytest.mark.parametrize("uniform", [True, False], ids=["uniform", "indexed"])
+@pytest.mark.parametrize("ends", ENDS, ids=lambda e: "-".join(e))
+def test_step_equals_numpy_stencil_step(chain_module, ends, uniform, backend):
+    module = chain_module(*ends, uniform)
+    for n in (1, 2, 3, 7, 20001):
+        for batch in (None, 3):
+            x, v = state(n, batch, seed=n)
+            a = module_acceleration(module, x)
+            want = reference_step(module, x, v, a, 0.37)
+            fv = fast.FusedVerlet.from_module(module, None, n, 0.37, backend)
+            np.testing.assert_allclose(fv.force(x), a, rtol=0, atol=1e-14 * np.max(np.abs(a)) + 1e-300)
+            got = fv.step(x, v, a)
+            for g, w in zip(got, want):
+                assert g.shape == w.shape
+                assert rel(g, w) <= 1e-14, (n, batch)
+
+
+@pytest.mark.parametrize("backend", BACKENDS, ids=lambda b: b.value)
+@pytest.mark.parametrize("ends,uniform", [(("free", "free"), True), (("wall", "free"), False),
+                                          (("ring", "ring"), False), (("wall", "wall"), True)])
+def test_cubic_chain_step_equals_numpy(chain_module, ends, uniform, backend):
+    module = chain_module(*ends, uniform, cubic=True)
+    assert not module.LINEAR
+    for n, batch in ((1, None), (4, 2), (9000, None)):
+        x, v = state(n, batch, seed=3)
+        a = module_acceleration(module, x)
+        want = reference_step(module, x, v, a, 0.05)
+        got = fast.FusedVerlet.from_module(module, None, n, 0.05, backend).step(x, v, a)
+        for g, w in zip(got, want):
+            assert rel(g, w) <= 1e-14
+
+
+@pytest.mark.parametrize("backend", BACKENDS, ids=lambda b: b.value)
+@pytest.mark.parametrize("ends,uniform", [(("free", "free"), True), (("wall", "free"), False),
+                                          (("ring", "ring"), True), (("free", "wall"), False)])
+def test_advance_equals_repeated_steps(chain_module, ends, uniform, backend):
+    module = chain_module(*ends, uniform)
+    h, steps = 0.2, 40
+    for n, batch in ((2, None), (300, 4), (12000, None)):
+        x0, v0 = state(n, batch, seed=5)
+        a0 = module_acceleration(module, x0)
+        x, v, a = x0, v0, a0
+        for _ in range(steps):
+            x, v, a = reference_step(module, x, v, a, h)
+        fv = fast.FusedVerlet.from_module(module, None, n, h, backend)
+        xa, va, aa = x0.copy(), v0.copy(), a0.copy()
+        out = fv.advance(xa, va, aa, steps)
+        assert out[0] is xa and out[1] is va and out[2] is aa
+        # the same scheme, different rounding: errors stay at roundoff × steps
+        assert rel(xa, x) <= 1e-12 and rel(va, v) <= 1e-12 and rel(aa, a) <= 1e-12
+
+
+@pytest.mark.parametrize("backend", BACKENDS, ids=lambda b: b.value)
+def test_kernel_contract_inplace_and_not(chain_module, backend):
+    module = chain_module("wall", "free", False)
+    x0, v0 = state(40, 2, seed=9)
+    a0 = module_acceleration(module, x0)
+    keep = [arr.copy() for arr in (x0, v0, a0)]
+    safe = fast.chain_verlet_kernel(module, None, 40, 0.1, backend=backend)
+    assert safe.inplace is False
+    x, v, a = safe(x0, v0, a0, 0)
+    for arr, orig in zip((x0, v0, a0), keep):
+        np.testing.assert_array_equal(arr, orig)  # inputs untouched
+    assert x is not x0 and v is not v0 and a is not a0
+    fused = fast.chain_verlet_kernel(module, None, 40, 0.1, inplace=True, backend=backend)
+    assert fused.inplace is True
+    xi, vi, ai = (arr.copy() for arr in keep)
+    out = fused(xi, vi, ai, 0)
+    assert out[0] is xi and out[1] is vi and out[2] is ai
+    for g, w in zip(out, (x, v, a)):
+        assert rel(g, w) <= 1e-15
+    # several steps through the kernel equal several reference steps
+    xs, vs, as_ = (arr.copy() for arr in keep)
+    xr, vr, ar = (arr.copy() for arr in keep)
+    for i in range(25):
+        xs, vs, as_ = safe(xs, vs, as_, i)
+        xr, vr, ar = reference_step(module, xr, vr, ar, 0.1)
+    assert rel(xs, xr) <= 1e-13 and rel(vs, vr) <= 1e-13
+
+
+def test_uniform_module_has_scalar_coefficients():
+    module = importlib.import_module("generated.chain100k")
+    c = fast.ChainCoefficients.from_module(module, None, 10)
+    assert c.uniform and c.inv_mass.shape == (1,) and c.k.shape == (1,)
+    assert c.left is fast.End.FREE and c.right is fast.End.FREE and not c.cubic
+    # Gershgorin bound ≥ the uniform chain's ω_max = 2√(k/m) sin(π(n-1)/(2n))
+    assert c.omega_max_bound >= 2.0 * np.sin(np.pi * 9 / 20) - 1e-12
+
+
+def test_indexed_coefficients_follow_the_module(chain_module):
+    module = chain_module("wall", "wall", False)
+    p = dict(module.DEFAULTS)
+    c = fast.ChainCoefficients.from_module(module, None, 6)
+    ks = module.spring_constants(**p, n=6)
+    assert c.k_left == ks[0] and c.k_right == ks[-1]
+    np.testing.assert_array_equal(c.k, ks[1:-1])
+    np.testing.assert_allclose(c.inv_mass, 1.0 / module.masses(**p, n=6), rtol=1e-15)
+
+
+def test_refuses_bad_input(chain_module, seed_module):
+    module = chain_module("free", "free", True)
+    with pytest.raises(RunRefused, match=r"\[chain\]"):
+        fast.FusedVerlet.from_module(seed_module, None, 3, 0.1)
+    with pytest.raises(ValueError, match="step size"):
+        fast.FusedVerlet.from_module(module, None, 5, 0.0)
+    if fast.available():
+        fv = fast.FusedVerlet.from_module(module, None, 5, 0.1, fast.Backend.NUMBA)
+        x = np.zeros(5)
+        with pytest.raises(ValueError, match="shape"):
+            fv.step(np.zeros(4), np.zeros(4), np.zeros(4))
+        with pytest.raises(ValueError, match="float64"):
+            fv.step(np.zeros(5, dtype=np.float32), x, x)
+        with pytest.raises(ValueError, match="C-contiguous"):
+            fv.step(np.zeros((5, 2))[:, :1], np.zeros((5, 1)), np.zeros((5, 1)))
+
+
+def test_stream_update_is_the_stated_sweep():
+    x = np.linspace(0.0, 1.0, 1001)
+    v = np.cos(x)
+    xe = x + 0.5 * v
+    ve = v - 0.5 * xe
+    fast.stream_update(x, v, 0.5)
+    np.testing.assert_allclose(x, xe, rtol=1e-15)
+    np.testing.assert_allclose(v, ve, rtol=1e-15, atol=1e-15)
+
+
+def test_available_is_a_bool_and_backend_follows_it():
+    assert isinstance(fast.available(), bool)
+    assert fast.default_backend() is (fast.Backend.NUMBA if fast.available() else fast.Backend.NUMPY)
