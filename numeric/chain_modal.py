@@ -1,0 +1,287 @@
+"""The exact solution of a uniform linear chain by fast transforms: O(N log N) per output time.
+
+The normal modes of a uniform chain (masses m, springs k) are known in
+closed form (:mod:`derive.chain`), and each family is the basis of a fast
+real transform, so modal coordinates are one transform away and no N×N
+matrix is ever formed:
+
+==========  ===========================================  ==============================================
+ends        shapes (i = 0 … n−1)                          ω_j / (2√(k/m)), transform
+==========  ===========================================  ==============================================
+free–free   cos(jπ(i + ½)/n), j = 0 … n−1                 sin(jπ/(2n));  DCT-II (orthonormal)
+wall–wall   sin((j+1)π(i+1)/(n+1)), j = 0 … n−1           sin((j+1)π/(2(n+1)));  DST-I (orthonormal)
+wall–free   sin((2j+1)π(i+1)/(2n+1)), j = 0 … n−1         sin((2j+1)π/(2(2n+1)));  DST-I of size 2n, odd
+            (free–wall: the same with i counted from the  outputs (see below)
+            right end)
+ring        exp(2πi·j·l/n), j = 0 … ⌊n/2⌋ (real FFT)       |sin(jπ/n)|;  rFFT
+==========  ===========================================  ==============================================
+
+Wall–free has no standard transform of its own (the denominator 2n + 1 is
+odd); it is embedded in a DST-I of size 2n, whose kernel is
+``sin(π(k+1)(l+1)/(2n+1))``: zero-pad x to 2n entries and keep the outputs
+with k = 2j (odd k + 1 = 2j + 1). The inverse puts q_j at k = 2j, zeros in
+between, and keeps the first n outputs. Both are scaled by ``1/√(2n+1)``
+(the shapes have squared norm (2n+1)/4).
+
+Each mode then evolves exactly, ``q(t) = q0 cos(ωt) + q̇0·t·sinc(ωt)``
+(:func:`numeric.modal.tsinc`), never dividing by ω, so the rigid-body mode
+of a free chain or a ring (ω = 0 exactly: sin 0) is the uniform drift.
+
+Index-dependent chains have no closed form: for them this module falls back
+to ``scipy.linalg.eigh_tridiagonal`` (O(N²) memory for the shapes; refused
+above :data:`MAX_FALLBACK` masses), and rings to the dense spectrum.
+"""
+
+from __future__ import annotations
+
+import enum
+from dataclasses import dataclass, field
+from types import ModuleType
+
+import numpy as np
+import scipy.fft
+import scipy.linalg
+
+from .errors import RunRefused
+from .modal import tsinc
+
+#: Largest index-dependent chain solved through its (dense) eigenvectors.
+MAX_FALLBACK = 4000
+
+
+class Basis(enum.Enum):
+    """How modal coordinates are computed."""
+
+    DCT = "free-free: DCT-II"
+    DST = "wall-wall: DST-I"
+    DST_ODD = "wall-free: DST-I of size 2n, odd outputs"
+    FFT = "ring: real FFT"
+    EIGENVECTORS = "index-dependent: eigenvectors (eigh_tridiagonal, or the dense SVD for a ring)"
+
+    @property
+    def fast(self) -> bool:
+        """An O(N log N) transform (no stored eigenvectors)."""
+        return self is not Basis.EIGENVECTORS
+
+
+def uniform_omega(n: int, m: float, k: float, left: str, right: str) -> np.ndarray:
+    """Angular frequencies of a uniform chain in the order of its transform's coefficients.
+
+    Parameters
+    ----------
+    n : int
+    m, k : float
+        Mass and spring constant (walls and ring closure use the same k).
+    left, right : str
+        ``"free"``, ``"wall"`` or ``"ring"`` (both).
+
+    Returns
+    -------
+    ndarray, shape (n,) — or (n//2 + 1,) for a ring (one per rFFT coefficient)
+    """
+    c = 2.0 * np.sqrt(k / m)
+    if left == "ring":
+        j = np.arange(n // 2 + 1)
+        return c * np.abs(np.sin(np.pi * j / n))
+    j = np.arange(n)
+    if left == "free" and right == "free":
+        return c * np.sin(np.pi * j / (2 * n))
+    if left == "wall" and right == "wall":
+        return c * np.sin(np.pi * (j + 1) / (2 * (n + 1)))
+    return c * np.sin(np.pi * (2 * j + 1) / (2 * (2 * n + 1)))
+
+
+def _basis_of(left: str, right: str) -> Basis:
+    if left == "ring":
+        return Basis.FFT
+    if left == "free" and right == "free":
+        return Basis.DCT
+    if left == "wall" and right == "wall":
+        return Basis.DST
+    return Basis.DST_ODD
+
+
+def _forward(basis: Basis, x: np.ndarray) -> np.ndarray:
+    """Modal coordinates of x (axis 0)."""
+    n = x.shape[0]
+    if basis is Basis.DCT:
+        return scipy.fft.dct(x, type=2, norm="ortho", axis=0)
+    if basis is Basis.DST:
+        return scipy.fft.dst(x, type=1, norm="ortho", axis=0)
+    if basis is Basis.FFT:
+        return scipy.fft.rfft(x, axis=0)
+    pad = np.zeros((2 * n,) + x.shape[1:])
+    pad[:n] = x
+    return scipy.fft.dst(pad, type=1, axis=0)[0::2] / np.sqrt(2 * n + 1)
+
+
+def _inverse(basis: Basis, q: np.ndarray, n: int, axis: int) -> np.ndarray:
+    """Positions from modal coordinates along ``axis``."""
+    if basis is Basis.DCT:
+        return scipy.fft.idct(q, type=2, norm="ortho", axis=axis)
+    if basis is Basis.DST:
+        return scipy.fft.idst(q, type=1, norm="ortho", axis=axis)
+    if basis is Basis.FFT:
+        return scipy.fft.irfft(q, n=n, axis=axis)
+    q = np.moveaxis(q, axis, 0)
+    pad = np.zeros((2 * n,) + q.shape[1:])
+    pad[0::2] = q
+    x = scipy.fft.dst(pad, type=1, axis=0)[:n] / np.sqrt(2 * n + 1)
+    return np.moveaxis(x, 0, axis)
+
+
+@dataclass(frozen=True)
+class ChainModal:
+    """Exact trajectory of a linear ``[chain]`` from (x0, v0).
+
+    Build with :meth:`from_module` (or :meth:`uniform`); evaluate with :meth:`at`.
+
+    Attributes
+    ----------
+    basis : Basis
+    n : int
+    omega : ndarray
+        Frequencies in the order of the modal coordinates (not sorted).
+    reverse : bool
+        The wall is on the right (free–wall): index counted from the right end.
+    """
+
+    basis: Basis
+    n: int
+    omega: np.ndarray = field(repr=False)
+    q0: np.ndarray = field(repr=False)
+    p0: np.ndarray = field(repr=False)
+    reverse: bool = False
+    vectors: np.ndarray | None = field(default=None, repr=False)
+    sqrt_mass: np.ndarray | None = field(default=None, repr=False)
+
+    # -- construction -------------------------------------------------------------------------
+    @classmethod
+    def uniform(cls, m: float, k: float, left: str, right: str, x0: np.ndarray, v0: np.ndarray) -> "ChainModal":
+        """A uniform chain of len(x0) masses m and springs k.
+
+        Parameters
+        ----------
+        x0, v0 : ndarray, shape (n,) or (n, B)
+        """
+        x0, v0 = _initial(x0, v0)
+        if left not in ("free", "wall", "ring") or right not in ("free", "wall", "ring") or (
+                (left == "ring") != (right == "ring")):
+            raise ValueError(f"chain ends must be free/wall on each side or ring on both, got {left!r}, {right!r}")
+        n = x0.shape[0]
+        basis = _basis_of(left, right)
+        reverse = left == "free" and right == "wall"
+        if reverse:
+            x0, v0 = x0[::-1], v0[::-1]
+        omega = uniform_omega(n, m, k, *(("wall", "free") if reverse else (left, right)))
+        return cls(basis, n, omega, _forward(basis, x0), _forward(basis, v0), reverse)
+
+    @classmethod
+    def from_module(cls, module: ModuleType, params: dict[str, float] | None, x0: np.ndarray,
+                    v0: np.ndarray) -> "ChainModal":
+        """The exact solution for a generated ``[chain]`` module's linear chain of len(x0) masses.
+
+        A uniform chain uses its transform; an index-dependent one falls back
+        to eigenvectors (``eigh_tridiagonal``; the dense SVD for a ring) up to
+        :data:`MAX_FALLBACK` masses.
+        """
+        if not getattr(module, "CHAIN", False):
+            raise RunRefused("ChainModal needs a [chain] scene's generated module; use numeric.modal for others")
+        if not bool(module.LINEAR):
+            raise RunRefused("no exact solution: this chain has cubic springs (use an integrator, e.g. verlet)")
+        values = dict(module.DEFAULTS)
+        values.update(params or {})
+        x0, v0 = _initial(x0, v0)
+        n = x0.shape[0]
+        left, right = str(module.LEFT), str(module.RIGHT)
+        masses = np.asarray(module.masses(**values, n=n), dtype=float)
+        ks = np.asarray(module.spring_constants(**values, n=n), dtype=float)
+        if bool(module.UNIFORM):
+            return cls.uniform(float(masses[0]), float(ks[0]) if ks.size else 1.0, left, right, x0, v0)
+        if n > MAX_FALLBACK:
+            raise RunRefused(f"index-dependent chain of n = {n} masses: no closed-form modes, and the "
+                             f"eigenvector fallback is limited to n <= {MAX_FALLBACK}; use --method verlet")
+        return cls._eigenvectors(module, values, masses, ks, x0, v0)
+
+    @classmethod
+    def _eigenvectors(cls, module, values, masses, ks, x0, v0) -> "ChainModal":
+        n = masses.shape[0]
+        r = np.sqrt(masses)
+        if str(module.LEFT) == "ring":
+            from .spectrum import spectrum
+
+            spec = spectrum(masses, module.spring_ends(n=n), ks)
+            omega, E = spec.omega, spec.vectors
+        else:
+            diag, off = (np.asarray(b, dtype=float) for b in module.stiffness_bands(**values, n=n))
+            w2, E = scipy.linalg.eigh_tridiagonal(diag / masses, off / (r[:-1] * r[1:]))
+            omega = np.sqrt(np.maximum(w2, 0.0))
+            rigid = int(module.RIGID_MODES)
+            if rigid:  # by structure: the uniform translation, ω = 0 exactly
+                omega[:rigid] = 0.0
+                E[:, 0] = r / np.linalg.norm(r)
+        shape = (-1,) + (1,) * (x0.ndim - 1)
+        rr = r.reshape(shape)
+        q0 = np.tensordot(E.T, rr * x0, axes=1)
+        p0 = np.tensordot(E.T, rr * v0, axes=1)
+        return cls(Basis.EIGENVECTORS, n, omega, q0, p0, False, E, r)
+
+    # -- evaluation ------------------------------------------------------------------------------
+    def modal_at(self, t) -> tuple[np.ndarray, np.ndarray]:
+        """Modal coordinates and their rates at times t: shape (S, modes, ...) or (modes, ...)."""
+        t = np.asarray(t, dtype=float)
+        extra = (1,) * (self.q0.ndim - 1)
+        tt = t.reshape(t.shape + (1,) + extra)
+        w = self.omega.reshape(self.omega.shape + extra)
+        c = np.cos(w * tt)
+        s = tsinc(w, tt)
+        q = self.q0 * c + self.p0 * s
+        p = self.p0 * c - self.q0 * (w * w) * s
+        return q, p
+
+    def at(self, t) -> tuple[np.ndarray, np.ndarray]:
+        """Positions and velocities at times ``t``.
+
+        Parameters
+        ----------
+        t : float or ndarray, shape (S,)
+
+        Returns
+        -------
+        x, v : ndarray, shape (n, ...) for scalar t, or (S, n, ...) for an array of times
+        """
+        t = np.asarray(t, dtype=float)
+        q, p = self.modal_at(t)
+        axis = t.ndim
+        if self.basis is Basis.EIGENVECTORS:
+            extra = (1,) * (self.q0.ndim - 1)
+            r = self.sqrt_mass.reshape((-1,) + extra)
+            x = np.moveaxis(np.tensordot(self.vectors, q, axes=([1], [axis])), 0, axis) / r
+            v = np.moveaxis(np.tensordot(self.vectors, p, axes=([1], [axis])), 0, axis) / r
+            return x, v
+        x = _inverse(self.basis, q, self.n, axis)
+        v = _inverse(self.basis, p, self.n, axis)
+        if self.reverse:
+            x, v = np.flip(x, axis), np.flip(v, axis)
+        return np.ascontiguousarray(x), np.ascontiguousarray(v)
+
+    @property
+    def omega_sorted(self) -> np.ndarray:
+        """All n frequencies ascending (a ring's 0 < j < n/2 counted twice, once per shape)."""
+        if self.basis is Basis.FFT:
+            j = np.arange(self.n)
+            w = self.omega[np.minimum(j, self.n - j)]
+            return np.sort(w)
+        return np.sort(self.omega)
+
+
+def _initial(x0, v0) -> tuple[np.ndarray, np.ndarray]:
+    x0 = np.asarray(x0, dtype=float)
+    v0 = np.asarray(v0, dtype=float)
+    if x0.shape != v0.shape or x0.ndim not in (1, 2) or x0.shape[0] < 1:
+        raise ValueError(f"x0 and v0 must have the same shape (n,) or (n, B) with n >= 1; got {x0.shape}, "
+                         f"{v0.shape}")
+    return x0, v0
+
+
+__all__ = ["ChainModal", "Basis", "uniform_omega", "MAX_FALLBACK"]
