@@ -1,0 +1,451 @@
+"""The accuracy planner behind ``springchain plan``: the cheapest way to reach a tolerance.
+
+*Error* means what the benchmark measures: the largest absolute position
+error over all recorded times, with fixed-step methods recording every step
+(``t = i·h``) and the exact, propagator and adaptive methods recording the
+scene's output grid.
+
+For each method the planner predicts the step (or tolerance) that just
+reaches ``tol`` and the seconds that costs, then recommends the cheapest:
+
+* step methods on a linear chain: :class:`~numeric.error_models.LinearChainModel`
+  evaluated exactly (closed-form numerical solution per mode) when that is
+  cheap, else its envelope; plus the rounding floor. The planned step is
+  the largest ``h = T/n`` whose prediction is at most :data:`SAFETY`·tol
+  and that is stable (``ω_max·h`` below the method's limit, ``ω_max`` exact
+  from the spectrum). A tolerance below a method's rounding floor is
+  unreachable: the method is left out of the candidates and named in
+  :attr:`Plan.unreachable`.
+* step methods on a nonlinear scene: the same model on the linearization
+  (labelled approximate).
+* adaptive methods: a power law ``error = c·rtol^α·T/T_pilot`` and a cost law
+  calibrated from two short pilot runs (:func:`calibrate_adaptive`).
+* the exact modal solution, ``expm`` and ``chebyshev``: error at the
+  rounding level; cost measured (the modal solution's eigen-decomposition
+  and evaluation on the output grid are timed as one run).
+
+Seconds are *measured* costs of this machine: seconds per step of each
+method on this scene (timed through the same driver the runs use, minimum
+of repeats, single-threaded BLAS) times the planned number of steps, plus
+its measured set-up.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field, replace
+from typing import Callable
+
+import numpy as np
+
+from .driver import integrate, step_grid
+from .error_models import EPS, LinearChainModel, OscillatorResponse, PowerLaw, roundoff_floor
+from .integrators import ADAPTIVE, INTEGRATORS
+from .integrators.base import Integrator, Problem
+from .integrators.ivp import AdaptiveMethod
+from .modal import ModalSolution
+from .spectrum import Spectrum, spectrum
+from .simulate import system_spectrum
+from .system import System
+from .timing import measure
+
+#: Planned steps aim at this fraction of the tolerance (the exact-for-linear model is exact up to roundoff).
+SAFETY = 0.7
+#: The smallest relative tolerance passed to ``solve_ivp`` (SciPy warns below 100·ε).
+MIN_RTOL = 3e-14
+#: Pilot tolerances of the adaptive calibration.
+PILOT_RTOLS = (1e-5, 1e-8)
+#: Largest ``steps · N · M`` for which the exact closed-form error is evaluated (else: envelope).
+EXACT_BUDGET = 1_000_000
+#: Largest number of steps considered for a step method.
+MAX_STEPS = 10**12
+
+
+class ExactModal:
+    """The exact modal solution as a "method" (no step, no force evaluations)."""
+
+    name = "modal"
+    order = math.inf
+    symplectic = True
+
+
+def adaptive_atol(x0: np.ndarray, v0: np.ndarray, rtol: float) -> float:
+    """The absolute tolerance paired with ``rtol``: ``rtol`` times the initial state's scale."""
+    scale = max(float(np.max(np.abs(x0), initial=0.0)), float(np.max(np.abs(v0), initial=0.0)), 1e-300)
+    return rtol * scale
+
+
+@dataclass(frozen=True)
+class Candidate:
+    """A method with the setting that reaches the tolerance, and its predicted cost.
+
+    Attributes
+    ----------
+    method : Integrator, AdaptiveMethod or ExactModal
+    dt : float or None
+        Planned step ``T/n`` (None for methods without a step).
+    steps : int or None
+    rtol : float or None
+        Planned relative tolerance of an adaptive method (``atol`` from :func:`adaptive_atol`).
+    predicted_error, predicted_seconds : float
+    reachable : bool
+        False when the tolerance is below the method's rounding floor (or its tolerance range).
+    model : str
+        Which model made the prediction.
+    """
+
+    method: object
+    dt: float | None
+    steps: int | None
+    rtol: float | None
+    predicted_error: float
+    predicted_seconds: float
+    reachable: bool = True
+    model: str = ""
+
+    @property
+    def name(self) -> str:
+        return self.method.name
+
+    def as_json(self) -> dict:
+        return {"method": self.name, "dt": self.dt, "predicted_error": float(self.predicted_error),
+                "predicted_seconds": float(self.predicted_seconds)}
+
+
+@dataclass(frozen=True)
+class Plan:
+    """The candidates that reach ``tol`` and the cheapest of them."""
+
+    tol: float
+    t_end: float
+    recommended: Candidate
+    candidates: tuple[Candidate, ...]
+    unreachable: tuple[Candidate, ...] = ()
+
+    def as_json(self) -> dict:
+        return {"recommended": self.recommended.as_json(), "candidates": [c.as_json() for c in self.candidates]}
+
+
+@dataclass(frozen=True)
+class StepCost:
+    """Measured cost of a step method through the driver: ``setup + per_step · steps`` seconds."""
+
+    per_step: float
+    setup: float
+
+    def __call__(self, steps: int) -> float:
+        return self.setup + self.per_step * steps
+
+
+@dataclass(frozen=True)
+class AdaptiveLaw:
+    """Pilot-calibrated error and cost of an adaptive method (see :class:`~numeric.error_models.PowerLaw`)."""
+
+    error: PowerLaw
+    evals: PowerLaw
+    seconds_per_eval: float
+
+
+def measure_step_cost(integrator: Integrator, problem: Problem, x0: np.ndarray, v0: np.ndarray, h: float,
+                      short: int = 32, long: int = 288, budget: float = 0.05) -> StepCost:
+    """Seconds per step and set-up of ``integrator`` on this problem, from two timed driver runs."""
+    t_short = measure(lambda: integrate(integrator, problem, x0, v0, h, short), budget=budget).seconds
+    t_long = measure(lambda: integrate(integrator, problem, x0, v0, h, long), budget=budget).seconds
+    per_step = max((t_long - t_short) / (long - short), t_long / long * 0.5)
+    return StepCost(per_step, max(t_short - per_step * short, 0.0))
+
+
+def output_grid(t_end: float, dt_out: float) -> np.ndarray:
+    """The scene's output times over ``[0, t_end]``: ``t = i·Δ`` with ``Δ = t_end/ceil(t_end/dt_out)``."""
+    h, n = step_grid(t_end, dt_out)
+    return np.arange(n + 1) * h
+
+
+def modal_run(system: System, x0: np.ndarray, v0: np.ndarray, t: np.ndarray, source: str = "svd"):
+    """The exact method as one timed unit: the spectrum, the modal projection, the evaluation at ``t``.
+
+    ``source``: ``svd`` (the accurate route of :mod:`numeric.spectrum`) or ``closed-form``
+    (the generated module's closed-form modes, derived once at derive time).
+    """
+    if source == "closed-form":
+        spec = system_spectrum(system, "closed-form")
+    else:
+        spec = spectrum(system.masses, system.spring_ends, system.stiffness)
+    return ModalSolution.from_initial(spec, x0, v0).at(t)
+
+
+def calibrate_adaptive(method: AdaptiveMethod, problem: Problem, x0: np.ndarray, v0: np.ndarray,
+                       t_pilot: float, dt_out: float,
+                       reference: Callable[[np.ndarray], np.ndarray]) -> AdaptiveLaw:
+    """Two pilot runs (rtol 1e-5 and 1e-8) over ``t_pilot`` against ``reference(t) -> x (S, N)``."""
+    t = output_grid(t_pilot, dt_out)
+    x_ref = reference(t)
+    errs, evals, secs = [], [], 0.0
+    for rtol in PILOT_RTOLS:
+        timing = measure(lambda rtol=rtol: method.solve(problem, x0, v0, t, rtol, adaptive_atol(x0, v0, rtol)),
+                         budget=0.0, max_repeats=1)
+        res = timing.result
+        errs.append(max(float(np.max(np.abs(res.x[..., 0] - x_ref))), 1e-300))
+        evals.append(float(res.force_evals))
+        secs += timing.seconds
+    (r1, r2), (e1, e2), (n1, n2) = PILOT_RTOLS, errs, evals
+    return AdaptiveLaw(PowerLaw.through(r1, e1, r2, e2, t_pilot, alpha_bounds=(0.3, 1.5)),
+                       PowerLaw.through(r1, n1, r2, n2, t_pilot, alpha_bounds=(-1.0, 0.0)),
+                       secs / (n1 + n2))
+
+
+@dataclass(frozen=True)
+class Planner:
+    """Everything measured once for a scene, from which plans for any tolerance follow.
+
+    Build with :meth:`for_system`; then :meth:`plan` (cheap) for each tolerance.
+
+    Attributes
+    ----------
+    t_end, dt_out : float
+        Horizon and output spacing.
+    model : LinearChainModel
+        Modes of the chain (of its linearization for a nonlinear scene).
+    exact : bool
+        Whether the scene has the exact modal solution (linear, undamped, unforced).
+    step_methods : tuple of Integrator
+        Finite-order step methods with their :class:`OscillatorResponse` in ``responses``.
+    """
+
+    t_end: float
+    dt_out: float
+    n: int
+    model: LinearChainModel
+    exact: bool
+    step_methods: tuple
+    responses: dict = field(repr=False)
+    step_costs: dict = field(repr=False)
+    propagators: tuple = ()
+    adaptive: dict = field(default_factory=dict, repr=False)
+    modal_seconds: float = math.nan
+    #: Per-method factor measured/predicted from a pilot run (nonlinear scenes; empty otherwise).
+    calibration: dict = field(default_factory=dict, repr=False)
+
+    @classmethod
+    def for_system(cls, system: System, x0: np.ndarray, v0: np.ndarray, t_end: float, dt_out: float,
+                   adaptive: bool = True, reference: Callable | None = None) -> "Planner":
+        """Measure costs and build the models (call inside :func:`~numeric.timing.single_threaded_blas`).
+
+        Parameters
+        ----------
+        reference : callable, optional
+            ``reference(t) -> x (S, N)`` at multiples ``t`` of ``dt_out``, for the pilot runs
+            (adaptive methods; step methods on a nonlinear scene). Default: the exact modal
+            solution (linear scenes) or DOP853 at rtol 1e-13 (others).
+        """
+        x0 = np.asarray(x0, dtype=float)
+        v0 = np.asarray(v0, dtype=float)
+        spec: Spectrum = spectrum(system.masses, system.spring_ends, system.stiffness)
+        model = LinearChainModel.from_spectrum(spec, x0, v0)
+        problem = Problem.from_system(system)
+        exact = bool(system.exact_available and not (system.damped or system.forced)
+                     and "gravity" not in system.effects)
+        steps_, responses, costs, props = [], {}, {}, []
+        h_probe = min(dt_out, 0.5 / max(model.omega_max, 1e-300))
+        for cls_ in INTEGRATORS.values():
+            integ = cls_()
+            if not math.isfinite(integ.order):
+                if exact and problem.linear is not None:
+                    props.append(integ)
+                    costs[integ.name] = measure_step_cost(integ, problem, x0, v0, step_grid(t_end, dt_out)[0])
+                continue
+            steps_.append(integ)
+            responses[integ.name] = OscillatorResponse.from_integrator(integ)
+            costs[integ.name] = measure_step_cost(integ, problem, x0, v0, h_probe)
+        modal_seconds = math.nan
+        grid = output_grid(t_end, dt_out)
+        if exact:
+            sample = grid if grid.shape[0] <= 200_001 else grid[:20_001]
+            timing = measure(lambda: modal_run(system, x0, v0, sample), budget=0.2)
+            modal_seconds = timing.seconds * (grid.shape[0] / sample.shape[0] if sample is not grid else 1.0)
+        t_pilot = min(t_end, 20 * 2 * math.pi / float(model.omega.min())) if model.omega.size else t_end
+        t_pilot = max(dt_out, dt_out * round(t_pilot / dt_out))
+        if reference is None:
+            if exact:
+                sol = ModalSolution.from_initial(spec, x0, v0)
+
+                def reference(t):
+                    return sol.at(t)[0]
+            else:
+                ref_method = ADAPTIVE["dop853"]()
+                cache: dict = {}
+
+                def reference(t):
+                    key = (t.shape[0], float(t[-1]))
+                    if key not in cache:
+                        cache[key] = ref_method.solve(problem, x0, v0, t, 1e-13,
+                                                      adaptive_atol(x0, v0, 1e-15)).x[..., 0]
+                    return cache[key]
+        laws = {}
+        if adaptive:
+            for cls_ in ADAPTIVE.values():
+                method = cls_()
+                laws[method.name] = calibrate_adaptive(method, problem, x0, v0, t_pilot, dt_out, reference)
+        planner = cls(float(t_end), float(dt_out), system.n, model, exact, tuple(steps_), responses, costs,
+                      tuple(props), laws, modal_seconds)
+        if not exact:
+            planner = planner.calibrated(problem, x0, v0, t_pilot, reference)
+        return planner
+
+    def calibrated(self, problem: Problem, x0: np.ndarray, v0: np.ndarray, t_pilot: float,
+                   reference: Callable) -> "Planner":
+        """Scale each step method's (linearized) model by measured/predicted on one pilot run.
+
+        The pilot step makes the linearized prediction about 1e-5 over ``t_pilot``; it is a
+        multiple or a divisor of ``dt_out`` so the pilot's times lie on the reference grid.
+        """
+        pilot = Planner(t_pilot, self.dt_out, self.n, self.model, self.exact, self.step_methods, self.responses,
+                        self.step_costs)
+        x_cache: dict = {}
+        factors = {}
+        for integ in self.step_methods:
+            h_target = t_pilot / pilot.plan_step(integ, 1e-5).steps
+            if h_target >= self.dt_out:
+                h, stride = self.dt_out * math.floor(h_target / self.dt_out), 1
+            else:
+                stride = math.ceil(self.dt_out / h_target)
+                h = self.dt_out / stride
+            n = int(round(t_pilot / h))
+            tr = integrate(integ, problem, x0, v0, h, n, record_every=stride)
+            key = tr.t.shape[0]
+            if key not in x_cache:
+                x_cache[key] = reference(np.rint(tr.t / self.dt_out) * self.dt_out)
+            measured = float(np.max(np.abs(tr.x[..., 0] - x_cache[key])))
+            resp = self.responses[integ.name]
+            predicted = pilot.model.envelope(resp, h, n)
+            factors[integ.name] = min(max(measured / max(predicted, 1e-300), 1.0 / 30.0), 30.0)
+        return replace(self, calibration=factors)
+
+    # -- predictions ---------------------------------------------------------------------------
+    def predict_error(self, integrator: Integrator, steps: int, exact_budget: int = EXACT_BUDGET) -> tuple[float, str]:
+        """Predicted error of ``steps`` steps of ``integrator`` over the horizon, and the model used."""
+        resp = self.responses[integrator.name]
+        h = self.t_end / steps
+        m = self.model
+        work = steps * max(m.omega.shape[0], 1) * self.n
+        if work <= exact_budget:
+            e, how = m.error(resp, h, steps), "closed-form numerical solution per mode"
+        else:
+            e, how = m.envelope(resp, h, steps), "per-mode envelope"
+        if not self.exact:
+            f = self.calibration.get(integrator.name)
+            if f is not None:
+                e *= f
+                how += f" of the linearization x {f:.3g} (pilot-calibrated)"
+            else:
+                how += " (of the linearization: approximate)"
+        return e + roundoff_floor(m.size, resp.stages, steps), how
+
+    def _min_steps(self, integrator: Integrator) -> int:
+        limit = integrator.stability_limit
+        w = self.model.omega_max
+        if w == 0 or not math.isfinite(limit):
+            return 1
+        return max(1, math.floor(self.t_end * w / limit * (1 + 1e-12)) + 1)
+
+    def plan_step(self, integrator: Integrator, tol: float) -> Candidate:
+        """The fewest steps whose predicted error is at most ``SAFETY·tol``."""
+        resp = self.responses[integrator.name]
+        m = self.model
+        cost = self.step_costs[integrator.name]
+        target = SAFETY * tol
+        n_lo = self._min_steps(integrator)
+
+        scale = self.calibration.get(integrator.name, 1.0)
+
+        def env(n):
+            return scale * m.envelope(resp, self.t_end / n, n) + roundoff_floor(m.size, resp.stages, n)
+
+        # exponential search on the envelope (monotone until the rounding floor takes over)
+        n_hi, found = n_lo, False
+        best_n, best_e = n_lo, env(n_lo)
+        while n_hi <= MAX_STEPS:
+            e = env(n_hi)
+            if e < best_e:
+                best_n, best_e = n_hi, e
+            if e <= target:
+                found = True
+                break
+            if n_hi > 64 * best_n:  # the floor is rising: no point refining further
+                break
+            n_hi *= 2
+        if not found:
+            h = self.t_end / best_n
+            return Candidate(integrator, h, best_n, None, best_e, cost(best_n), False,
+                             "rounding floor above the tolerance")
+        lo = max(n_lo, n_hi // 2) if n_hi > n_lo else n_lo
+        # refine on the envelope between lo (too few) and n_hi (enough)
+        while lo < n_hi - 1 and env(lo) > target:
+            mid = (lo + n_hi) // 2
+            if env(mid) <= target:
+                n_hi = mid
+            else:
+                lo = mid
+        n = n_hi
+        # with the exact closed form, walk down while it still meets the target
+        if n * max(m.omega.shape[0], 1) * self.n <= EXACT_BUDGET:
+            def exact(k):
+                return self.predict_error(integrator, k)[0]
+            lo = max(n_lo, n // 4)
+            if exact(lo) <= target:
+                n = lo
+            else:
+                while lo < n - 1:
+                    mid = (lo + n) // 2
+                    if exact(mid) <= target:
+                        n = mid
+                    else:
+                        lo = mid
+        e, how = self.predict_error(integrator, n)
+        return Candidate(integrator, self.t_end / n, n, None, e, cost(n), e <= tol, how)
+
+    def plan_adaptive(self, name: str, tol: float) -> Candidate:
+        law = self.adaptive[name]
+        method = ADAPTIVE[name]()
+        rtol = law.error.solve(SAFETY * tol, self.t_end)
+        ok = rtol >= MIN_RTOL
+        rtol = max(min(rtol, 1e-2), MIN_RTOL)
+        evals = law.evals(rtol, self.t_end)
+        return Candidate(method, None, None, rtol, law.error(rtol, self.t_end), evals * law.seconds_per_eval,
+                         ok, "pilot-calibrated power law in rtol")
+
+    def exact_error(self, steps: int) -> float:
+        """Rounding-level error of the exact methods over ``steps`` output intervals."""
+        m = self.model
+        return EPS * m.size * (8.0 + m.omega_max * self.t_end + math.sqrt(steps))
+
+    def propagator_error(self, steps: int) -> float:
+        """Rounding-level error of an exact propagator (``expm``, ``chebyshev``) after ``steps`` steps."""
+        return EPS * self.model.size * (8.0 + steps)
+
+    def plan(self, tol: float) -> Plan:
+        """Candidates for ``tol`` and the recommended (cheapest) one."""
+        if not (math.isfinite(tol) and tol > 0):
+            raise ValueError(f"tolerance must be finite and > 0, got {tol!r}")
+        cands: list[Candidate] = []
+        n_out = output_grid(self.t_end, self.dt_out).shape[0] - 1
+        if self.exact:
+            e = self.exact_error(n_out)
+            cands.append(Candidate(ExactModal(), None, None, None, e, self.modal_seconds, e <= tol,
+                                   "exact; error at the rounding level"))
+        for integ in self.step_methods:
+            cands.append(self.plan_step(integ, tol))
+        for integ in self.propagators:
+            h, n = step_grid(self.t_end, self.dt_out)
+            e = self.propagator_error(n)
+            cands.append(Candidate(integ, h, n, None, e, self.step_costs[integ.name](n), e <= tol,
+                                   "exact propagator; rounding grows with the number of steps"))
+        for name in self.adaptive:
+            cands.append(self.plan_adaptive(name, tol))
+        ok = tuple(c for c in cands if c.reachable)
+        bad = tuple(c for c in cands if not c.reachable)
+        if not ok:
+            raise ValueError(f"no method reaches tol = {tol:g} over t = {self.t_end:g}: the rounding floors "
+                             f"are above it (smallest predicted: {min(c.predicted_error for c in cands):.2g})")
+        best = min(ok, key=lambda c: c.predicted_seconds)
+        return Plan(tol, self.t_end, best, ok, bad)
