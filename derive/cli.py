@@ -114,7 +114,7 @@ def _simulate(scene, args, out: Path, quiet_json: bool) -> dict:
     steps = args.steps if args.steps is not None else scene.steps
     record_every = args.record_every or scene.record_every
     methods = args.method or (method_names()[:2] if system.exact_available and not
-                              (system.chain and system.n > 4000) else ["verlet"])
+                              (system.chain and not system.module.UNIFORM and system.n > 4000) else ["verlet"])
     unknown = [m for m in methods if m not in method_names()]
     if unknown:
         raise SceneError(None, "--method", f"{unknown[0]!r} is not a method; accepted: {', '.join(method_names())}")
@@ -134,8 +134,8 @@ def _simulate(scene, args, out: Path, quiet_json: bool) -> dict:
     summary.update({"scene": scene.name, "module": origin, "dt": dt, "steps": steps,
                     "t_end": steps * dt, "npz": str(npz), "figures": [str(p) for p in figures]})
     if not quiet_json:
-        long_chain = system.chain and system.n > 4000
-        applies = ("integrators (the exact solution is offered up to 4000 masses)" if long_chain
+        long_chain = system.chain and not system.module.UNIFORM and system.n > 4000
+        applies = ("integrators (an index-dependent chain has an exact solution up to 4000 masses)" if long_chain
                    else "modal (exact) and every integrator") if system.exact_available else (
             "integrators only (" + ("cubic springs" if not system.linear else "non-harmonic forces")
             + ": no exact solution)")
@@ -193,6 +193,111 @@ def cmd_run(args) -> int:
     args.spectrum, args.no_figures, args.rtol, args.atol = "svd", False, 1e-10, 1e-12
     _simulate(scene, args, Path(args.out), False)
     print(f"\nfigures and data are in {Path(args.out).resolve()}  ({time.perf_counter() - t0:.2f} s in all)")
+    return 0
+
+
+def _bench_inputs(scene_path, t_end):
+    """Scene, system and horizon for bench/plan (the generated module, no SymPy for bundled scenes)."""
+    from numeric.system import System
+
+    from .pipeline import load_module
+    from .scene import load_scene
+
+    scene = load_scene(scene_path if scene_path else _seed_scene())
+    module, _ = load_module(scene)
+    system = System.from_module(module)
+    horizon = t_end if t_end is not None else scene.dt * scene.steps
+    return scene, system, horizon
+
+
+def cmd_bench(args) -> int:
+    from numeric.bench import BenchConfig, markdown_table, run_bench, with_derive_seconds, write_outputs
+    from numeric.timing import single_threaded_blas
+
+    from . import pipeline
+
+    scene, system, horizon = _bench_inputs(args.scene, args.t_end)
+    import sympy  # noqa: F401  (imported before timing: the derive time excludes the SymPy import)
+
+    t0 = time.perf_counter()
+    pipeline.derive(scene)
+    derive_seconds = time.perf_counter() - t0
+    config = BenchConfig.quick_config() if args.quick else BenchConfig()
+    with single_threaded_blas():
+        result = run_bench(system, scene.x0, scene.v0, horizon, scene.dt * scene.record_every, scene.name,
+                           config, progress=not args.no_progress, methods=tuple(args.method or ()) or None)
+    result = with_derive_seconds(result, derive_seconds)
+    paths = write_outputs(result, Path(args.out))
+    if args.json:
+        print(json.dumps(result.as_json(), indent=1, default=float))
+    else:
+        print(markdown_table(result), end="")
+        for path in paths:
+            print(f"wrote {path}")
+    return 0
+
+
+def cmd_plan(args) -> int:
+    from numeric.errors import RunRefused
+    from numeric.plan import Planner
+    from numeric.timing import single_threaded_blas
+
+    scene, system, horizon = _bench_inputs(args.scene, args.t_end)
+    if system.damped or system.forced or "gravity" in system.effects:
+        raise RunRefused(f"plan covers conservative scenes (springs, cubic springs); {scene.name!r} has "
+                         "dampers, forces or gravity")
+    with single_threaded_blas():
+        planner = Planner.for_system(system, scene.x0, scene.v0, horizon, scene.dt * scene.record_every)
+        try:
+            plan = planner.plan(args.tol)
+        except ValueError as exc:
+            raise RunRefused(f"--tol {args.tol:g}: {exc}") from None
+    if args.json:
+        print(json.dumps(plan.as_json(), indent=2))
+        return 0
+    print(f"plan for {scene.name!r}: largest position error <= {args.tol:g} over t = 0 ... {horizon:g} "
+          f"(error as in `springchain bench`: max over every step, or the output grid)")
+    print(f"{'method':<14}{'dt / rtol':>14}{'steps':>12}{'predicted error':>17}{'predicted s':>14}  model")
+    for c in sorted(plan.candidates, key=lambda c: c.predicted_seconds):
+        setting = f"{c.dt:.6g}" if c.dt is not None else (f"rtol {c.rtol:.2g}" if c.rtol is not None else "-")
+        steps = str(c.steps) if c.steps is not None else "-"
+        print(f"{c.name:<14}{setting:>14}{steps:>12}{c.predicted_error:>17.3e}{c.predicted_seconds:>14.3e}  {c.model}")
+    for c in plan.unreachable:
+        print(f"{c.name:<14} cannot reach {args.tol:g}: best predicted {c.predicted_error:.2e} ({c.model or 'floor'})")
+    r = plan.recommended
+    how = f"dt = {r.dt:.6g}" if r.dt is not None else (f"rtol = {r.rtol:.2g}" if r.rtol is not None else "no step")
+    print(f"recommended: {r.name} ({how}), predicted error {r.predicted_error:.2e} in {r.predicted_seconds:.3g} s")
+    return 0
+
+
+def cmd_scaling(args) -> int:
+    """Scaling to long chains (numeric.scaling) and the symbolic cost (derive.symbolic_cost)."""
+    from numeric import scaling
+
+    from . import symbolic_cost
+
+    out = Path(args.out)
+    sizes = tuple(n for n in scaling.DEFAULT_SIZES if n < args.max_n) + (args.max_n,)
+    uniform, random = symbolic_cost.scaling_cases()
+    result = scaling.run(uniform, random, scaling.ScalingConfig(sizes=tuple(n for n in sizes if n >= 3)),
+                         progress=scaling.print_progress)
+    paths = scaling.write(result, out)
+    sym = None
+    if args.symbolic_max_n:
+        say = lambda line: scaling.print_progress("symbolic: " + line)  # noqa: E731
+        small = tuple(n for n in (3, 10, 20, 40, 80, 160, 320) if n <= args.symbolic_max_n)
+        sym = symbolic_cost.run(small, symbolic_cost.DEFAULT_CHAIN_SIZES, progress=say)
+        paths += symbolic_cost.write(sym, out)
+    if args.json:
+        print(json.dumps({"scaling": scaling._jsonable(result.to_json()),
+                          "symbolic": None if sym is None else scaling._jsonable(sym.to_json()),
+                          "files": [str(p) for p in paths]}, indent=1))
+        return 0
+    print(scaling.markdown(result))
+    if sym is not None:
+        print(symbolic_cost.markdown(sym))
+    for path in paths:
+        print(f"wrote {path}")
     return 0
 
 
@@ -255,6 +360,47 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("--no-figures", action="store_true", help="write only the NPZ")
     s.add_argument("--json", action="store_true", help="print a JSON summary instead of text")
     s.set_defaults(func=cmd_simulate)
+    b = sub.add_parser("bench", help="work-precision benchmark of every method (figures and a table)",
+                       description="Sweep the step of every fixed-step method and the tolerance of the adaptive "
+                                   "ones, measure the largest position error against an exact (extended-"
+                                   "precision) or very accurate reference, count force evaluations and time "
+                                   "each run (min of repeats, single-threaded BLAS). Writes bench-<scene>.md, "
+                                   ".json, a work-precision figure and an error-vs-horizon figure.")
+    b.add_argument("scene", nargs="?", help="scene file (default: the bundled reference scene seed.toml)")
+    b.add_argument("--t-end", type=_positive_float("--t-end"),
+                   help="horizon T (default: the scene's dt x steps)")
+    b.add_argument("--quick", action="store_true", help="a small sweep (seconds, for tests)")
+    b.add_argument("--method", action="append", choices=method_names(), metavar="NAME",
+                   help="restrict to these methods, repeatable (default: every method that applies; the "
+                        "error-vs-horizon study runs only with the default)")
+    b.add_argument("--out", default="springchain-bench", help="output folder (default: %(default)s)")
+    b.add_argument("--json", action="store_true", help="print the records and targets as JSON")
+    b.add_argument("--no-progress", action="store_true", help="no progress lines on stderr")
+    b.set_defaults(func=cmd_bench)
+
+    pl = sub.add_parser("plan", help="cheapest method and step to reach a tolerance",
+                        description="Predict, from closed-form error models and measured costs, the step (or "
+                                    "tolerance) each method needs to keep the largest position error below TOL "
+                                    "over the horizon, and recommend the cheapest.")
+    pl.add_argument("scene", help="scene file (TOML)")
+    pl.add_argument("--tol", type=_positive_float("--tol"), required=True, help="largest position error allowed")
+    pl.add_argument("--t-end", type=_positive_float("--t-end"), help="horizon T (default: the scene's dt x steps)")
+    pl.add_argument("--json", action="store_true", help="print one JSON object and nothing else")
+    pl.set_defaults(func=cmd_plan)
+    sc = sub.add_parser("scaling", help="setup-vs-step cost from N = 3 to 10^6, and the symbolic cost",
+                        description="Time the exact solution's set-up (dense, tridiagonal, transform) against one "
+                                    "Verlet step (NumPy stencil, fused) and the 32-byte-per-mass memory floor for "
+                                    "chains of N masses; the crossover horizon; and derive + codegen time against "
+                                    "sympy's LagrangesMethod. Writes DIR/scaling.{json,md,png} and "
+                                    "DIR/symbolic-cost.{json,md,png}; progress on stderr.")
+    sc.add_argument("--max-n", type=_positive_int("--max-n"), default=1_000_000,
+                    help="largest chain size (default: %(default)s)")
+    sc.add_argument("--symbolic-max-n", type=int, default=40,
+                    help="largest N for [masses] derive and LagrangesMethod (0: skip the symbolic part; "
+                         "LagrangesMethod takes ~13 s at 80; default: %(default)s)")
+    sc.add_argument("--json", action="store_true", help="print one JSON object with both tables")
+    sc.add_argument("--out", default="springchain-out", help="output folder (default: %(default)s)")
+    sc.set_defaults(func=cmd_scaling)
     return p
 
 
