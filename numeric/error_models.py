@@ -256,8 +256,8 @@ class OscillatorResponse:
         ``cos θ − cos z = D`` with ``D = (trace/2 − cos z) + (trace/2)(1/ρ − 1)``
         known without cancellation; ``δ`` solves ``−2 sin(z + δ/2) sin(δ/2) = D``
         by fixed-point iteration from ``δ₀ = −D/sin z`` (a few steps reach
-        roundoff), falling back to ``acos`` on the branch nearest z when the
-        iteration does not apply (z near 0 mod π with a large D).
+        roundoff) while ``|D| ≤ 1e-4``; for a larger defect ``acos`` on the
+        branch nearest z is accurate and is used instead.
         """
         z = np.asarray(z, dtype=float)
         half_trace = 0.5 * (_series(self.xx, z) + _series(self.vv, z))
@@ -266,10 +266,11 @@ class OscillatorResponse:
             D = D + half_trace * np.expm1(-self.log_amplitude(z))
         with np.errstate(invalid="ignore", divide="ignore"):
             delta = -D / np.sin(z)
-            for _ in range(6):
+            for _ in range(8):
                 arg = -D / (2.0 * np.sin(z + 0.5 * delta))
                 delta = 2.0 * np.arcsin(np.clip(arg, -1.0, 1.0))
-            bad = ~np.isfinite(delta) | (np.abs(arg) > 0.5)
+            # a large defect: acos is accurate there (absolute error ε/sin θ ≪ |δ|)
+            bad = ~np.isfinite(delta) | (np.abs(D) > 1e-4)
             if np.any(bad):
                 c = np.clip(np.cos(z[bad]) + D[bad], -1.0, 1.0)
                 a = np.arccos(c)
