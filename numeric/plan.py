@@ -39,6 +39,7 @@ from typing import Callable
 import numpy as np
 
 from .driver import integrate, step_grid
+from .errors import RunRefused
 from .error_models import EPS, LinearChainModel, OscillatorResponse, PowerLaw, roundoff_floor
 from .integrators import ADAPTIVE, INTEGRATORS
 from .integrators.base import Integrator, Problem
@@ -59,6 +60,8 @@ PILOT_RTOLS = (1e-5, 1e-8)
 EXACT_BUDGET = 1_000_000
 #: Largest number of steps considered for a step method.
 MAX_STEPS = 10**12
+#: The planner and the benchmark work on the dense modes of the chain: small and moderate scenes only.
+MAX_MASSES = 2000
 
 
 class ExactModal:
@@ -238,6 +241,9 @@ class Planner:
             (adaptive methods; step methods on a nonlinear scene). Default: the exact modal
             solution (linear scenes) or DOP853 at rtol 1e-13 (others).
         """
+        if system.n > MAX_MASSES:
+            raise RunRefused(f"plan and bench use the dense modes of the chain: at most {MAX_MASSES} masses "
+                             f"(this scene has {system.n}); for long chains see `springchain scaling`")
         x0 = np.asarray(x0, dtype=float)
         v0 = np.asarray(v0, dtype=float)
         spec: Spectrum = spectrum(system.masses, system.spring_ends, system.stiffness)
@@ -263,7 +269,8 @@ class Planner:
             sample = grid if grid.shape[0] <= 200_001 else grid[:20_001]
             timing = measure(lambda: modal_run(system, x0, v0, sample), budget=0.2)
             modal_seconds = timing.seconds * (grid.shape[0] / sample.shape[0] if sample is not grid else 1.0)
-        t_pilot = min(t_end, 20 * 2 * math.pi / float(model.omega.min())) if model.omega.size else t_end
+        periods = 20 if exact else 5  # nonlinear pilots also need a reference run: keep them short
+        t_pilot = min(t_end, periods * 2 * math.pi / float(model.omega.min())) if model.omega.size else t_end
         t_pilot = max(dt_out, dt_out * round(t_pilot / dt_out))
         if reference is None:
             if exact:
@@ -296,28 +303,28 @@ class Planner:
                    reference: Callable) -> "Planner":
         """Scale each step method's (linearized) model by measured/predicted on one pilot run.
 
-        The pilot step makes the linearized prediction about 1e-5 over ``t_pilot``; it is a
-        multiple or a divisor of ``dt_out`` so the pilot's times lie on the reference grid.
+        The pilot step makes the linearized prediction about 1e-4 over ``t_pilot``; it is a
+        multiple or a divisor of the output spacing, so the pilot's times lie on the reference grid
+        (one reference run for all pilots).
         """
         pilot = Planner(t_pilot, self.dt_out, self.n, self.model, self.exact, self.step_methods, self.responses,
                         self.step_costs)
-        x_cache: dict = {}
+        grid = output_grid(t_pilot, self.dt_out)
+        x_ref = reference(grid)
+        spacing = grid[1] - grid[0]
         factors = {}
         for integ in self.step_methods:
-            h_target = t_pilot / pilot.plan_step(integ, 1e-5).steps
-            if h_target >= self.dt_out:
-                h, stride = self.dt_out * math.floor(h_target / self.dt_out), 1
+            h_target = t_pilot / pilot.plan_step(integ, 1e-4).steps
+            if h_target >= spacing:
+                h, stride = spacing * math.floor(h_target / spacing), 1
             else:
-                stride = math.ceil(self.dt_out / h_target)
-                h = self.dt_out / stride
-            n = int(round(t_pilot / h))
+                stride = math.ceil(spacing / h_target)
+                h = spacing / stride
+            n = stride * math.floor(t_pilot / (h * stride) + 1e-9)
             tr = integrate(integ, problem, x0, v0, h, n, record_every=stride)
-            key = tr.t.shape[0]
-            if key not in x_cache:
-                x_cache[key] = reference(np.rint(tr.t / self.dt_out) * self.dt_out)
-            measured = float(np.max(np.abs(tr.x[..., 0] - x_cache[key])))
-            resp = self.responses[integ.name]
-            predicted = pilot.model.envelope(resp, h, n)
+            idx = np.rint(tr.t / spacing).astype(int)
+            measured = float(np.max(np.abs(tr.x[..., 0] - x_ref[idx])))
+            predicted = pilot.model.envelope(self.responses[integ.name], h, n)
             factors[integ.name] = min(max(measured / max(predicted, 1e-300), 1.0 / 30.0), 30.0)
         return replace(self, calibration=factors)
 
