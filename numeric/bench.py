@@ -479,6 +479,9 @@ def run_bench(system: System, x0: np.ndarray, v0: np.ndarray, t_end: float, dt_o
         lin = spectrum(system.masses, system.spring_ends, system.stiffness)
         w = float(lin.omega_max) if lin.omega.size else 1.0
         k = max(1, int(math.floor(2.0 / (w * dt_out))))
+        n_total = int(round(t_end / dt_out))
+        if abs(n_total * dt_out - t_end) <= 1e-9 * t_end:  # a grid that ends exactly at t_end
+            k = max(d for d in range(1, k + 1) if n_total % d == 0)
         spacing = dt_out * k
         n_grid = int(round(t_end / spacing))
         t_end = n_grid * spacing
