@@ -200,275 +200,283 @@ class ChainCoefficients:
         return math.sqrt(2.0 * 2.0 * max(ks) * float(np.max(self.inv_mass)))
 
     def kernel_args(self) -> tuple:
-        """The positional coefficient arguments of the compiled sweeps."""
-        k3 = self.k3 if self.k3 is not None else np.zeros(1)
-        return (self.n, self.inv_mass, self.k, k3, self.k_left, self.k_right, self.k3_left, self.k3_right,
-                int(self.left), int(self.right))
+        """The positional coefficient arguments of the compiled sweeps.
+
+        Floats for a uniform chain and arrays otherwise (the kernels are
+        specialised on these types); None for the cubic ones of a linear chain.
+        """
+        if self.uniform:
+            im, k = float(self.inv_mass[0]), float(self.k[0])
+            k3 = None if self.k3 is None else float(self.k3[0])
+        else:
+            im, k, k3 = self.inv_mass, self.k, self.k3
+        k3l = None if self.k3 is None else self.k3_left
+        k3r = None if self.k3 is None else self.k3_right
+        return (self.n, im, k, k3, self.k_left, self.k_right, k3l, k3r, int(self.left), int(self.right))
 
 
 # -- compiled sweeps -----------------------------------------------------------------------
-@functools.lru_cache(maxsize=None)
-def _compiled(uniform: bool, cubic: bool):
-    """The numba sweeps specialised for (uniform, cubic); compiled on first call.
+# -- compiled sweeps ------------------------------------------------------------------------------
+# The kernels are plain module-level functions compiled lazily by :func:`_compiled` with
+# ``numba.njit(cache=True)`` (so a second process loads machine code instead of compiling).
+# They are specialised by the *types* of the coefficients: a uniform chain passes floats, an
+# index-dependent one arrays; a linear chain passes None for the cubic coefficients. The helpers
+# below are overloaded for numba on those types, so the branches vanish at compile time and the
+# inner loops vectorise. What a kick does (:class:`_Mode`) is a run-time argument tested outside
+# the inner loops. States are flat C-contiguous float64 views of (n, nb) arrays: row i is
+# elements i*nb … i*nb + nb - 1. Chain ends are the integers of :class:`End`.
 
-    ``uniform`` and ``cubic`` are closure constants, so the branches on them
-    vanish at compile time and the inner loops vectorise; what a kick does
-    (:class:`_Mode`) is a run-time argument tested outside the inner loops.
-    Arrays are flat C-contiguous float64 views of (n, nb) states; row ``i``
-    is elements ``i*nb … i*nb + nb - 1``.
+_FREE, _WALL, _RING = int(End.FREE), int(End.WALL), int(End.RING)
+_VERLET, _LEAPFROG, _FORCE = int(_Mode.VERLET), int(_Mode.LEAPFROG), int(_Mode.FORCE)
 
-    Returns ``(force, sweep, half_kick)``.
-    """
-    import numba
 
-    UNI = uniform
-    CUB = cubic
-    FREE, WALL = int(End.FREE), int(End.WALL)
-    VERLET, LEAPFROG, FORCE = int(_Mode.VERLET), int(_Mode.LEAPFROG), int(_Mode.FORCE)
-    RING = int(End.RING)
+def _at(c, i):
+    """Coefficient of row i: ``c[i]`` for an array, ``c`` for a float (numba overload)."""
+    return c if np.ndim(c) == 0 else c[i]
 
-    @numba.njit
-    def spring(x, j, b, nb, n, k, k3, kl, kr, k3l, k3r, left, right):
-        """Force ``k d + k3 d³`` of spring j (-1 … n-1, ends included), d its extension."""
-        if j < 0:
-            if left == FREE:
-                return 0.0
-            if left == WALL:
-                d = x[b]
-                s = kl * d
-                if CUB:
-                    s += k3l * d * d * d
-                return s
-            j = n - 1  # a ring: spring -1 is the closing spring n-1
-        if j >= n - 1:
-            if right == FREE:
-                return 0.0
-            last = (n - 1) * nb + b
-            if right == WALL:
-                d = -x[last]
-            else:
-                d = x[b] - x[last]
-            s = kr * d
-            if CUB:
-                s += k3r * d * d * d
-            return s
-        e = j * nb + b
-        d = x[e + nb] - x[e]
-        s = (k[0] if UNI else k[j]) * d
-        if CUB:
-            s += (k3[0] if UNI else k3[j]) * d * d * d
-        return s
 
-    @numba.njit
-    def kick_end(x, v, a, i, nb, n, im, k, k3, kl, kr, k3l, k3r, left, right, c, mode):
-        """Kick one row (any row, ends included) through the scalar spring function."""
-        mi = im[0] if UNI else im[i]
-        for b in range(nb):
-            A = mi * (spring(x, i, b, nb, n, k, k3, kl, kr, k3l, k3r, left, right)
-                      - spring(x, i - 1, b, nb, n, k, k3, kl, kr, k3l, k3r, left, right))
-            e = i * nb + b
-            if mode == VERLET:
-                v[e] = v[e] + c * (a[e] + A)
-                a[e] = A
-            elif mode == LEAPFROG:
-                v[e] = v[e] + c * A
-            else:
-                a[e] = A
+def _rows(c, a, b):
+    """Coefficients of rows a … b-1: ``c[a:b]`` for an array, ``c`` for a float (numba overload)."""
+    return c if np.ndim(c) == 0 else c[a:b]
 
-    @numba.njit
-    def kick_uniform(xm, xc, xp, vv, aa, kk, kc, mi, c, mode):
-        """Interior rows of a uniform chain (scalars hoisted; neighbours are the views xm, xp)."""
-        if mode == VERLET:
+
+def _cubic(s, c, i, d):
+    """``s + c_i d³``, or ``s`` when c is None (a linear chain) (numba overload)."""
+    return s if c is None else s + _at(c, i) * d * d * d
+
+
+def _scalar(c):
+    """Whether coefficients are one float for the whole chain (a constant under numba)."""
+    return np.ndim(c) == 0
+
+
+def _spring_impl(x, j, b, nb, n, k, k3, kl, kr, k3l, k3r, left, right):
+    """Force ``k d + k3 d³`` of spring j (-1 … n-1, ends included), d its extension."""
+    if j < 0:
+        if left == _FREE:
+            return 0.0
+        if left == _WALL:
+            d = x[b]
+            return _cubic(kl * d, k3l, 0, d)
+        j = n - 1  # a ring: spring -1 is the closing spring n-1
+    if j >= n - 1:
+        if right == _FREE:
+            return 0.0
+        last = (n - 1) * nb + b
+        if right == _WALL:
+            d = -x[last]
+        else:
+            d = x[b] - x[last]
+        return _cubic(kr * d, k3r, 0, d)
+    e = j * nb + b
+    d = x[e + nb] - x[e]
+    return _cubic(_at(k, j) * d, k3, j, d)
+
+
+def _kick_end_impl(x, v, a, i, nb, n, im, k, k3, kl, kr, k3l, k3r, left, right, c, mode):
+    """Kick one row (any row, ends included) through the scalar spring function."""
+    mi = _at(im, i)
+    for b in range(nb):
+        A = mi * (_spring(x, i, b, nb, n, k, k3, kl, kr, k3l, k3r, left, right)
+                  - _spring(x, i - 1, b, nb, n, k, k3, kl, kr, k3l, k3r, left, right))
+        e = i * nb + b
+        if mode == _VERLET:
+            v[e] = v[e] + c * (a[e] + A)
+            a[e] = A
+        elif mode == _LEAPFROG:
+            v[e] = v[e] + c * A
+        else:
+            a[e] = A
+
+
+def _kick_flat_impl(xm, xc, xp, vv, aa, ku, kd, cu, cd, mm, c, mode):
+    """Interior rows as one flat loop: coefficients are floats (uniform) or per element (one state)."""
+    if mode == _VERLET:
+        for e in range(xc.shape[0]):
+            d1 = xp[e] - xc[e]
+            d0 = xc[e] - xm[e]
+            A = _at(mm, e) * (_cubic(_at(ku, e) * d1, cu, e, d1) - _cubic(_at(kd, e) * d0, cd, e, d0))
+            vv[e] = vv[e] + c * (aa[e] + A)
+            aa[e] = A
+    elif mode == _LEAPFROG:
+        if _scalar(ku) and cu is None:
+            # w ← w + (h k/m)·(Δ⁺x − Δ⁻x): coefficients folded (this sweep equals Verlet to rounding only)
+            q = c * _at(mm, 0) * _at(ku, 0)
             for e in range(xc.shape[0]):
-                d1 = xp[e] - xc[e]
-                d0 = xc[e] - xm[e]
-                s1 = kk * d1
-                s0 = kk * d0
-                if CUB:
-                    s1 += kc * d1 * d1 * d1
-                    s0 += kc * d0 * d0 * d0
-                A = mi * (s1 - s0)
-                vv[e] = vv[e] + c * (aa[e] + A)
-                aa[e] = A
-        elif mode == LEAPFROG:
-            if not CUB:
-                # w ← w + (h k/m)·(Δ⁺x − Δ⁻x): coefficients folded (the sweep equals Verlet to rounding)
-                q = c * mi * kk
-                for e in range(xc.shape[0]):
-                    vv[e] = vv[e] + q * ((xp[e] - xc[e]) - (xc[e] - xm[e]))
-            else:
-                for e in range(xc.shape[0]):
-                    d1 = xp[e] - xc[e]
-                    d0 = xc[e] - xm[e]
-                    A = mi * ((kk * d1 + kc * d1 * d1 * d1) - (kk * d0 + kc * d0 * d0 * d0))
-                    vv[e] = vv[e] + c * A
+                vv[e] = vv[e] + q * ((xp[e] - xc[e]) - (xc[e] - xm[e]))
         else:
             for e in range(xc.shape[0]):
                 d1 = xp[e] - xc[e]
                 d0 = xc[e] - xm[e]
-                s1 = kk * d1
-                s0 = kk * d0
-                if CUB:
-                    s1 += kc * d1 * d1 * d1
-                    s0 += kc * d0 * d0 * d0
-                aa[e] = mi * (s1 - s0)
+                A = _at(mm, e) * (_cubic(_at(ku, e) * d1, cu, e, d1) - _cubic(_at(kd, e) * d0, cd, e, d0))
+                vv[e] = vv[e] + c * A
+    else:
+        for e in range(xc.shape[0]):
+            d1 = xp[e] - xc[e]
+            d0 = xc[e] - xm[e]
+            aa[e] = _at(mm, e) * (_cubic(_at(ku, e) * d1, cu, e, d1) - _cubic(_at(kd, e) * d0, cd, e, d0))
 
-    @numba.njit
-    def kick_indexed(xm, xc, xp, vv, aa, ku, kd, cu, cd, mm, c, mode):
-        """Interior rows of an index-dependent chain, one state (row = element)."""
-        if mode == VERLET:
-            for e in range(xc.shape[0]):
-                d1 = xp[e] - xc[e]
-                d0 = xc[e] - xm[e]
-                s1 = ku[e] * d1
-                s0 = kd[e] * d0
-                if CUB:
-                    s1 += cu[e] * d1 * d1 * d1
-                    s0 += cd[e] * d0 * d0 * d0
-                A = mm[e] * (s1 - s0)
-                vv[e] = vv[e] + c * (aa[e] + A)
-                aa[e] = A
-        elif mode == LEAPFROG:
-            for e in range(xc.shape[0]):
-                d1 = xp[e] - xc[e]
-                d0 = xc[e] - xm[e]
-                s1 = ku[e] * d1
-                s0 = kd[e] * d0
-                if CUB:
-                    s1 += cu[e] * d1 * d1 * d1
-                    s0 += cd[e] * d0 * d0 * d0
-                vv[e] = vv[e] + c * (mm[e] * (s1 - s0))
+
+def _kick_row_batch_impl(x, v, a, i, nb, mi, ku, kd, cu, cd, c, mode):
+    """One interior row of an index-dependent chain across the batch (coefficients of that row)."""
+    base = i * nb
+    for b in range(nb):
+        e = base + b
+        d1 = x[e + nb] - x[e]
+        d0 = x[e] - x[e - nb]
+        A = mi * (_cubic(ku * d1, cu, 0, d1) - _cubic(kd * d0, cd, 0, d0))
+        if mode == _VERLET:
+            v[e] = v[e] + c * (a[e] + A)
+            a[e] = A
+        elif mode == _LEAPFROG:
+            v[e] = v[e] + c * A
         else:
-            for e in range(xc.shape[0]):
-                d1 = xp[e] - xc[e]
-                d0 = xc[e] - xm[e]
-                s1 = ku[e] * d1
-                s0 = kd[e] * d0
-                if CUB:
-                    s1 += cu[e] * d1 * d1 * d1
-                    s0 += cd[e] * d0 * d0 * d0
-                aa[e] = mm[e] * (s1 - s0)
+            a[e] = A
 
-    @numba.njit
-    def kick_row_batch(x, v, a, i, nb, mi, ku, kd, cu, cd, c, mode):
-        """One interior row of an index-dependent chain across the batch."""
-        base = i * nb
-        for b in range(nb):
-            e = base + b
-            d1 = x[e + nb] - x[e]
-            d0 = x[e] - x[e - nb]
-            s1 = ku * d1
-            s0 = kd * d0
-            if CUB:
-                s1 += cu * d1 * d1 * d1
-                s0 += cd * d0 * d0 * d0
-            A = mi * (s1 - s0)
-            if mode == VERLET:
-                v[e] = v[e] + c * (a[e] + A)
-                a[e] = A
-            elif mode == LEAPFROG:
-                v[e] = v[e] + c * A
-            else:
-                a[e] = A
 
-    @numba.njit
-    def kick_rows(x, v, a, r0, r1, nb, n, im, k, k3, kl, kr, k3l, k3r, left, right, c, mode):
-        """Kick rows r0 … r1-1 (0 <= r0 <= r1 <= n): end rows scalar, interior rows vectorised."""
-        if r1 <= r0:
-            return
-        if r0 == 0:
-            kick_end(x, v, a, 0, nb, n, im, k, k3, kl, kr, k3l, k3r, left, right, c, mode)
-            r0 = 1
-        last = r1 == n and r0 <= n - 1
-        if last:
-            r1 = n - 1
-        if r1 > r0:
+def _kick_rows_impl(x, v, a, r0, r1, nb, n, im, k, k3, kl, kr, k3l, k3r, left, right, c, mode):
+    """Kick rows r0 … r1-1 (0 <= r0 <= r1 <= n): end rows scalar, interior rows vectorised."""
+    if r1 <= r0:
+        return
+    if r0 == 0:
+        _kick_end(x, v, a, 0, nb, n, im, k, k3, kl, kr, k3l, k3r, left, right, c, mode)
+        r0 = 1
+    last = r1 == n and r0 <= n - 1
+    if last:
+        r1 = n - 1
+    if r1 > r0:
+        if _scalar(k) or nb == 1:  # one flat loop; neighbours nb elements apart
             lo = r0 * nb
             hi = r1 * nb
-            if UNI:  # any batch: neighbours are nb elements apart
-                kick_uniform(x[lo - nb:hi - nb], x[lo:hi], x[lo + nb:hi + nb], v[lo:hi], a[lo:hi],
-                             k[0], k3[0], im[0], c, mode)
-            elif nb == 1:
-                kick_indexed(x[r0 - 1:r1 - 1], x[r0:r1], x[r0 + 1:r1 + 1], v[r0:r1], a[r0:r1],
-                             k[r0:r1], k[r0 - 1:r1 - 1], k3[r0:r1] if CUB else k3[0:0],
-                             k3[r0 - 1:r1 - 1] if CUB else k3[0:0], im[r0:r1], c, mode)
-            else:  # index-dependent and a batch: scalar coefficients per row, the batch vectorised
-                for i in range(r0, r1):
-                    kick_row_batch(x, v, a, i, nb, im[i], k[i], k[i - 1], k3[i] if CUB else 0.0,
-                                   k3[i - 1] if CUB else 0.0, c, mode)
-        if last:
-            kick_end(x, v, a, n - 1, nb, n, im, k, k3, kl, kr, k3l, k3r, left, right, c, mode)
+            _kick_flat(x[lo - nb:hi - nb], x[lo:hi], x[lo + nb:hi + nb], v[lo:hi], a[lo:hi],
+                       _rows(k, r0, r1), _rows(k, r0 - 1, r1 - 1), _rows(k3, r0, r1), _rows(k3, r0 - 1, r1 - 1),
+                       _rows(im, r0, r1), c, mode)
+        else:  # index-dependent and a batch: one coefficient per row, the batch vectorised
+            for i in range(r0, r1):
+                _kick_row_batch(x, v, a, i, nb, _at(im, i), _at(k, i), _at(k, i - 1), _row(k3, i),
+                                _row(k3, i - 1), c, mode)
+    if last:
+        _kick_end(x, v, a, n - 1, nb, n, im, k, k3, kl, kr, k3l, k3r, left, right, c, mode)
 
-    @numba.njit
-    def force(x, a, nb, n, im, k, k3, kl, kr, k3l, k3r, left, right):
-        """a ← a(x) for all rows."""
-        kick_rows(x, a, a, 0, n, nb, n, im, k, k3, kl, kr, k3l, k3r, left, right, 0.0, FORCE)
 
-    @numba.njit(fastmath={"contract"})
-    def drift_leapfrog(xs, ws, h):
-        for e in range(xs.shape[0]):
-            xs[e] = xs[e] + h * ws[e]
+def _row(c, i):
+    """The row's cubic coefficient: None for a linear chain, else ``_at(c, i)`` (numba overload)."""
+    return None if c is None else _at(c, i)
 
-    @numba.njit
-    def sweep(xi, vi, ai, xo, vo, ao, inplace, nb, n, im, k, k3, kl, kr, k3l, k3r, left, right, h, mode, steps):
-        """``steps`` sweeps of velocity Verlet (mode VERLET, on x v a) or of the half-step form (LEAPFROG, on x w).
 
-        Each sweep drifts a block of rows, then kicks the rows whose neighbours
-        are all drifted (lo-1 … hi-2); row n-1 (and a ring's row 0, which needs
-        the new x[n-1]) are kicked after the last block. VERLET may write to
-        other arrays than it reads (``inplace`` False); LEAPFROG works in place.
-        """
-        hh = 0.5 * h * h
-        c = 0.5 * h if mode == VERLET else h
-        rows = max(1, BLOCK_ELEMENTS // nb)
-        first = 1 if left == RING else 0
-        for step in range(steps):
-            lo = 0
-            while lo < n:
-                hi = min(lo + rows, n)
-                s, t = lo * nb, hi * nb
-                if mode == LEAPFROG:
-                    drift_leapfrog(xo[s:t], vo[s:t], h)
-                elif inplace or step > 0:
-                    xs = xo[s:t]
-                    vs = vo[s:t]
-                    as_ = ao[s:t]
-                    for e in range(t - s):
-                        xs[e] = xs[e] + h * vs[e] + hh * as_[e]
-                else:
-                    xin, vin, ain = xi[s:t], vi[s:t], ai[s:t]
-                    xs, vs, as_ = xo[s:t], vo[s:t], ao[s:t]
-                    for e in range(t - s):
-                        xs[e] = xin[e] + h * vin[e] + hh * ain[e]
-                        vs[e] = vin[e]
-                        as_[e] = ain[e]
-                kick_rows(xo, vo, ao, max(lo - 1, first), min(hi - 1, n - 1), nb, n, im, k, k3,
-                          kl, kr, k3l, k3r, left, right, c, mode)
-                lo = hi
-            kick_rows(xo, vo, ao, n - 1, n, nb, n, im, k, k3, kl, kr, k3l, k3r, left, right, c, mode)
-            if first == 1 and n > 1:
-                kick_rows(xo, vo, ao, 0, 1, nb, n, im, k, k3, kl, kr, k3l, k3r, left, right, c, mode)
+def _force_impl(x, a, nb, n, im, k, k3, kl, kr, k3l, k3r, left, right):
+    """a ← a(x) for all rows."""
+    _kick_rows(x, a, a, 0, n, nb, n, im, k, k3, kl, kr, k3l, k3r, left, right, 0.0, _FORCE)
 
-    @numba.njit
-    def half_kick(v, a, c):
-        """v ← v + c a (entry to / exit from the half-step velocity form)."""
-        for e in range(v.shape[0]):
-            v[e] = v[e] + c * a[e]
 
-    return force, sweep, half_kick
+def _sweep_impl(xi, vi, ai, xo, vo, ao, inplace, nb, n, im, k, k3, kl, kr, k3l, k3r, left, right, h, mode, steps):
+    """``steps`` sweeps of velocity Verlet (mode VERLET, on x v a) or of the half-step form (LEAPFROG, on x w).
+
+    Each sweep drifts a block of rows, then kicks the rows whose neighbours
+    are all drifted (lo-1 … hi-2); row n-1 (and a ring's row 0, which needs
+    the new x[n-1]) are kicked after the last block. VERLET may write to
+    other arrays than it reads (``inplace`` False); LEAPFROG works in place.
+    """
+    hh = 0.5 * h * h
+    c = 0.5 * h if mode == _VERLET else h
+    rows = max(1, BLOCK_ELEMENTS // nb)
+    first = 1 if left == _RING else 0
+    for step in range(steps):
+        lo = 0
+        while lo < n:
+            hi = min(lo + rows, n)
+            s, t = lo * nb, hi * nb
+            xs = xo[s:t]
+            vs = vo[s:t]
+            if mode == _LEAPFROG:
+                for e in range(t - s):
+                    xs[e] = xs[e] + h * vs[e]
+            elif inplace or step > 0:
+                as_ = ao[s:t]
+                for e in range(t - s):
+                    xs[e] = xs[e] + h * vs[e] + hh * as_[e]
+            else:
+                as_ = ao[s:t]
+                xin, vin, ain = xi[s:t], vi[s:t], ai[s:t]
+                for e in range(t - s):
+                    xs[e] = xin[e] + h * vin[e] + hh * ain[e]
+                    vs[e] = vin[e]
+                    as_[e] = ain[e]
+            _kick_rows(xo, vo, ao, max(lo - 1, first), min(hi - 1, n - 1), nb, n, im, k, k3,
+                       kl, kr, k3l, k3r, left, right, c, mode)
+            lo = hi
+        _kick_rows(xo, vo, ao, n - 1, n, nb, n, im, k, k3, kl, kr, k3l, k3r, left, right, c, mode)
+        if first == 1 and n > 1:
+            _kick_rows(xo, vo, ao, 0, 1, nb, n, im, k, k3, kl, kr, k3l, k3r, left, right, c, mode)
+
+
+def _half_kick_impl(v, a, c):
+    """v ← v + c a (entry to / exit from the half-step velocity form)."""
+    for e in range(v.shape[0]):
+        v[e] = v[e] + c * a[e]
+
+
+def _stream_impl(x, v, c):
+    """The floor's sweep: x ← x + c v; v ← v − c x, one pass."""
+    for e in range(x.shape[0]):
+        x[e] = x[e] + c * v[e]
+        v[e] = v[e] - c * x[e]
+
+
+# jitted versions (set by _compiled(); the implementations call these names)
+_spring = _kick_end = _kick_flat = _kick_row_batch = _kick_rows = None
 
 
 @functools.lru_cache(maxsize=1)
-def _stream():
+def _compiled():
+    """Register the numba overloads and compile (or load from numba's cache) the kernels.
+
+    Returns a namespace with ``force``, ``sweep``, ``half_kick`` and ``stream``.
+    """
+    import types as pytypes
+
     import numba
+    from numba import types
+    from numba.extending import overload
 
-    @numba.njit
-    def stream(x, v, c):
-        for e in range(x.shape[0]):
-            x[e] = x[e] + c * v[e]
-            v[e] = v[e] - c * x[e]
+    def is_array(c):
+        return isinstance(c, types.Array)
 
-    return stream
+    @overload(_at)
+    def _at_ol(c, i):
+        return (lambda c, i: c[i]) if is_array(c) else (lambda c, i: c)
+
+    @overload(_rows)
+    def _rows_ol(c, a, b):
+        return (lambda c, a, b: c[a:b]) if is_array(c) else (lambda c, a, b: c)
+
+    @overload(_cubic)
+    def _cubic_ol(s, c, i, d):
+        if isinstance(c, (types.NoneType, types.Omitted)):
+            return lambda s, c, i, d: s
+        if is_array(c):
+            return lambda s, c, i, d: s + c[i] * d * d * d
+        return lambda s, c, i, d: s + c * d * d * d
+
+    @overload(_row)
+    def _row_ol(c, i):
+        if isinstance(c, types.NoneType):
+            return lambda c, i: None
+        return (lambda c, i: c[i]) if is_array(c) else (lambda c, i: c)
+
+    @overload(_scalar)
+    def _scalar_ol(c):
+        flag = not is_array(c)
+        return lambda c: flag
+
+    def jit(fn):
+        return numba.njit(cache=True)(fn)
+
+    g = globals()
+    for name in ("_spring", "_kick_end", "_kick_flat", "_kick_row_batch", "_kick_rows"):
+        g[name] = jit(g[name + "_impl"])
+    return pytypes.SimpleNamespace(force=jit(_force_impl), sweep=jit(_sweep_impl), half_kick=jit(_half_kick_impl),
+                                   stream=jit(_stream_impl))
 
 
 def stream_update(x: np.ndarray, v: np.ndarray, c: float = 1e-12) -> None:
@@ -483,7 +491,7 @@ def stream_update(x: np.ndarray, v: np.ndarray, c: float = 1e-12) -> None:
     x, v : ndarray, shape (N,), float64, C-contiguous
     """
     if available():
-        _stream()(x, v, float(c))
+        _compiled().stream(x, v, float(c))
     else:
         x += c * v
         v -= c * x
@@ -549,8 +557,8 @@ class FusedVerlet:
         return self.acceleration(x)
 
     def _kernels(self):
-        c = self.coefficients
-        return _compiled(c.uniform, c.cubic)
+        k = _compiled()
+        return k.force, k.sweep, k.half_kick
 
     # -- building blocks ------------------------------------------------------------------
     def force(self, x: np.ndarray, out: np.ndarray | None = None) -> np.ndarray:

@@ -1,0 +1,624 @@
+"""Scaling to long chains: the exact solution's set-up against Verlet's per-step cost, N = 3 … 10⁶.
+
+For each chain size N this measures, single-threaded and as the minimum of
+repeats after a warm-up:
+
+* exact-solution set-up: the dense route the ``modal`` method uses
+  (:func:`numeric.spectrum.spectrum`, an SVD, O(N³)), a dense symmetric
+  eigen-solve (``scipy.linalg.eigh``, O(N³)), the tridiagonal solver with
+  eigenvectors (``scipy.linalg.eigh_tridiagonal``, O(N²) memory) — these on
+  an index-dependent ("random") chain, where nothing better exists — and the
+  transform solution of a uniform chain (:mod:`numeric.chain_modal`,
+  O(N log N) set-up and per output time, no matrix);
+* the cost of one output time from stored eigenvectors (an N×N product);
+* one velocity-Verlet step: the NumPy stencil path (the project's ``verlet``
+  kernel on the generated module), the fused sweep (:mod:`numeric.fast`) and
+  its multi-step half-step-velocity form;
+* the memory floor: the time to move 32 bytes per mass (x and v read and
+  written once), measured in the same run by a one-pass in-place update of
+  two N-arrays (:func:`numeric.fast.stream_update`) and by a NumPy copy of
+  2N doubles (16 bytes read + 16 written per mass); the floor is the faster.
+
+The crossover answers "for this N, horizon T and tolerance, which is
+cheaper?". Verlet's step comes from its error model: the phase error of the
+fastest mode after time T is about ``ω_max³ h² T / 24`` (relative to the
+amplitude), so ``h = √(24 tol / (ω_max³ T))``, capped at the stability edge
+(``ω_max h < 2``, here 1.9), and ``steps = ⌈T/h⌉``. The exact method pays its
+set-up and one evaluation at T. Equating the two gives the horizon T* beyond
+which the exact solution is cheaper: ``T* = (c_exact / (c_step √(ω³/(24 tol))))^(2/3)``
+while accuracy limits the step. Dense set-up costs beyond the largest measured
+N are extrapolated (∝ N³, tridiagonal ∝ N²) and marked so.
+"""
+
+from __future__ import annotations
+
+import math
+import sys
+import time
+from dataclasses import asdict, dataclass, field
+from pathlib import Path
+from types import ModuleType
+from typing import Callable
+
+import numpy as np
+
+from . import fast
+from .chain_modal import ChainModal
+
+#: Default chain sizes of ``springchain scaling``.
+DEFAULT_SIZES = (3, 10, 30, 100, 300, 1000, 2000, 4000, 10_000, 30_000, 100_000, 300_000, 1_000_000)
+#: Bytes a Verlet step must move per mass at the least: x and v (8 bytes each) read and written.
+FLOOR_BYTES_PER_MASS = 32
+#: Largest ω_max·h used (stability edge 2).
+STABLE_OMEGA_H = 1.9
+
+#: Markdown columns (record field -> title): seconds per operation.
+SECONDS_COLUMNS = {
+    "n": "N",
+    "setup_dense_svd": "dense SVD set-up (modal)",
+    "setup_dense_eigh": "dense eigh set-up",
+    "setup_tridiagonal": "eigh_tridiagonal set-up",
+    "eval_dense": "eigenvectors: 1 output time",
+    "setup_transform": "transform set-up (uniform)",
+    "eval_transform": "transform: 1 output time",
+    "step_numpy": "NumPy step",
+    "step_fused": "fused step",
+    "step_fused_advance": "fused multi-step, per step",
+    "step_numpy_random": "NumPy step (random)",
+    "step_fused_random": "fused step (random)",
+}
+#: Markdown columns: nanoseconds per mass and the crossover horizons (``ns:`` = seconds/N·1e9).
+PER_MASS_COLUMNS = {
+    "n": "N",
+    "ns:step_numpy": "NumPy step ns/mass",
+    "ns:step_fused": "fused step ns/mass",
+    "ns:step_fused_advance": "fused multi-step ns/mass",
+    "ns:floor": "floor ns/mass (32 B)",
+    "fused_over_floor": "multi-step / floor",
+    "crossover_transform": "T* transform vs fused (uniform)",
+    "crossover_dense": "T* best eigenvector route vs fused (random)",
+    "cheaper_uniform": "cheaper at T (uniform)",
+    "cheaper_random": "cheaper at T (random)",
+}
+
+
+@dataclass(frozen=True)
+class ScalingConfig:
+    """What :func:`run` measures.
+
+    Attributes
+    ----------
+    sizes : tuple of int
+        Chain sizes N.
+    svd_max, dense_max, tridiagonal_max : int
+        Largest N for the dense SVD route, ``scipy.linalg.eigh`` and
+        ``eigh_tridiagonal`` with eigenvectors.
+    t_end, tol : float
+        Horizon and relative position tolerance of the crossover.
+    budget : float
+        Seconds of timed repeats per set-up measurement (at least one repeat).
+    step_budget : float
+        Seconds of interleaved rounds for the per-step costs and the floor at each N
+        (four times as much at the largest N, the headline).
+    memory_bytes : float
+        Memory an eigenvector route may use: it needs about three N×N float64
+        arrays (matrix, eigenvectors, workspace), so it is infeasible above
+        ``N = √(memory_bytes / 24)`` (≈ 19 000 for 8 GiB), whatever its time.
+    """
+
+    sizes: tuple[int, ...] = DEFAULT_SIZES
+    svd_max: int = 1000
+    dense_max: int = 2000
+    tridiagonal_max: int = 4000
+    t_end: float = 1000.0
+    tol: float = 1e-6
+    budget: float = 0.25
+    step_budget: float = 1.0
+    memory_bytes: float = 8 * 2**30
+
+    def __post_init__(self):
+        if not self.sizes or min(self.sizes) < 3:
+            raise ValueError(f"sizes must be chain sizes >= 3, got {self.sizes!r}")
+        if not (self.t_end > 0 and 0 < self.tol < 1):
+            raise ValueError(f"need t_end > 0 and 0 < tol < 1, got {self.t_end!r}, {self.tol!r}")
+
+
+@dataclass(frozen=True)
+class ScalingResult:
+    """Records (one per N), the headline at the largest N, and the configuration."""
+
+    config: ScalingConfig
+    records: list[dict] = field(repr=False)
+    headline: dict
+    notes: tuple[str, ...] = ()
+
+    def to_json(self) -> dict:
+        return {"config": asdict(self.config), "records": self.records, "headline": self.headline,
+                "notes": list(self.notes)}
+
+
+# -- timing -------------------------------------------------------------------------------------------
+def best_seconds(fn: Callable[[], object], *, budget: float = 0.25, max_repeats: int = 9, min_time: float = 2e-3,
+                 warmup: bool = True) -> float:
+    """Minimum seconds per call of ``fn`` after a warm-up.
+
+    A call longer than ``budget`` is timed once (its own first run). Short calls are batched so that one timed sample lasts at least
+    ``min_time``; samples are repeated until ``budget`` seconds are spent
+    (at least one, at most ``max_repeats``).
+    """
+    if warmup:
+        t0 = time.perf_counter()
+        fn()
+        first = time.perf_counter() - t0
+        if first > budget:  # a long call (an O(N³) set-up): its caches are warm within it; one run is enough
+            return float(first)
+    else:
+        first = 0.0
+    inner = 1 if first >= min_time else int(min(10_000, max(1, math.ceil(min_time / max(first, 1e-7)))))
+    samples: list[float] = []
+    spent = 0.0
+    while len(samples) < max_repeats and (not samples or spent < budget):
+        t0 = time.perf_counter()
+        for _ in range(inner):
+            fn()
+        dt = time.perf_counter() - t0
+        spent += dt
+        samples.append(dt / inner)
+    return float(min(samples))
+
+
+def _single_threaded():
+    """threadpoolctl's limit to one BLAS thread, or a no-op if threadpoolctl is missing."""
+    try:
+        from threadpoolctl import threadpool_limits
+    except ImportError:  # pragma: no cover - threadpoolctl ships with scikit-style stacks; optional here
+        import contextlib
+
+        return contextlib.nullcontext()
+    return threadpool_limits(limits=1)
+
+
+# -- error model and crossover ---------------------------------------------------------------------
+def verlet_step_for(t_end: float, tol: float, omega_max: float) -> float:
+    """Verlet step meeting ``ω_max³ h² T / 24 <= tol`` (relative phase error), capped at ``1.9/ω_max``."""
+    if omega_max <= 0:
+        return t_end
+    h = math.sqrt(24.0 * tol / (omega_max**3 * t_end))
+    return min(h, STABLE_OMEGA_H / omega_max, t_end)
+
+
+def verlet_steps(t_end: float, tol: float, omega_max: float) -> int:
+    """``⌈T / h⌉`` for the step of :func:`verlet_step_for`."""
+    return max(1, math.ceil(t_end / verlet_step_for(t_end, tol, omega_max) - 1e-9))
+
+
+def crossover_time(c_exact: float, c_step: float, tol: float, omega_max: float) -> float:
+    """The horizon T* at which Verlet's ``steps(T)·c_step`` equals the exact method's ``c_exact``.
+
+    Beyond T* the exact solution is cheaper. Accuracy-limited steps give
+    ``steps = T^(3/2) √(ω³/(24 tol))``; if the step that accuracy allows at T*
+    is beyond the stability edge, ``steps = T ω / 1.9`` is used instead.
+    """
+    if omega_max <= 0 or c_step <= 0:
+        return math.inf
+    rate = math.sqrt(omega_max**3 / (24.0 * tol))
+    t = (c_exact / (c_step * rate)) ** (2.0 / 3.0)
+    if verlet_step_for(t, tol, omega_max) >= STABLE_OMEGA_H / omega_max:  # stability-limited there
+        t = c_exact * STABLE_OMEGA_H / (c_step * omega_max)
+    return t
+
+
+# -- chains ---------------------------------------------------------------------------------------------
+@dataclass(frozen=True)
+class ChainCase:
+    """A generated ``[chain]`` module at fixed parameters, evaluated at any N."""
+
+    label: str
+    module: ModuleType = field(repr=False)
+    params: dict[str, float] = field(default_factory=dict)
+
+    @property
+    def values(self) -> dict[str, float]:
+        p = dict(self.module.DEFAULTS)
+        p.update(self.params)
+        return p
+
+    def arrays(self, n: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """masses (n,), spring_ends (S, 2), stiffness (S,)."""
+        p = self.values
+        return (np.asarray(self.module.masses(**p, n=n), dtype=float),
+                np.asarray(self.module.spring_ends(n=n)), np.asarray(self.module.spring_constants(**p, n=n),
+                                                                     dtype=float))
+
+    def initial(self, n: int) -> tuple[np.ndarray, np.ndarray]:
+        """A smooth initial displacement (half sine) and zero velocity, shape (n, 1)."""
+        i = np.arange(n, dtype=float)
+        return (0.01 * np.sin(np.pi * (i + 1) / (n + 1)))[:, None], np.zeros((n, 1))
+
+
+def _numpy_step(case: ChainCase, n: int, h: float) -> tuple[Callable, str]:
+    """The project's ``verlet`` kernel on the generated stencil (or :mod:`numeric.fast`'s NumPy backend)."""
+    acc = case.module.make_acceleration(**case.values, n=n)
+    try:
+        from .integrators import INTEGRATORS
+        from .integrators.base import Problem
+
+        kernel = INTEGRATORS["verlet"]().kernel(Problem(acc), h)
+        return kernel, "numeric.integrators verlet kernel"
+    except Exception:  # the integrator package's API moved: time the same formula here
+        fv = fast.FusedVerlet.from_module(case.module, case.params, n, h, fast.Backend.NUMPY)
+        return fv.kernel(), "numeric.fast NumPy backend"
+
+
+# -- measurements ---------------------------------------------------------------------------------------
+def interleaved_seconds(calls: dict[str, tuple[Callable[[], object], int]], *, budget: float,
+                        min_rounds: int = 5, max_rounds: int = 200, min_time: float = 2e-3) -> dict[str, float]:
+    """Minimum seconds per unit of several calls timed in turns, so they share the same conditions.
+
+    Parameters
+    ----------
+    calls : dict of name -> (callable, units per call)
+        E.g. ``("advance", 100)`` for a call that makes 100 steps.
+    budget : float
+        Seconds after which no new round starts (at least ``min_rounds`` rounds).
+
+    Each call is warmed up once and batched so that one sample lasts at
+    least ``min_time``; a round times every call once.
+    """
+    inner = {}
+    for name, (fn, _) in calls.items():
+        t0 = time.perf_counter()
+        fn()
+        first = time.perf_counter() - t0
+        inner[name] = int(min(10_000, max(1, math.ceil(min_time / max(first, 1e-7)))))
+    best = {name: math.inf for name in calls}
+    spent, rounds = 0.0, 0
+    while rounds < min_rounds or (spent < budget and rounds < max_rounds):
+        for name, (fn, units) in calls.items():
+            t0 = time.perf_counter()
+            for _ in range(inner[name]):
+                fn()
+            dt = time.perf_counter() - t0
+            spent += dt
+            best[name] = min(best[name], dt / (inner[name] * units))
+        rounds += 1
+    return best
+
+
+def floor_calls(n: int) -> dict[str, tuple[Callable[[], object], int]]:
+    """The two measurements of the 32-byte-per-mass floor, as calls for :func:`interleaved_seconds`.
+
+    ``floor_stream``: the one-pass in-place update of two N-arrays
+    (:func:`numeric.fast.stream_update`, numba; absent without it);
+    ``floor_copy``: NumPy copying 2N doubles (16 bytes read and 16 written per mass).
+    """
+    x = np.random.default_rng(0).standard_normal(n)
+    v = np.random.default_rng(1).standard_normal(n) * 1e-3
+    src = np.random.default_rng(2).standard_normal(2 * n)
+    dst = np.empty_like(src)
+    calls = {"floor_copy": (lambda: np.copyto(dst, src), 1)}
+    if fast.available():
+        calls["floor_stream"] = (lambda: fast.stream_update(x, v), 1)
+    return calls
+
+
+def step_calls(case: ChainCase, n: int, prefix: str = "", advance_steps: int = 100) -> tuple[dict, str]:
+    """Verlet-step calls (NumPy stencil path, fused step, fused multi-step) for :func:`interleaved_seconds`."""
+    x0, v0 = case.initial(n)
+    h = 0.5 * STABLE_OMEGA_H / fast.ChainCoefficients.from_module(case.module, case.params, n).omega_max_bound
+    kernel, source = _numpy_step(case, n, h)
+    a0 = case.module.make_acceleration(**case.values, n=n)(x0)
+    state = [x0.copy(), v0.copy(), a0.copy()]
+
+    def numpy_step():
+        state[0], state[1], state[2] = kernel(state[0], state[1], state[2], 0)
+
+    calls = {prefix + "step_numpy": (numpy_step, 1)}
+    if fast.available():
+        fv = fast.FusedVerlet.from_module(case.module, case.params, n, h, fast.Backend.NUMBA)
+        x, v, a = x0[:, 0].copy(), v0[:, 0].copy(), a0[:, 0].copy()
+        calls[prefix + "step_fused"] = (lambda: fv.step(x, v, a, inplace=True), 1)
+        if not prefix:
+            calls["step_fused_advance"] = (lambda: fv.advance(x, v, a, advance_steps), advance_steps)
+    return calls, source
+
+
+def measure_step_costs(uniform: ChainCase, random: ChainCase, n: int, budget: float) -> dict:
+    """Floor and per-step costs of both chains at size n, timed in turns (same conditions)."""
+    calls = floor_calls(n)
+    uni, source = step_calls(uniform, n)
+    rnd, _ = step_calls(random, n, prefix="random:")
+    calls.update(uni)
+    calls.update(rnd)
+    best = interleaved_seconds(calls, budget=budget)
+    out = {"numpy_source": source, "floor_stream": best.get("floor_stream"), "floor_copy": best["floor_copy"],
+           "step_numpy": best["step_numpy"], "step_fused": best.get("step_fused"),
+           "step_fused_advance": best.get("step_fused_advance"),
+           "step_numpy_random": best["random:step_numpy"], "step_fused_random": best.get("random:step_fused")}
+    out["floor"] = min(t for t in (out["floor_stream"], out["floor_copy"]) if t is not None)
+    return out
+
+
+def measure_exact_uniform(case: ChainCase, n: int, budget: float) -> dict:
+    """Transform solution: set-up (two forward transforms) and one output time."""
+    x0, v0 = case.initial(n)
+    x0, v0 = x0[:, 0], v0[:, 0]
+    setup = best_seconds(lambda: ChainModal.from_module(case.module, case.params, x0, v0), budget=budget)
+    sol = ChainModal.from_module(case.module, case.params, x0, v0)
+    ev = best_seconds(lambda: sol.at(12.5), budget=budget)
+    return {"setup_transform": setup, "eval_transform": ev, "basis": sol.basis.value}
+
+
+def measure_exact_dense(case: ChainCase, n: int, config: ScalingConfig) -> dict:
+    """Dense and tridiagonal set-ups (where N allows) and one output time from stored eigenvectors."""
+    import scipy.linalg
+
+    from .spectrum import spectrum
+
+    m, ends, k = case.arrays(n)
+    out: dict = {"setup_dense_svd": None, "setup_dense_eigh": None, "setup_tridiagonal": None, "eval_dense": None}
+    b = config.budget
+    if n <= config.svd_max:
+        out["setup_dense_svd"] = best_seconds(lambda: spectrum(m, ends, k), budget=b)
+    if n <= config.dense_max:
+        r = 1.0 / np.sqrt(m)
+        K = case.module.stiffness_matrix(**case.values, n=n) if n <= getattr(case.module, "MAX_DENSE", n) else None
+        if K is not None:
+            D = K * r[:, None] * r[None, :]
+            out["setup_dense_eigh"] = best_seconds(lambda: scipy.linalg.eigh(D), budget=b)
+    if n <= config.tridiagonal_max and str(case.module.LEFT) != "ring":
+        diag, off = case.module.stiffness_bands(**case.values, n=n)
+        r = 1.0 / np.sqrt(m)
+        d, e = diag * r * r, off * r[:-1] * r[1:]
+        out["setup_tridiagonal"] = best_seconds(lambda: scipy.linalg.eigh_tridiagonal(d, e), budget=b)
+    if n <= config.tridiagonal_max:
+        E = np.random.default_rng(3).standard_normal((n, n))  # the product costs the same for any E
+        q = np.random.default_rng(4).standard_normal(n)
+        w = np.linspace(0.0, 2.0, n)
+        out["eval_dense"] = best_seconds(lambda: E @ (q * np.cos(w * 12.5)), budget=b)
+    return out
+
+
+def _extrapolate(records: list[dict], key: str, n: int, power: float) -> float | None:
+    """``t(N_max) (n/N_max)^power`` from the largest N where ``key`` was measured."""
+    known = [(r["n"], r[key]) for r in records if r.get(key) is not None]
+    if not known:
+        return None
+    n0, t0 = max(known)
+    return t0 * (n / n0) ** power
+
+
+def _crossovers(records: list[dict], config: ScalingConfig, omega_uniform: float, omega_random) -> list[str]:
+    """Fill the cost model columns in place; returns notes on extrapolation."""
+    notes = []
+    for r in records:
+        n = r["n"]
+        steps = verlet_steps(config.t_end, config.tol, omega_uniform)
+        r["verlet_steps"] = steps
+        c_step = r.get("step_fused_advance") or r.get("step_fused") or r["step_numpy"]
+        r["cost_verlet"] = steps * c_step
+        if r.get("setup_transform") is not None:
+            c_exact = r["setup_transform"] + r["eval_transform"]
+            r["cost_exact_transform"] = c_exact
+            r["crossover_transform"] = crossover_time(c_exact, c_step, config.tol, omega_uniform)
+            r["cheaper_uniform"] = "exact (transform)" if c_exact < r["cost_verlet"] else "verlet (fused)"
+        # random chain: the best dense route, measured or extrapolated
+        w = omega_random[n]
+        c_step_r = r.get("step_fused_random") or r["step_numpy_random"]
+        ev = r.get("eval_dense") if r.get("eval_dense") is not None else _extrapolate(records, "eval_dense", n, 2.0)
+        options = {}
+        extrapolated = set()
+        for key, power in (("setup_dense_eigh", 3.0), ("setup_tridiagonal", 2.0), ("setup_dense_svd", 3.0)):
+            t = r.get(key)
+            if t is None:
+                t = _extrapolate(records, key, n, power)
+                extrapolated.add(key)
+            if t is not None:
+                options[key] = t + (ev or 0.0)
+        steps_r = verlet_steps(config.t_end, config.tol, w)
+        r["cost_verlet_random"] = steps_r * c_step_r
+        feasible = 24.0 * n * n <= config.memory_bytes
+        r["dense_feasible"] = feasible
+        if options and feasible:
+            best = min(options, key=options.get)
+            r["cost_exact_dense"] = options[best]
+            r["exact_dense_route"] = best.replace("setup_", "")
+            r["exact_dense_extrapolated"] = best in extrapolated
+            r["crossover_dense"] = crossover_time(options[best], c_step_r, config.tol, w)
+            r["cheaper_random"] = ("exact (" + r["exact_dense_route"] + ")"
+                                   if options[best] < r["cost_verlet_random"] else "verlet (fused)")
+        elif options:
+            r["crossover_dense"] = math.inf
+            r["cheaper_random"] = f"verlet (N×N eigenvectors need {24.0 * n * n / 2**30:.0f} GiB)"
+    if any(r.get("exact_dense_extrapolated") for r in records):
+        notes.append("dense set-up costs beyond the largest measured N are extrapolated (eigh, SVD ∝ N³; "
+                     "eigh_tridiagonal ∝ N²; one eigenvector evaluation ∝ N²)")
+    return notes
+
+
+def run(uniform: ChainCase, random: ChainCase, config: ScalingConfig = ScalingConfig(),
+        progress: Callable[[str], None] | None = None) -> ScalingResult:
+    """Measure every quantity for every N (single-threaded BLAS) and build the crossover table.
+
+    Parameters
+    ----------
+    uniform : ChainCase
+        A uniform ``[chain]`` module (transform solution, uniform fused kernel).
+    random : ChainCase
+        An index-dependent ``[chain]`` module (dense routes, index-dependent fused kernel).
+    progress : callable, optional
+        Called with one line of text per stage.
+    """
+    say = progress or (lambda line: None)
+    records: list[dict] = []
+    omega_random: dict[int, float] = {}
+    omega_uniform = fast.ChainCoefficients.from_module(uniform.module, uniform.params, 3).omega_max_bound
+    with _single_threaded():
+        if fast.available():
+            say("compiling the fused kernels (numba; cached after the first run)")
+            for case in (uniform, random):
+                for fn, _ in step_calls(case, 16, advance_steps=2)[0].values():
+                    fn()
+        sizes = sorted(set(config.sizes))
+        for j, n in enumerate(sizes):
+            t0 = time.perf_counter()
+            rec: dict = {"n": n}
+            budget = config.step_budget * (4.0 if n == sizes[-1] else 1.0)  # the headline gets more rounds
+            rec.update(measure_step_costs(uniform, random, n, budget))
+            rec.update(measure_exact_uniform(uniform, n, config.budget))
+            rec.update(measure_exact_dense(random, n, config))
+            if rec.get("step_fused_advance"):
+                rec["fused_over_floor"] = rec["step_fused_advance"] / rec["floor"]
+                rec["fused_step_over_floor"] = rec["step_fused"] / rec["floor"]
+            omega_random[n] = fast.ChainCoefficients.from_module(random.module, random.params, n).omega_max_bound
+            records.append(rec)
+            say(f"N = {n:>8d}  ({j + 1}/{len(sizes)}, {time.perf_counter() - t0:.1f} s): "
+                f"numpy step {_ns(rec['step_numpy'], n)}, fused {_ns(rec.get('step_fused'), n)}, "
+                f"multi-step {_ns(rec.get('step_fused_advance'), n)}, floor {_ns(rec['floor'], n)} per mass")
+    notes = _crossovers(records, config, omega_uniform, omega_random)
+    if not all(r.get("dense_feasible", True) for r in records):
+        notes.append(f"eigenvector routes are infeasible where three N×N float64 arrays exceed "
+                     f"{config.memory_bytes / 2**30:g} GiB (N > {math.isqrt(int(config.memory_bytes / 24)):,})")
+    if not fast.available():
+        notes.append("numba is not installed: no fused kernel (install the `fast` extra)")
+    big = records[-1]
+    n = big["n"]
+    head = {"n": n,
+            "ns_per_mass": {key: (None if big.get(key) is None else 1e9 * big[key] / n)
+                            for key in ("step_numpy", "step_fused", "step_fused_advance", "floor_stream",
+                                        "floor_copy", "floor", "step_numpy_random", "step_fused_random")},
+            "fused_over_floor": big.get("fused_over_floor"),
+            "fused_step_over_floor": big.get("fused_step_over_floor"),
+            "target_ratio": 1.5,
+            "numpy_source": big.get("numpy_source")}
+    head["target_met"] = None if head["fused_over_floor"] is None else bool(head["fused_over_floor"] <= 1.5)
+    return ScalingResult(config, records, head, tuple(notes))
+
+
+def _ns(seconds, n) -> str:
+    return "   -   " if seconds is None else f"{1e9 * seconds / n:7.3f} ns"
+
+
+# -- output -----------------------------------------------------------------------------------------------
+def _fmt(value) -> str:
+    if value is None:
+        return "–"
+    if isinstance(value, str):
+        return value
+    if isinstance(value, float) and math.isinf(value):
+        return "∞"
+    if isinstance(value, int):
+        return str(value)
+    return f"{value:.3g}"
+
+
+def markdown(result: ScalingResult) -> str:
+    """The scaling table (seconds; T* in time units) with the headline and notes."""
+    cfg, h = result.config, result.headline
+    ns = h["ns_per_mass"]
+    lines = ["### Scaling: exact set-up vs Verlet step (single-threaded, minimum of repeats)", "",
+             f"At N = {h['n']:,}: NumPy stencil step {_fmt(ns['step_numpy'])} ns/mass "
+             f"({h['numpy_source']}); fused step {_fmt(ns['step_fused'])} ns/mass; fused multi-step "
+             f"{_fmt(ns['step_fused_advance'])} ns/mass per step; memory floor (32 B/mass) "
+             f"{_fmt(ns['floor'])} ns/mass (in-place stream {_fmt(ns['floor_stream'])}, NumPy copy "
+             f"{_fmt(ns['floor_copy'])}). Fused multi-step / floor = {_fmt(h['fused_over_floor'])} "
+             f"(target ≤ 1.5: {'met' if h['target_met'] else 'not met' if h['target_met'] is not None else 'n/a'}); "
+             f"fused single step / floor = {_fmt(h['fused_step_over_floor'])}.", "",
+             f"Crossover for T = {cfg.t_end:g}, tolerance {cfg.tol:g} (Verlet phase error ω³h²T/24): "
+             "T* is the horizon beyond which the exact solution is cheaper than fused Verlet.", ""]
+    lines += _table(result.records, SECONDS_COLUMNS, "Seconds (random = index-dependent chain):")
+    lines += _table(result.records, PER_MASS_COLUMNS, "Per mass and crossover:")
+    lines.append("")
+    lines += [f"- {note}" for note in result.notes]
+    return "\n".join(lines) + "\n"
+
+
+def _cell(record: dict, key: str) -> str:
+    if key.startswith("ns:"):
+        v = record.get(key[3:])
+        return _fmt(None if v is None else 1e9 * v / record["n"])
+    text = _fmt(record.get(key))
+    if key == "crossover_dense" and record.get("exact_dense_extrapolated"):
+        text += " (extrap.)"
+    return text
+
+
+def _table(records: list[dict], columns: dict[str, str], title: str) -> list[str]:
+    lines = [title, "", "| " + " | ".join(columns.values()) + " |", "|" + "---|" * len(columns)]
+    lines += ["| " + " | ".join(_cell(r, key) for key in columns) + " |" for r in records]
+    return lines + [""]
+
+
+def figure(result: ScalingResult):
+    """Seconds vs N (log–log): set-up costs, per-step costs and the memory floor."""
+    import matplotlib.pyplot as plt
+
+    recs = result.records
+    n = np.array([r["n"] for r in recs], dtype=float)
+    fig, ax = plt.subplots(figsize=(9, 6), constrained_layout=True)
+    series = [
+        ("setup_dense_svd", "exact set-up: dense SVD (modal), random chain", "C3", "o-"),
+        ("setup_dense_eigh", "exact set-up: dense eigh, random chain", "C1", "s-"),
+        ("setup_tridiagonal", "exact set-up: eigh_tridiagonal + vectors, random", "C5", "^-"),
+        ("setup_transform", "exact set-up: transform (uniform)", "C2", "D-"),
+        ("eval_transform", "exact, one output time: transform (uniform)", "C2", "d:"),
+        ("step_numpy", "Verlet step: NumPy stencil (uniform)", "C0", "o-"),
+        ("step_numpy_random", "Verlet step: NumPy stencil (random)", "C0", "o--"),
+        ("step_fused", "Verlet step: fused (uniform)", "C4", "v-"),
+        ("step_fused_random", "Verlet step: fused (random)", "C4", "v--"),
+        ("step_fused_advance", "Verlet step: fused multi-step (uniform)", "C6", "*-"),
+    ]
+    for key, label, color, style in series:
+        y = np.array([np.nan if r.get(key) is None else r[key] for r in recs], dtype=float)
+        if np.all(np.isnan(y)):
+            continue
+        ax.plot(n, y, style, color=color, label=label, ms=4, lw=1.2)
+    floor = np.array([r["floor"] for r in recs], dtype=float)
+    ax.plot(n, floor, "k-", lw=2, alpha=0.5, label="memory floor: move 32 B per mass (measured)")
+    ax.set_xscale("log")
+    ax.set_yscale("log")
+    ax.set_xlabel("chain size N (masses)")
+    ax.set_ylabel("seconds")
+    ax.set_title("Exact-solution set-up vs one Verlet step (single-threaded)")
+    ax.grid(alpha=0.3, which="both")
+    ax.legend(fontsize=7, loc="upper left")
+    return fig
+
+
+def write(result: ScalingResult, out: Path, *, json_name: str = "scaling.json", md_name: str = "scaling.md",
+          png_name: str = "scaling.png") -> list[Path]:
+    """Write the JSON, Markdown and figure into ``out`` (atomically); returns the paths."""
+    import json
+
+    from . import plots
+    from .files import atomic_write_text
+
+    out = Path(out)
+    paths = [out / json_name, out / md_name, out / png_name]
+    atomic_write_text(paths[0], json.dumps(_jsonable(result.to_json()), indent=1) + "\n")
+    atomic_write_text(paths[1], markdown(result))
+    plots.save(figure(result), paths[2])
+    return paths
+
+
+def _jsonable(obj):
+    if isinstance(obj, dict):
+        return {k: _jsonable(v) for k, v in obj.items()}
+    if isinstance(obj, (list, tuple)):
+        return [_jsonable(v) for v in obj]
+    if isinstance(obj, float) and not math.isfinite(obj):
+        return None
+    if isinstance(obj, (np.floating, np.integer)):
+        return _jsonable(obj.item())
+    return obj
+
+
+def print_progress(line: str) -> None:
+    """Progress on stderr."""
+    sys.stderr.write(f"scaling: {line}\n")
+    sys.stderr.flush()
+
+
+__all__ = ["ScalingConfig", "ScalingResult", "ChainCase", "run", "markdown", "figure", "write", "best_seconds",
+           "verlet_step_for", "verlet_steps", "crossover_time", "interleaved_seconds", "DEFAULT_SIZES",
+           "FLOOR_BYTES_PER_MASS"]
