@@ -14,12 +14,13 @@ from .ivp import DOP853, LSODA, RK45, AdaptiveMethod, AdaptiveResult
 from .kahan_li import KahanLi8
 from .rk4 import RK4
 from .verlet import VelocityVerlet
+from .verlet_compensated import CompensatedVerlet
 from .yoshida import Yoshida4
 
 #: The one table from command-line names to fixed-step integrator classes.
 INTEGRATORS: dict[str, type[Integrator]] = {
     cls.name: cls
-    for cls in (VelocityVerlet, Yoshida4, BlanesMoan4, BlanesMoan6, KahanLi8, RK4,
+    for cls in (VelocityVerlet, CompensatedVerlet, Yoshida4, BlanesMoan4, BlanesMoan6, KahanLi8, RK4,
                 MatrixExponential, ChebyshevPropagator)
 }
 
@@ -28,7 +29,7 @@ ADAPTIVE: dict[str, type[AdaptiveMethod]] = {cls.name: cls for cls in (RK45, DOP
 
 __all__ = [
     "Integrator", "Problem", "State", "LinearChain", "INTEGRATORS", "ADAPTIVE",
-    "VelocityVerlet", "Yoshida4", "BlanesMoan4", "BlanesMoan6", "KahanLi8", "RK4",
+    "VelocityVerlet", "CompensatedVerlet", "Yoshida4", "BlanesMoan4", "BlanesMoan6", "KahanLi8", "RK4",
     "MatrixExponential", "ChebyshevPropagator", "AdaptiveMethod", "AdaptiveResult",
     "RK45", "DOP853", "LSODA",
 ]
