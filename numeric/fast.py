@@ -17,7 +17,7 @@ Two sweeps are provided:
   velocity" form ``w = v + h/2 a``: ``x ← x + h w;  w ← w + h a(x)``. The
   state in memory is ``(x, w)``: 16 bytes read and 16 written per mass and
   step, i.e. the 32-byte-per-mass floor, and still one stencil per mass.
-  ``v`` and ``a`` are restored at the end (two extra sweeps per call), so
+  ``v`` and ``a`` are restored at the end (three extra passes per call), so
   the result is velocity Verlet to rounding.
 
 The compiled path needs numba (the optional ``fast`` extra); it is imported
@@ -63,7 +63,7 @@ class End(enum.IntEnum):
 
 
 class _Mode(enum.IntEnum):
-    """What a sweep's kick does with the new acceleration A (compile-time constant)."""
+    """What a sweep's kick does with the new acceleration A (a run-time argument of the kernels)."""
 
     VERLET = 0  #: v ← v + h/2 (a + A); a ← A
     LEAPFROG = 1  #: w ← w + h A
@@ -651,13 +651,17 @@ class FusedVerlet:
         With ``inplace=False`` (the contract's default) inputs are never
         modified; with ``inplace=True`` they are updated and returned, which
         is safe for a driver that copies the frames it records (the attribute
-        ``inplace`` on the returned function says which).
+        ``inplace`` on the returned function says which). An in-place kernel
+        also carries ``advance(x, v, a, steps)`` (:meth:`advance`), which a
+        driver may call between recorded frames instead of ``steps`` kernel calls.
         """
         def step(x, v, a, i):
             return self.step(x, v, a, inplace=inplace)
 
         step.inplace = inplace
         step.backend = self.backend
+        if inplace:  # many steps at once, for a driver that records only every k-th step
+            step.advance = self.advance
         return step
 
 

@@ -142,7 +142,8 @@ def best_seconds(fn: Callable[[], object], *, budget: float = 0.25, max_repeats:
                  warmup: bool = True) -> float:
     """Minimum seconds per call of ``fn`` after a warm-up.
 
-    A call longer than ``budget`` is timed once (its own first run). Short calls are batched so that one timed sample lasts at least
+    A call longer than ``budget`` is timed once (its own first run). Short calls
+    are batched so that one timed sample lasts at least
     ``min_time``; samples are repeated until ``budget`` seconds are spent
     (at least one, at most ``max_repeats``).
     """

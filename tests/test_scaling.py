@@ -188,7 +188,8 @@ def test_cli_scaling_writes_its_files(tmp_path, capsys, monkeypatch):
     from derive.cli import main
 
     fast_timing = scaling.interleaved_seconds
-    monkeypatch.setattr(scaling, "interleaved_seconds", lambda calls, **kw: fast_timing(calls, budget=0.0, min_rounds=1))
+    monkeypatch.setattr(scaling, "interleaved_seconds",
+                        lambda calls, **kw: fast_timing(calls, budget=0.0, min_rounds=1))
 
     assert main(["scaling", "--max-n", "5", "--symbolic-max-n", "0", "--out", str(tmp_path), "--json"]) == 0
     out = json.loads(capsys.readouterr().out)
