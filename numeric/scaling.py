@@ -331,7 +331,9 @@ def measure_step_costs(uniform: ChainCase, random: ChainCase, n: int, budget: fl
     rnd, _ = step_calls(random, n, prefix="random:")
     calls.update(uni)
     calls.update(rnd)
-    best = interleaved_seconds(calls, budget=budget)
+    # each sample is several consecutive calls (≥ 20 ms), so the floor, like the multi-step sweep,
+    # is measured on data that the previous pass left in cache, not after another call flushed it
+    best = interleaved_seconds(calls, budget=budget, min_time=0.02)
     out = {"numpy_source": source, "floor_stream": best.get("floor_stream"), "floor_copy": best["floor_copy"],
            "step_numpy": best["step_numpy"], "step_fused": best.get("step_fused"),
            "step_fused_advance": best.get("step_fused_advance"),

@@ -196,3 +196,18 @@ def test_cli_scaling_writes_its_files(tmp_path, capsys, monkeypatch):
     assert out["symbolic"] is None and [r["n"] for r in out["scaling"]["records"]] == [3, 5]
     for name in ("scaling.json", "scaling.md", "scaling.png"):
         assert (tmp_path / name).exists()
+
+
+def test_tiny_run_without_numba(cases, monkeypatch):
+    """Without numba the benchmark still runs: NumPy paths only, no fused columns, a note says why."""
+    monkeypatch.setattr(fast, "available", lambda: False)
+    uniform, random = cases
+    config = scaling.ScalingConfig(sizes=(4,), svd_max=4, dense_max=4, tridiagonal_max=4, budget=0.0,
+                                   step_budget=0.0)
+    result = scaling.run(uniform, random, config)
+    rec = result.records[0]
+    assert rec["step_fused"] is None and rec["floor_stream"] is None and rec["step_numpy"] > 0
+    assert rec["floor"] == rec["floor_copy"] and rec["cheaper_uniform"]
+    assert result.headline["target_met"] is None
+    assert any("numba" in note for note in result.notes)
+    assert "n/a" in scaling.markdown(result)
