@@ -273,14 +273,18 @@ def cmd_plan(args) -> int:
 def cmd_scaling(args) -> int:
     """Scaling to long chains (numeric.scaling) and the symbolic cost (derive.symbolic_cost)."""
     from numeric import scaling
+    from numeric.errors import RunRefused
 
     from . import symbolic_cost
 
+    if args.max_n < 3:
+        raise RunRefused(f"--max-n {args.max_n}: accepted: a whole number >= 3")
+    if args.symbolic_max_n < 0:
+        raise RunRefused(f"--symbolic-max-n {args.symbolic_max_n}: accepted: a whole number >= 0 (0 skips it)")
     out = Path(args.out)
     sizes = tuple(n for n in scaling.DEFAULT_SIZES if n < args.max_n) + (args.max_n,)
     uniform, random = symbolic_cost.scaling_cases()
-    result = scaling.run(uniform, random, scaling.ScalingConfig(sizes=tuple(n for n in sizes if n >= 3)),
-                         progress=scaling.print_progress)
+    result = scaling.run(uniform, random, scaling.ScalingConfig(sizes=sizes), progress=scaling.print_progress)
     paths = scaling.write(result, out)
     sym = None
     if args.symbolic_max_n:
