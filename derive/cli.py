@@ -257,11 +257,11 @@ def cmd_plan(args) -> int:
         return 0
     print(f"plan for {scene.name!r}: largest position error <= {args.tol:g} over t = 0 ... {horizon:g} "
           f"(error as in `springchain bench`: max over every step, or the output grid)")
-    print(f"{'method':<14}{'dt / rtol':>14}{'steps':>12}{'predicted error':>17}{'predicted s':>14}  model")
+    print(f"{'method':<14}{'dt / rtol':>14}{'steps':>14}{'predicted error':>17}{'predicted s':>14}  model")
     for c in sorted(plan.candidates, key=lambda c: c.predicted_seconds):
         setting = f"{c.dt:.6g}" if c.dt is not None else (f"rtol {c.rtol:.2g}" if c.rtol is not None else "-")
         steps = str(c.steps) if c.steps is not None else "-"
-        print(f"{c.name:<14}{setting:>14}{steps:>12}{c.predicted_error:>17.3e}{c.predicted_seconds:>14.3e}  {c.model}")
+        print(f"{c.name:<14}{setting:>14}{steps:>14}{c.predicted_error:>17.3e}{c.predicted_seconds:>14.3e}  {c.model}")
     for c in plan.unreachable:
         print(f"{c.name:<14} cannot reach {args.tol:g}: best predicted {c.predicted_error:.2e} ({c.model or 'floor'})")
     r = plan.recommended
