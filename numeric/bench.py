@@ -768,7 +768,7 @@ def horizon_figure(result: BenchResult):
         axes[1].loglog(c.measured_t, np.maximum(c.measured_energy, 1e-17), "o-", color=col, label=c.method)
     axes[0].set_xlabel("horizon T [s]")
     axes[0].set_ylabel("max |x − x_exact| over t ≤ T [m]")
-    axes[0].set_title("Position error vs horizon (equal force evaluations per unit time)")
+    axes[0].set_title("Position error vs horizon (step methods: equal force evaluations per unit time)")
     axes[1].set_xlabel("horizon T [s]")
     axes[1].set_ylabel("max |E(t) − E(0)| / |E(0)| over t ≤ T")
     axes[1].set_title("Energy error vs horizon: bounded for symplectic methods")
