@@ -118,8 +118,8 @@ def test_cubic_chain_step_equals_numpy(chain_module, ends, uniform, backend):
                                           (("ring", "ring"), True), (("free", "wall"), False)])
 def test_advance_equals_repeated_steps(chain_module, ends, uniform, backend):
     module = chain_module(*ends, uniform)
-    h, steps = 0.2, 40
-    for n, batch in ((2, None), (300, 4), (12000, None)):
+    h, steps = 0.2, 41  # pairs of steps in one sweep (open chains) and one single sweep
+    for n, batch in ((1, None), (2, None), (3, 2), (4, None), (300, 4), (12000, None)):
         x0, v0 = state(n, batch, seed=5)
         a0 = module_acceleration(module, x0)
         x, v, a = x0, v0, a0
