@@ -381,21 +381,22 @@ def _drift_rows_impl(x, w, r0, r1, nb, h):
             xs[e] = xs[e] + h * ws[e]
 
 
-def _sweep_impl(xi, vi, ai, xo, vo, ao, inplace, nb, n, im, k, k3, kl, kr, k3l, k3r, left, right, h, mode, steps):
+def _sweep_impl(xi, vi, ai, xo, vo, ao, inplace, nb, n, im, k, k3, kl, kr, k3l, k3r, left, right, h, mode, steps,
+                pairs):
     """``steps`` sweeps of velocity Verlet (mode VERLET, on x v a) or of the half-step form (LEAPFROG, on x w).
 
     Each sweep drifts a block of rows, then kicks the rows whose neighbours
     are all drifted (lo-1 … hi-2); row n-1 (and a ring's row 0, which needs
     the new x[n-1]) are kicked after the last block. VERLET may write to
     other arrays than it reads (``inplace`` False); LEAPFROG works in place,
-    and for open chains makes two steps per sweep (:func:`_leapfrog_pair_impl`).
+    and with ``pairs`` makes two steps per sweep on open chains (:func:`_leapfrog_pair_impl`).
     """
     hh = 0.5 * h * h
     c = 0.5 * h if mode == _VERLET else h
     rows = max(1, BLOCK_ELEMENTS // nb)
     first = 1 if left == _RING else 0
     single = steps
-    if mode == _LEAPFROG and left != _RING:
+    if pairs and mode == _LEAPFROG and left != _RING:
         for _ in range(steps // 2):
             _leapfrog_pair(xo, vo, rows, nb, n, im, k, k3, kl, kr, k3l, k3r, left, right, h)
         single = steps % 2
@@ -653,15 +654,17 @@ class FusedVerlet:
             xo, vo, ao = np.empty_like(x), np.empty_like(v), np.empty_like(a)
             xof, vof, aof = xo.reshape(-1), vo.reshape(-1), ao.reshape(-1)
         self._kernels()[1](xf, vf, af, xof, vof, aof, inplace, nb, *self.coefficients.kernel_args(), h,
-                           int(_Mode.VERLET), 1)
+                           int(_Mode.VERLET), 1, False)
         return xo, vo, ao
 
-    def advance(self, x: np.ndarray, v: np.ndarray, a: np.ndarray, steps: int) -> tuple[np.ndarray, ...]:
+    def advance(self, x: np.ndarray, v: np.ndarray, a: np.ndarray, steps: int, *,
+                two_step_sweeps: bool = True) -> tuple[np.ndarray, ...]:
         """``steps`` velocity-Verlet steps in place, through the half-step velocity ``w = v + h/2 a``.
 
         Equal to ``steps`` calls of :meth:`step` up to rounding. Each sweep
         moves 32 bytes per mass (x and w in and out) and makes one step, or
-        two on an open chain (free or wall ends). Updates and returns x, v, a.
+        two on an open chain (free or wall ends) unless ``two_step_sweeps`` is
+        False. Updates and returns x, v, a.
         """
         steps = int(steps)
         if steps < 0:
@@ -683,7 +686,7 @@ class FusedVerlet:
         force, sweep, half_kick = self._kernels()
         args = self.coefficients.kernel_args()
         half_kick(vf, af, 0.5 * h)
-        sweep(xf, vf, af, xf, vf, af, True, nb, *args, h, int(_Mode.LEAPFROG), steps)
+        sweep(xf, vf, af, xf, vf, af, True, nb, *args, h, int(_Mode.LEAPFROG), steps, bool(two_step_sweeps))
         force(xf, af, nb, *args)
         half_kick(vf, af, -0.5 * h)
         return x, v, a

@@ -64,6 +64,7 @@ SECONDS_COLUMNS = {
     "step_numpy": "NumPy step",
     "step_fused": "fused step",
     "step_fused_advance": "fused multi-step, per step",
+    "step_fused_sweep": "fused one-step sweeps, per step",
     "step_numpy_random": "NumPy step (random)",
     "step_fused_random": "fused step (random)",
 }
@@ -73,6 +74,7 @@ PER_MASS_COLUMNS = {
     "ns:step_numpy": "NumPy step ns/mass",
     "ns:step_fused": "fused step ns/mass",
     "ns:step_fused_advance": "fused multi-step ns/mass",
+    "ns:step_fused_sweep": "one-step sweeps ns/mass",
     "ns:floor": "floor ns/mass (32 B)",
     "fused_over_floor": "multi-step / floor",
     "crossover_transform": "T* transform vs fused (uniform)",
@@ -321,6 +323,8 @@ def step_calls(case: ChainCase, n: int, prefix: str = "", advance_steps: int = 1
         calls[prefix + "step_fused"] = (lambda: fv.step(x, v, a, inplace=True), 1)
         if not prefix:
             calls["step_fused_advance"] = (lambda: fv.advance(x, v, a, advance_steps), advance_steps)
+            calls["step_fused_sweep"] = (lambda: fv.advance(x, v, a, advance_steps, two_step_sweeps=False),
+                                         advance_steps)
     return calls, source
 
 
@@ -336,7 +340,7 @@ def measure_step_costs(uniform: ChainCase, random: ChainCase, n: int, budget: fl
     best = interleaved_seconds(calls, budget=budget, min_time=0.02)
     out = {"numpy_source": source, "floor_stream": best.get("floor_stream"), "floor_copy": best["floor_copy"],
            "step_numpy": best["step_numpy"], "step_fused": best.get("step_fused"),
-           "step_fused_advance": best.get("step_fused_advance"),
+           "step_fused_advance": best.get("step_fused_advance"), "step_fused_sweep": best.get("step_fused_sweep"),
            "step_numpy_random": best["random:step_numpy"], "step_fused_random": best.get("random:step_fused")}
     out["floor"] = min(t for t in (out["floor_stream"], out["floor_copy"]) if t is not None)
     return out
@@ -472,6 +476,7 @@ def run(uniform: ChainCase, random: ChainCase, config: ScalingConfig = ScalingCo
             rec.update(measure_exact_dense(random, n, config))
             if rec.get("step_fused_advance"):
                 rec["fused_over_floor"] = rec["step_fused_advance"] / rec["floor"]
+                rec["fused_sweep_over_floor"] = rec["step_fused_sweep"] / rec["floor"]
                 rec["fused_step_over_floor"] = rec["step_fused"] / rec["floor"]
             omega_random[n] = fast.ChainCoefficients.from_module(random.module, random.params, n).omega_max_bound
             records.append(rec)
@@ -488,9 +493,11 @@ def run(uniform: ChainCase, random: ChainCase, config: ScalingConfig = ScalingCo
     n = big["n"]
     head = {"n": n,
             "ns_per_mass": {key: (None if big.get(key) is None else 1e9 * big[key] / n)
-                            for key in ("step_numpy", "step_fused", "step_fused_advance", "floor_stream",
-                                        "floor_copy", "floor", "step_numpy_random", "step_fused_random")},
+                            for key in ("step_numpy", "step_fused", "step_fused_advance", "step_fused_sweep",
+                                        "floor_stream", "floor_copy", "floor", "step_numpy_random",
+                                        "step_fused_random")},
             "fused_over_floor": big.get("fused_over_floor"),
+            "fused_sweep_over_floor": big.get("fused_sweep_over_floor"),
             "fused_step_over_floor": big.get("fused_step_over_floor"),
             "target_ratio": 1.5,
             "numpy_source": big.get("numpy_source")}
@@ -520,13 +527,16 @@ def markdown(result: ScalingResult) -> str:
     cfg, h = result.config, result.headline
     ns = h["ns_per_mass"]
     lines = ["### Scaling: exact set-up vs Verlet step (single-threaded, minimum of repeats)", "",
-             f"At N = {h['n']:,}: NumPy stencil step {_fmt(ns['step_numpy'])} ns/mass "
-             f"({h['numpy_source']}); fused step {_fmt(ns['step_fused'])} ns/mass; fused multi-step "
-             f"{_fmt(ns['step_fused_advance'])} ns/mass per step; memory floor (32 B/mass) "
-             f"{_fmt(ns['floor'])} ns/mass (in-place stream {_fmt(ns['floor_stream'])}, NumPy copy "
-             f"{_fmt(ns['floor_copy'])}). Fused multi-step / floor = {_fmt(h['fused_over_floor'])} "
-             f"(target ≤ 1.5: {'met' if h['target_met'] else 'not met' if h['target_met'] is not None else 'n/a'}); "
-             f"fused single step / floor = {_fmt(h['fused_step_over_floor'])}.", "",
+             f"At N = {h['n']:,} (ns per mass and step): NumPy stencil step {_fmt(ns['step_numpy'])} "
+             f"({h['numpy_source']}); fused step on (x, v, a) {_fmt(ns['step_fused'])} (48 B/mass); fused "
+             f"multi-step {_fmt(ns['step_fused_advance'])} (two steps per sweep); fused one-step sweeps "
+             f"{_fmt(ns['step_fused_sweep'])} (32 B/mass); memory floor, moving 32 B/mass, "
+             f"{_fmt(ns['floor'])} (in-place stream {_fmt(ns['floor_stream'])}, NumPy copy "
+             f"{_fmt(ns['floor_copy'])}).", "",
+             f"Fused multi-step / floor = {_fmt(h['fused_over_floor'])} (target ≤ 1.5: "
+             f"{'met' if h['target_met'] else 'not met' if h['target_met'] is not None else 'n/a'}); one-step "
+             f"sweeps / floor = {_fmt(h['fused_sweep_over_floor'])}; single fused step / floor = "
+             f"{_fmt(h['fused_step_over_floor'])}.", "",
              f"Crossover for T = {cfg.t_end:g}, tolerance {cfg.tol:g} (Verlet phase error ω³h²T/24): "
              "T* is the horizon beyond which the exact solution is cheaper than fused Verlet.", ""]
     lines += _table(result.records, SECONDS_COLUMNS, "Seconds (random = index-dependent chain):")
@@ -569,7 +579,8 @@ def figure(result: ScalingResult):
         ("step_numpy_random", "Verlet step: NumPy stencil (random)", "C0", "o--"),
         ("step_fused", "Verlet step: fused (uniform)", "C4", "v-"),
         ("step_fused_random", "Verlet step: fused (random)", "C4", "v--"),
-        ("step_fused_advance", "Verlet step: fused multi-step (uniform)", "C6", "*-"),
+        ("step_fused_advance", "Verlet step: fused multi-step, 2 steps/sweep (uniform)", "C6", "*-"),
+        ("step_fused_sweep", "Verlet step: fused multi-step, 1 step/sweep (uniform)", "C6", "*:"),
     ]
     for key, label, color, style in series:
         y = np.array([np.nan if r.get(key) is None else r[key] for r in recs], dtype=float)

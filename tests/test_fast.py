@@ -126,11 +126,12 @@ def test_advance_equals_repeated_steps(chain_module, ends, uniform, backend):
         for _ in range(steps):
             x, v, a = reference_step(module, x, v, a, h)
         fv = fast.FusedVerlet.from_module(module, None, n, h, backend)
-        xa, va, aa = x0.copy(), v0.copy(), a0.copy()
-        out = fv.advance(xa, va, aa, steps)
-        assert out[0] is xa and out[1] is va and out[2] is aa
-        # the same scheme, different rounding: errors stay at roundoff × steps
-        assert rel(xa, x) <= 1e-12 and rel(va, v) <= 1e-12 and rel(aa, a) <= 1e-12
+        for pairs in (True, False):
+            xa, va, aa = x0.copy(), v0.copy(), a0.copy()
+            out = fv.advance(xa, va, aa, steps, two_step_sweeps=pairs)
+            assert out[0] is xa and out[1] is va and out[2] is aa
+            # the same scheme, different rounding: errors stay at roundoff × steps
+            assert rel(xa, x) <= 1e-12 and rel(va, v) <= 1e-12 and rel(aa, a) <= 1e-12
 
 
 @pytest.mark.parametrize("backend", BACKENDS, ids=lambda b: b.value)
