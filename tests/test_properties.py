@@ -176,7 +176,7 @@ def test_momentum_of_free_pieces_and_energy_are_conserved(scene, seed):
         assert np.all(np.abs(p - p[0]) <= 8 * n * EPS * (np.abs(v[:, piece]) @ m))
     # energy through the springs. Rounding scales: the terms themselves; float positions in the
     # extensions (a drift of |x| moves a stiff spring's Δx by ε|x|); and the normwise accuracy of the
-    # modes, ‖VᵀDV − Λ‖ ≲ ε ω²_max, which couples elastic modes of amplitudes a_j = √(q0² + (q̇0/ω)²)
+    # modes, ‖VᵀDV − Λ‖ ≲ ε ω²_max, coupling elastic modes of amplitudes a_j = √(q0² + (q̇0/ω)²)
     spec = sol.spectrum
     el = slice(spec.rigid, None)
     amp2 = np.sum(sol.q0[el] ** 2 + (sol.p0[el] / spec.omega[el]) ** 2)
@@ -187,7 +187,7 @@ def test_momentum_of_free_pieces_and_energy_are_conserved(scene, seed):
     assert abs(e[0] - sol.energy) <= tol[0] + np.finfo(float).tiny
 
 
-# -- Verlet converges to it ----------------------------------------------------------------------------------------------
+# -- Verlet converges to it ----------------------------------------------------------------------------------------
 @settings(max_examples=15)
 @given(scenes(max_n=8, decades=4.0), st.integers(0, 2**16))
 def test_verlet_converges_to_the_exact_solution_at_order_two(scene, seed):

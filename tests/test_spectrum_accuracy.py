@@ -16,8 +16,6 @@ ill-defined there.
 
 from __future__ import annotations
 
-import itertools
-
 import mpmath as mp
 import numpy as np
 import pytest
@@ -215,7 +213,7 @@ def test_degenerate_structures(masses, ends, k, rigid):
         np.testing.assert_allclose(spec.vectors.T @ spec.vectors, np.eye(masses.size), atol=4 * EPS)
 
 
-# -- repeated and nearly repeated frequencies ---------------------------------------------------------------------------
+# -- repeated and nearly repeated frequencies ----------------------------------------------------------------------
 def expm_reference(masses, ends, k, x0, v0, t):
     """x(t) from the matrix exponential of the first-order system, shape (len(t), N).
 
