@@ -265,7 +265,7 @@ def render_module(model: Model, modes: ModeSet, *, bundled: bool = True) -> str:
             if model.g is not None:
                 w(f"    _g = _inv_m * gravity_forces({kwcall})")
             w("")
-            w("    def bound(x):")
+            w("    def _bound(x):")
             w("        _x = numpy.asarray(x, dtype=float)")
             w("        _xe = numpy.concatenate([_x, numpy.zeros((1,) + _x.shape[1:])])  # row -1 = wall")
             w("        _s = _k.reshape((-1,) + (1,) * (_x.ndim - 1)) * (_xe[_a] - _xe[_b])")
@@ -281,19 +281,19 @@ def render_module(model: Model, modes: ModeSet, *, bundled: bool = True) -> str:
             if model.g is not None:
                 w(f"    _g = (_inv_m * gravity_forces({kwcall}))[:, None]")
                 w("")
-                w("    def bound(x):")
+                w("    def _bound(x):")
                 w("        return _A @ x + (_g if numpy.ndim(x) == 2 else _g[:, 0])")
             else:
                 w("")
-                w("    def bound(x):")
+                w("    def _bound(x):")
                 w("        return _A @ x")
     else:
         w('    """acceleration() with the parameters bound (nonlinear springs: the expressions above)."""')
         w("")
-        w("    def bound(x):")
+        w("    def _bound(x):")
         w(f"        return acceleration(x{', ' + kwcall if kwcall else ''})")
     w("")
-    w("    return bound")
+    w("    return _bound")
     if model.dampers:
         damp = model.force_expressions(Effect.DAMPER)
         w("")

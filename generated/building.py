@@ -118,10 +118,10 @@ def make_acceleration(F0, c, k, m):
     _inv_m = 1.0 / masses(F0=F0, c=c, k=k, m=m)
     _A = -_inv_m[:, None] * stiffness_matrix(F0=F0, c=c, k=k, m=m)
 
-    def bound(x):
+    def _bound(x):
         return _A @ x
 
-    return bound
+    return _bound
 
 
 def damping_acceleration(v, F0, c, k, m):

@@ -105,10 +105,10 @@ def acceleration(x, k, kappa, m):
 def make_acceleration(k, kappa, m):
     """acceleration() with the parameters bound (nonlinear springs: the expressions above)."""
 
-    def bound(x):
+    def _bound(x):
         return acceleration(x, k=k, kappa=kappa, m=m)
 
-    return bound
+    return _bound
 
 
 def energy(x, v, k, kappa, m):

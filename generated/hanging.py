@@ -103,10 +103,10 @@ def make_acceleration(g, k, m):
     _A = -_inv_m[:, None] * stiffness_matrix(g=g, k=k, m=m)
     _g = (_inv_m * gravity_forces(g=g, k=k, m=m))[:, None]
 
-    def bound(x):
+    def _bound(x):
         return _A @ x + (_g if numpy.ndim(x) == 2 else _g[:, 0])
 
-    return bound
+    return _bound
 
 
 def gravity_forces(g, k, m):

@@ -107,10 +107,10 @@ def make_acceleration(k, m):
     _inv_m = 1.0 / masses(k=k, m=m)
     _A = -_inv_m[:, None] * stiffness_matrix(k=k, m=m)
 
-    def bound(x):
+    def _bound(x):
         return _A @ x
 
-    return bound
+    return _bound
 
 
 def energy(x, v, k, m):
