@@ -728,14 +728,15 @@ def work_precision_figure(result: BenchResult):
     fig, axes = plt.subplots(1, 2, figsize=(13, 5.5), constrained_layout=True)
     floor = 1e-17
     markers = "os^vD<>ph*Xd"
+    colors = plt.get_cmap("tab20").colors
     for j, name in enumerate(_method_order(result.records)):
-        rs = sorted((r for r in result.records if r.method == name), key=lambda r: r.seconds)
+        # connected in the order of the setting (coarse to fine), so timing noise shows as noise
+        rs = sorted((r for r in result.records if r.method == name), key=lambda r: -r.error)
         err = np.array([max(r.error, floor) for r in rs])
-        style = dict(marker=markers[j % len(markers)], ms=5, lw=1.2, label=name)
+        style = dict(marker=markers[j % len(markers)], ms=5, lw=1.2, label=name, color=colors[(2 * j) % 20])
         axes[0].loglog([r.seconds for r in rs], err, **style)
         ev = [(r.force_evals, e) for r, e in zip(rs, err) if r.force_evals > 0]
         if ev:
-            ev.sort()
             axes[1].loglog([a for a, _ in ev], [b for _, b in ev], **style)
     axes[0].set_xlabel("wall-clock seconds per run (min of repeats, single-threaded BLAS)")
     axes[1].set_xlabel("force evaluations per run")
