@@ -523,7 +523,10 @@ def run(uniform: ChainCase, random: ChainCase, config: ScalingConfig = ScalingCo
             "fused_step_over_floor_paired": big.get("fused_step_over_floor_paired"),
             "target_ratio": 1.5,
             "numpy_source": big.get("numpy_source")}
-    head["target_met"] = None if head["fused_over_floor"] is None else bool(head["fused_over_floor"] <= 1.5)
+    # the verdict uses the median of per-round ratios (sweep and floor timed back to back): under a
+    # changing load the two minima may come from different moments
+    verdict = head["fused_over_floor_paired"] or head["fused_over_floor"]
+    head["target_met"] = None if verdict is None else bool(verdict <= head["target_ratio"])
     return ScalingResult(config, records, head, tuple(notes))
 
 
@@ -556,7 +559,7 @@ def markdown(result: ScalingResult) -> str:
              f"{_fmt(ns['floor'])} (in-place stream {_fmt(ns['floor_stream'])}, NumPy copy "
              f"{_fmt(ns['floor_copy'])}).", "",
              f"Fused multi-step / floor = {_fmt(h['fused_over_floor'])} (ratio of minima; median of per-round "
-             f"ratios {_fmt(h['fused_over_floor_paired'])}; target ≤ 1.5: "
+             f"ratios {_fmt(h['fused_over_floor_paired'])}; target, on the median: ≤ 1.5: "
              f"{'met' if h['target_met'] else 'not met' if h['target_met'] is not None else 'n/a'}); one-step "
              f"sweeps / floor = {_fmt(h['fused_sweep_over_floor'])} "
              f"(median {_fmt(h['fused_sweep_over_floor_paired'])}); "
