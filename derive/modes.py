@@ -261,7 +261,11 @@ def closed_form_modes(model: Model, budget: float | None = DEFAULT_BUDGET,
     if rigid:
         modes.append(Mode(sp.Integer(0), len(rigid), tuple(rigid), rigid=True))
     notes: list[str] = []
+    # a mirror split at best halves the problem: beyond twice the largest block nothing is solvable
+    hopeless = model.scene.n - len(rigid) > 2 * MAX_SYMBOLIC_BLOCK + 1
     try:
+        if hopeless:
+            raise BudgetExceeded
         with time_budget(budget):
             for B in _blocks(model):
                 # rigid translations lie in the symmetric block (uniform vectors are mirror-symmetric)
@@ -278,24 +282,31 @@ def closed_form_modes(model: Model, budget: float | None = DEFAULT_BUDGET,
     values = model.scene.parameters
     subs = {model.params[k]: v for k, v in values.items()}
     modes = _merge_equal(modes, subs)
-    modes.sort(key=lambda m: (float(sp.re(sp.N(m.omega2.subs(subs), 30))), str(m.omega2)))
+    modes.sort(key=lambda m: (float(sp.re(sp.N(m.omega2.subs(subs), 30))) if m.exact else float(m.omega2),
+                              str(m.omega2)))
     return ModeSet(tuple(modes), closed, tuple(notes))
 
 
 def _merge_equal(modes: list[Mode], subs: dict) -> list[Mode]:
-    """Merge modes whose ω² are equal (e.g. one from each mirror block) into one repeated mode."""
+    """Merge exact modes whose ω² are equal (e.g. one from each mirror block) into one repeated mode.
+
+    Numeric fallback modes are kept one per shape; each value is evaluated once.
+    """
     out: list[Mode] = []
+    values: list[complex] = []
     for mode in modes:
-        value = complex(sp.N(mode.omega2.subs(subs), 30))
+        value = complex(sp.N(mode.omega2.subs(subs), 30)) if mode.exact else complex(float(mode.omega2))
         for j, other in enumerate(out):
-            ov = complex(sp.N(other.omega2.subs(subs), 30))
-            if abs(value - ov) <= 1e-12 * max(abs(value), abs(ov), 1e-300) and (
-                    mode.rigid == other.rigid) and sp.cancel(mode.omega2 - other.omega2) == 0:
+            ov = values[j]
+            if (mode.exact and other.exact and mode.rigid == other.rigid
+                    and abs(value - ov) <= 1e-12 * max(abs(value), abs(ov), 1e-300)
+                    and sp.cancel(mode.omega2 - other.omega2) == 0):
                 out[j] = Mode(other.omega2, other.multiplicity + mode.multiplicity,
-                              other.shapes + mode.shapes, other.rigid, other.exact and mode.exact)
+                              other.shapes + mode.shapes, other.rigid, True)
                 break
         else:
             out.append(mode)
+            values.append(value)
     return out
 
 
@@ -318,8 +329,16 @@ def _numeric_modes(model: Model, lam: sp.Symbol, n_rigid: int) -> list[Mode]:
 
     values = model.scene.parameters
     subs = {model.params[k]: v for k, v in values.items()}
-    K = np.array(model.K.subs(subs).evalf(17).tolist(), dtype=float)
-    M = np.array(model.M.subs(subs).evalf(17).tolist(), dtype=float)
+    n = model.scene.n
+    # assembled from the element list: O(N + S) evaluations, not N² substitutions
+    M = np.diag([float(m.subs(subs)) for m in model.masses])
+    K = np.zeros((n, n))
+    for a, b, k, _, _ in model.springs:
+        kv = float(k.subs(subs))
+        for i, si in ((a, 1.0), (b, -1.0)):
+            for j, sj in ((a, 1.0), (b, -1.0)):
+                if i >= 0 and j >= 0:
+                    K[i, j] += si * sj * kv
     w, V = scipy.linalg.eigh(K, M)
     out = []
     for j in range(n_rigid, len(w)):
