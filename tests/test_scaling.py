@@ -187,9 +187,9 @@ def test_ratios_and_markdown_from_records():
 def test_cli_scaling_writes_its_files(tmp_path, capsys, monkeypatch):
     from derive.cli import main
 
-    fast_timing = scaling.interleaved_seconds
-    monkeypatch.setattr(scaling, "interleaved_seconds",
-                        lambda calls, **kw: fast_timing(calls, budget=0.0, min_rounds=1))
+    quick = scaling.interleaved_samples
+    monkeypatch.setattr(scaling, "interleaved_samples",
+                        lambda calls, **kw: quick(calls, budget=0.0, min_rounds=1, min_time=0.0))
 
     assert main(["scaling", "--max-n", "5", "--symbolic-max-n", "0", "--out", str(tmp_path), "--json"]) == 0
     out = json.loads(capsys.readouterr().out)
