@@ -214,6 +214,18 @@ def render_chain_module(model: ChainModel, *, bundled: bool = True) -> str:
     if ch.right in ("wall", "ring"):
         w(f"    _parts.append(numpy.broadcast_to(_spring_k(numpy.array([n - 1.0]), {kw}), (1,)))")
     w("    return numpy.concatenate(_parts).astype(float)")
+    if model.k3 is not None:
+        w("")
+        w("")
+        w(f"def spring_cubic_constants({sig}, n=N):")
+        w('    """Cubic coefficient k3 of each spring in spring_ends() order, shape (S,)."""')
+        w("    i = numpy.arange(n - 1, dtype=float)")
+        w(f"    _parts = [numpy.broadcast_to(_spring_k3(i, {kw}), (n - 1,))]")
+        if ch.left == "wall":
+            w(f"    _parts.insert(0, numpy.broadcast_to(_spring_k3(numpy.array([-1.0]), {kw}), (1,)))")
+        if ch.right in ("wall", "ring"):
+            w(f"    _parts.append(numpy.broadcast_to(_spring_k3(numpy.array([n - 1.0]), {kw}), (1,)))")
+        w("    return numpy.concatenate(_parts).astype(float)")
     w("")
     w("")
     cubic = model.k3 is not None
@@ -230,10 +242,10 @@ def render_chain_module(model: ChainModel, *, bundled: bool = True) -> str:
         if cubic:
             w(f"    _k3s = float(_spring_k3(0.0, {kw}))")
     else:
-        w("    _inv_m = _inv_m.reshape((n, 1))")
-        w(f"    _ks = numpy.broadcast_to(_spring_k(i, {kw}), (n - 1,)).reshape(-1, 1)")
+        w(f"    _ks1 = numpy.broadcast_to(_spring_k(i, {kw}), (n - 1,))")
         if cubic:
-            w(f"    _k3s = numpy.broadcast_to(_spring_k3(i, {kw}), (n - 1,)).reshape(-1, 1)")
+            w(f"    _k3s1 = numpy.broadcast_to(_spring_k3(i, {kw}), (n - 1,))")
+        w("    _inv_m1 = _inv_m")
     if ch.left == "wall":
         w(f"    _k_left = float(_spring_k(numpy.array(-1.0), {kw}))")
         if cubic:
@@ -244,6 +256,11 @@ def render_chain_module(model: ChainModel, *, bundled: bool = True) -> str:
             w(f"    _k3_right = float(_spring_k3(numpy.array(n - 1.0), {kw}))")
     w("")
     w("    def acceleration(x):")
+    if not ch.uniform:  # per-mass coefficients broadcast against (n,) or (n, ...)
+        w("        _shape = (-1,) + (1,) * (numpy.ndim(x) - 1)")
+        w("        _ks, _inv_m = _ks1.reshape(_shape), _inv_m1.reshape(_shape)")
+        if cubic:
+            w("        _k3s = _k3s1.reshape(_shape)")
     w("        _f = numpy.empty(numpy.shape(x))")
     w("        _d = x[1:] - x[:-1]")
     w("        _s = _ks * _d" + (" + _k3s * _d**3" if cubic else ""))

@@ -274,8 +274,9 @@ def closed_form_modes(model: Model, budget: float | None = DEFAULT_BUDGET,
                 modes.extend(_solve_block(model, B, lam, n_rigid, max_radical_degree))
         closed = True
     except BudgetExceeded:
-        notes.append(f"no closed form within the {budget:g} s budget, by radicals or for blocks larger "
-                     f"than {MAX_SYMBOLIC_BLOCK}; "
+        why = (f"{model.scene.n} masses: symmetry blocks larger than {MAX_SYMBOLIC_BLOCK}" if hopeless else
+               f"a factor of degree > 3, an unreadably long root, or over the {budget:g} s budget")
+        notes.append(f"no closed form ({why}); "
                      "eigenvalues below are numeric (symmetric generalized eigensolver) at the scene's parameter values")
         modes = [m for m in modes if m.rigid] + _numeric_modes(model, lam, len(rigid))
         closed = False
