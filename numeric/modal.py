@@ -54,8 +54,12 @@ class ModalSolution:
         extra = (1,) * (self.q0.ndim - 1)
         tt = t.reshape(t.shape + (1,) + extra)
         ww = w.reshape(w.shape + extra)
-        c = np.cos(ww * tt)
-        s = tsinc(ww, tt)
+        phase = ww * tt
+        z = np.exp(1j * phase)  # cos and sin in one pass
+        c = z.real
+        # t·sinc(ωt) = t·sin(ωt)/(ωt), = t where ωt = 0 (ω = 0 exactly for rigid modes)
+        with np.errstate(invalid="ignore", divide="ignore"):
+            s = np.where(phase != 0.0, z.imag / np.where(phase != 0.0, phase, 1.0), 1.0) * tt
         q = self.q0 * c + self.p0 * s
         p = -self.q0 * (ww**2) * s + self.p0 * c
         return t, q, p, ww
@@ -65,6 +69,8 @@ class ModalSolution:
         extra = (1,) * (self.q0.ndim - 1)
         E = self.spectrum.vectors
         r = np.sqrt(self.spectrum.masses).reshape((-1,) + extra)
+        if self.q0.ndim == 1 and t.ndim <= 1:  # (S, N) or (N,): one matrix product
+            return (y @ E.T) / r
         return np.moveaxis(np.tensordot(E, y, axes=([1], [t.ndim])), 0, t.ndim) / r
 
     def at(self, t) -> tuple[np.ndarray, np.ndarray]:
