@@ -11,7 +11,7 @@ Bounds keep every later step cheap: at most ``MAX_LENGTH`` characters,
 ``MAX_DEPTH`` levels of nesting (parentheses counted in the text, before the
 parser sees it), ``MAX_NODES`` parts, exponents that are small constants
 (``|p| <= MAX_EXPONENT``, powers of powers at most ``MAX_TOTAL_EXPONENT`` in
-all), literals up to ``MAX_LITERAL`` and ``MAX_DIGITS`` digits of exact
+all), ``%`` only by a nonzero constant (``i % 2``), literals up to ``MAX_LITERAL`` and ``MAX_DIGITS`` digits of exact
 numbers in all. ``9**9**9`` is refused by its form, never computed.
 
 The result is a small immutable tree of :class:`Expr` nodes that knows
@@ -28,6 +28,7 @@ from __future__ import annotations
 import ast
 import difflib
 import math
+import warnings
 from dataclasses import dataclass
 from fractions import Fraction
 from typing import Mapping
@@ -81,6 +82,8 @@ _OPERATORS = {ast.BitXor: "^", ast.BitAnd: "&", ast.BitOr: "|", ast.LShift: "<<"
 
 #: Relative rounding of one floating-point operation (with a margin for libm's sin, cos, exp).
 _U = 2.0**-52
+#: Absolute rounding in the subnormal range (the smallest positive float).
+_ETA = 2.0**-1074
 #: |float(pi) - pi|
 _PI_ERROR = 1.2246467991473532e-16
 
@@ -231,8 +234,10 @@ class BinOp(Expr):
                 e = _abs(a) * eb + _abs(b) * ea + ea * eb
             elif self.op == "/":
                 v = np.divide(a, b)
-                denom = _abs(b) * (_abs(b) - eb)
-                e = np.where(_abs(b) > eb, (_abs(a) * eb + _abs(b) * ea) / denom, np.inf)
+                # |a/b - (a+da)/(b+db)| <= (|a/b| rb + ea/|b|) / (1 - rb) with rb = eb/|b|, written
+                # with ratios so that nothing underflows for subnormal a, b
+                rb = np.divide(eb, _abs(b))
+                e = np.where(rb < 1, (_abs(v) * rb + np.divide(ea, _abs(b))) / (1 - rb), np.inf)
             elif self.op == "**":
                 v = np.power(a, b)
                 da = _abs(b) * np.power(_abs(a), b - 1.0)  # d/da a**b
@@ -244,10 +249,17 @@ class BinOp(Expr):
                 v = np.mod(a, b)
                 q = np.divide(a, b)
                 e = ea + eb * (_abs(q) + 1.0)
+                # near a jump, neither rounding nor SymPy (which must decide floor(a/b)) can say
+                # on which side the exact value lies
                 jump = (e > 0) & (_abs(q - np.round(q)) * _abs(b) <= e + _U * _abs(a))
-                e = np.where(jump, np.maximum(e, _abs(b)), e)
-            e = e + _U * _abs(v)
-        return _scalar(v), _scalar(e)
+                e = np.where(jump | (_abs(b) <= eb), np.inf, e)
+            e = e + _U * _abs(v) + _ETA
+            if self.op != "**":  # whole numbers below 2**53 combine exactly (e.g. (i + 1) % 2)
+                exact = (ea == 0) & (eb == 0) & _whole(a) & _whole(b) & _whole(v)
+                if self.op == "/":
+                    exact = exact & (v * b == a)
+                e = np.where(exact, 0.0, e)
+        return _scalar(v), _bound(e)
 
 
 @dataclass(frozen=True)
@@ -273,20 +285,30 @@ class Call(Expr):
             a = np.asarray(a, dtype=float)
             v = getattr(np, self.func)(a)
             if self.func in ("sin", "cos"):  # Lipschitz 1, plus libm's rounding
-                e = ea + _U * (1.0 + _abs(v))
+                e = ea + _U * (1.0 + _abs(v)) + _ETA
             elif self.func == "exp":
-                e = _abs(v) * np.expm1(ea) + 2 * _U * _abs(v)
+                e = _abs(v) * np.expm1(ea) + 2 * _U * _abs(v) + _ETA
             else:  # sqrt(a) - sqrt(a - ea) <= ea / (sqrt(a) + sqrt(a - ea))
                 e = np.where(a > ea, ea / (np.sqrt(_abs(a)) + np.sqrt(np.maximum(a - ea, 0.0))),
                              np.sqrt(_abs(a) + ea))
-                e = e + _U * _abs(v)
-        return _scalar(v), _scalar(e)
+                e = e + _U * _abs(v) + _ETA
+        return _scalar(v), _bound(e)
+
+
+def _whole(x):
+    """Whether x is a whole number that float64 holds exactly."""
+    return (x == np.round(x)) & (_abs(x) <= 2.0**53)
 
 
 def _times(derivative, error):
     """``derivative * error`` with 0 where the error is 0 and inf where it cannot be bounded."""
     prod = np.nan_to_num(np.asarray(derivative) * error, nan=np.inf)
     return np.where(np.asarray(error) == 0, 0.0, prod)
+
+
+def _bound(e):
+    """An error bound: never nan (an unknown bound is inf)."""
+    return _scalar(np.nan_to_num(np.asarray(e, dtype=float), nan=np.inf, posinf=np.inf))
 
 
 def _scalar(x):
@@ -399,7 +421,9 @@ def parse_expression(
     if _nesting(text) > MAX_DEPTH:
         raise fail(f"nested deeper than {MAX_DEPTH} levels", f"at most {MAX_DEPTH} levels of parentheses")
     try:
-        tree = ast.parse(text.strip(), mode="eval")
+        with warnings.catch_warnings():  # e.g. SyntaxWarning on "1or a": never a second line on stderr
+            warnings.simplefilter("ignore")
+            tree = ast.parse(text.strip(), mode="eval")
     except (SyntaxError, ValueError, RecursionError, MemoryError, OverflowError) as exc:
         msg = getattr(exc, "msg", None) or type(exc).__name__
         raise fail(f"not a valid expression ({msg})") from None
@@ -446,6 +470,15 @@ def parse_expression(
             return Neg(inner) if isinstance(node.op, ast.USub) else inner
         if isinstance(node, ast.BinOp) and type(node.op) in _BINOPS:
             op = _BINOPS[type(node.op)]
+            if op == "%":
+                # a constant divisor only: SymPy's Mod with a symbolic divisor runs polynomial gcds
+                # that can take unbounded time (e.g. 46 % exp(617175.67*exp(b)))
+                left, right = walk(node.left, depth + 1, power), walk(node.right, depth + 1, power)
+                divisor = _constant_value(right)
+                if divisor is None or divisor == 0:
+                    raise fail("% needs a nonzero constant number on its right",
+                               "a % p with p a nonzero number, e.g. i % 2")
+                return BinOp(op, left, right)
             if op != "**":
                 return BinOp(op, walk(node.left, depth + 1, power), walk(node.right, depth + 1, power))
             right = walk(node.right, depth + 1, power)

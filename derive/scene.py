@@ -349,6 +349,11 @@ class _Loader:
         if bad.any():
             raise self.bad(key, text, f"{verb} {first(bad):g}{where(bad)}",
                            "an expression finite at the scene's parameter values")
+        unbounded = ~np.isfinite(error)
+        if unbounded.any():
+            raise self.bad(key, text, f"rounding cannot pin its value down{where(unbounded)} (a divisor "
+                                      "or root argument that rounding cannot tell from 0, or % at a jump)",
+                           "an expression whose divisors are clearly away from 0")
         wanted = "a value > 0" if positive else "a nonzero value"
         if positive and (value <= 0).any():
             mask = value <= 0
