@@ -118,7 +118,8 @@ def _simulate(scene, args, out: Path, quiet_json: bool) -> dict:
     unknown = [m for m in methods if m not in method_names()]
     if unknown:
         raise SceneError(None, "--method", f"{unknown[0]!r} is not a method; accepted: {', '.join(method_names())}")
-    check_memory(scene.file, scene.n, steps, record_every, methods=len(methods))
+    check_memory(scene.file, scene.n, steps, record_every, methods=len(methods),
+                 key="--steps" if args.steps is not None else "simulation.steps")
     out.mkdir(parents=True, exist_ok=True)
     if system.chain:
         summary = stream_methods(system, scene.x0, scene.v0, dt, steps, methods, record_every, out,
@@ -426,6 +427,10 @@ def main(argv: list[str] | None = None) -> int:
     except BrokenPipeError:  # output piped into e.g. `head`
         sys.stderr.close()
         return 0
+    except OSError as exc:  # e.g. an --out folder that cannot be created
+        where = f"{exc.filename}: " if exc.filename else ""
+        sys.stderr.write(f"springchain: error: {where}{exc.strerror or exc}\n")
+        return EXIT_USAGE
     except KeyboardInterrupt:
         sys.stderr.write("springchain: interrupted\n")
         return 130

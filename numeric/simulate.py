@@ -53,9 +53,9 @@ def system_spectrum(system: System, source: str = "svd") -> Spectrum:
 def check_stable(omega_max: float, h: float, method: str, limit: float = 2.0) -> None:
     """Refuse a step at or beyond the stability edge ``ω_max·h < limit``."""
     if omega_max * h >= limit:
-        raise RunRefused(f"--dt {h:g} is at or beyond {method}'s stability limit: ω_max = {omega_max:.6g}, "
-                         f"so dt must be < {limit:g}/ω_max = {limit / omega_max:.6g}; "
-                         f"use a smaller --dt or --method modal (exact, any dt)")
+        raise RunRefused(f"dt = {h:g} is at or beyond {method}'s stability limit: ω_max = {omega_max:.6g}, "
+                         f"so dt must be < {limit:g}/ω_max = {limit / omega_max:.6g}; use a smaller dt "
+                         f"(--dt or simulation.dt) or --method modal (exact, any dt)")
 
 
 def problem_for(system: System) -> Problem:
