@@ -30,7 +30,8 @@ import numpy as np
 from scipy.special import jv
 
 from ..errors import RunRefused
-from .base import Integrator, Problem, StepKernel, finite_positive
+from .base import Problem, StepKernel, finite_positive
+from .propagator import LinearPropagator
 
 #: Coefficients below this fraction of the largest are dropped.
 TRUNCATION = 1e-17
@@ -113,7 +114,7 @@ class ChebyshevCoefficients:
         return cls(h, radius2, c, g, w)
 
 
-class ChebyshevPropagator(Integrator):
+class ChebyshevPropagator(LinearPropagator):
     """Exact-to-roundoff propagator of a linear chain from acceleration evaluations only.
 
     Force evaluations are counted in units of one evaluation on an (N, B)
@@ -122,20 +123,10 @@ class ChebyshevPropagator(Integrator):
     """
 
     name = "chebyshev"
-    order = math.inf
-    symplectic = True  # the exact flow (to roundoff), like expm
     evals_per_step = math.nan  # depends on h·ω_max: see evals_for
-    init_evals = 0
-    stability_limit = math.inf
 
     def check(self, problem: Problem) -> None:
-        if problem.linear is None:
-            raise RunRefused(f"--method {self.name} needs a linear chain of springs only (no cubic springs, "
-                             f"dampers, gravity or external forces); use --method modal for the exact solution "
-                             f"of a linear scene with effects, or a step method such as blanes-moan6")
-        if problem.damping is not None or problem.external is not None:
-            raise RunRefused(f"--method {self.name} propagates free oscillations only; this scene has "
-                             f"dampers or external forces: use rk4 or dop853")
+        super().check(problem)
         if np.any(problem.linear.stiffness < 0):
             raise RunRefused(f"--method {self.name} needs non-negative spring constants")
 

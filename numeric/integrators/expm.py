@@ -12,13 +12,11 @@ not from an eigen-solve of ``M⁻¹K``. Set-up ``O(N³)`` (once per run), then o
 
 from __future__ import annotations
 
-import math
-
 import numpy as np
 
-from ..errors import RunRefused
 from ..modal import tsinc
-from .base import Integrator, Problem, StepKernel, finite_positive
+from .base import Problem, StepKernel, finite_positive
+from .propagator import LinearPropagator
 
 
 def step_matrix(problem: Problem, h: float) -> np.ndarray:
@@ -39,24 +37,11 @@ def step_matrix(problem: Problem, h: float) -> np.ndarray:
     return phi
 
 
-class MatrixExponential(Integrator):
+class MatrixExponential(LinearPropagator):
     """Exact propagator of an undamped, unforced linear chain (needs ``Problem.linear``)."""
 
     name = "expm"
-    order = math.inf
-    symplectic = True
     evals_per_step = 0.0
-    init_evals = 0
-    stability_limit = math.inf
-
-    def check(self, problem: Problem) -> None:
-        if problem.linear is None:
-            raise RunRefused(f"--method {self.name} needs a linear chain of springs only (no cubic springs, "
-                             f"dampers, gravity or external forces); use --method modal for the exact solution "
-                             f"of a linear scene with effects, or a step method such as blanes-moan6")
-        if problem.damping is not None or problem.external is not None:
-            raise RunRefused(f"--method {self.name} propagates free oscillations only; this scene has "
-                             f"dampers or external forces: use rk4 or dop853")
 
     def kernel(self, problem: Problem, h: float) -> StepKernel:
         h = finite_positive(h)
