@@ -28,7 +28,8 @@ def _printer() -> NumPyPrinter:
 
 
 def _p(expr) -> str:
-    return _printer().doprint(sp.sympify(expr))
+    """Print a SymPy expression (or a Python int, e.g. 0) as NumPy code."""
+    return _printer().doprint(sp.Integer(expr) if isinstance(expr, int) else expr)
 
 
 def regenerate_command(scene_file: str, bundled: bool) -> str:

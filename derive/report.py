@@ -18,7 +18,8 @@ def _values(model: Model) -> dict:
 
 
 def _num(expr, model: Model) -> float:
-    return float(sp.re(sp.N(sp.sympify(expr).subs(_values(model)), 17)))
+    expr = sp.Integer(expr) if isinstance(expr, int) else expr
+    return float(sp.re(sp.N(expr.subs(_values(model)), 17)))
 
 
 def _pretty(mat: sp.Matrix) -> str:
