@@ -151,7 +151,12 @@ class Model:
         """
         n = self.scene.n
         lhs = [sp.Integer(0)] * n
-        coords = lambda expr: [i for i in range(n) if expr.has(self.x[i]) or expr.has(self.v[i])]  # noqa: E731
+        index = {**{x: i for i, x in enumerate(self.x)}, **{v: i for i, v in enumerate(self.v)}}
+
+        def coords(expr) -> list[int]:
+            """The coordinates an element touches, from its free symbols (not a scan of all N)."""
+            return sorted({index[s] for s in expr.free_symbols if s in index})
+
         for _, e in self.kinetic_terms:
             for i in coords(e):
                 p = sp.diff(e, self.v[i])
