@@ -311,13 +311,6 @@ def _merge_equal(modes: list[Mode], subs: dict) -> list[Mode]:
     return out
 
 
-def _in_span(B: sp.Matrix, s) -> bool:
-    v = sp.Matrix(s)
-    # B's columns are orthogonal 0/±1 vectors: project and compare
-    coeffs = [(B[:, j].T * v)[0] / (B[:, j].T * B[:, j])[0] for j in range(B.shape[1])]
-    return sp.simplify(B * sp.Matrix(coeffs) - v) == sp.zeros(*v.shape)
-
-
 def _numeric_modes(model: Model, lam: sp.Symbol, n_rigid: int) -> list[Mode]:
     """Numeric fallback at the scene's parameter values (rigid modes stay exact).
 

@@ -18,7 +18,7 @@ from typing import Callable
 import numpy as np
 import scipy.linalg
 
-from .integrators.base import Integrator, Problem, State  # noqa: F401
+from .integrators.base import Integrator, Problem, State  # noqa: F401  (State: the contract's type)
 
 
 class EffectSplitting(Integrator):
@@ -93,8 +93,3 @@ class EffectSplitting(Integrator):
             return x, v, a
 
         return step
-
-
-def strip(x: np.ndarray, n: int) -> np.ndarray:
-    """Drop the time row added for forced scenes: (..., N+1, B) -> (..., N, B)."""
-    return x[..., :n, :]

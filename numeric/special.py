@@ -59,10 +59,15 @@ def sinc(x: np.ndarray) -> np.ndarray:
     -------
     ndarray, same shape
     """
+    return _over_x(np.sin, x)
+
+
+def _over_x(f, x) -> np.ndarray:
+    """``f(x)/x`` with its limit 1 at x = 0 (for f = sin, sinh: accurate at every other float)."""
     x = np.asarray(x, dtype=float)
     zero = x == 0.0
     safe = np.where(zero, 1.0, x)
-    return np.where(zero, 1.0, np.sin(safe) / safe)
+    return np.where(zero, 1.0, f(safe) / safe)
 
 
 def sinhc(x: np.ndarray) -> np.ndarray:
@@ -76,10 +81,7 @@ def sinhc(x: np.ndarray) -> np.ndarray:
     -------
     ndarray, same shape
     """
-    x = np.asarray(x, dtype=float)
-    zero = x == 0.0
-    safe = np.where(zero, 1.0, x)
-    return np.where(zero, 1.0, np.sinh(safe) / safe)
+    return _over_x(np.sinh, x)
 
 
 def tsinc(omega: np.ndarray, t: np.ndarray) -> np.ndarray:
@@ -190,7 +192,6 @@ def undamped_forced_sin(omega: np.ndarray, Omega: np.ndarray, t: np.ndarray) -> 
     big = np.maximum(omega, W) * t
     series = big <= _SERIES_LIMIT
     near = ~series & (2.0 * omega > W) & (omega < 2.0 * W)
-    far = ~series & ~near
     with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
         sigma = 0.5 * (omega + W)
         delta = 0.5 * (omega - W)
