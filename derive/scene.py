@@ -65,7 +65,6 @@ MAX_NAME = 64
 SOFT_KEYWORDS = frozenset({"_", "case", "match", "type", *keyword.softkwlist})
 
 #: Largest number of bytes all recorded trajectories of one run may hold.
-MAX_RECORDED_BYTES = 4 * 2**30
 #: Largest scene file read.
 MAX_FILE_BYTES = 64 * 2**20
 #: Largest description (characters).
@@ -213,15 +212,6 @@ def did_you_mean(word: object, options) -> str:
     if not near and ALIASES.get(norm) in options:
         near = [ALIASES[norm]]
     return f" (did you mean {near[0]!r}?)" if near else ""
-
-
-def _human_bytes(n: float) -> str:
-    """``n`` bytes as e.g. ``5.96e+03 GiB`` or ``512 MiB``."""
-    for unit in ("B", "KiB", "MiB"):
-        if n < 1024:
-            return f"{n:.3g} {unit}"
-        n /= 1024
-    return f"{n:.3g} GiB"
 
 
 class _Loader:
@@ -494,8 +484,6 @@ def _build(ld: _Loader, sha: str) -> Scene:
         mass_names, mass_exprs = tuple(names), tuple(exprs)
         n = len(names)
 
-    check_memory(ld.file, n, steps, record_every)
-
     index = {m: j for j, m in enumerate(mass_names)}
     accepted_ends = ", ".join(repr(m) for m in (*mass_names, "wall"))
 
@@ -567,34 +555,6 @@ def _build(ld: _Loader, sha: str) -> Scene:
                  record_every=record_every)
 
 
-def check_memory(file: str | None, n: int, steps: int, record_every: int, methods: int = 2,
-                 key: str = "simulation.steps") -> None:
-    """Refuse runs whose recorded trajectories would not fit in memory.
-
-    Parameters
-    ----------
-    file : str or None
-        The scene file, for the message.
-    n, steps, record_every, methods : int
-        Masses, steps, the recording stride and the number of methods run.
-    key : str
-        What to name in the message (``--steps`` when the option set it).
-
-    Raises
-    ------
-    SceneError
-        Saying how much memory the trajectories would need.
-    """
-    frames = steps // record_every + 1
-    need = frames * n * 8 * 2 * methods
-    if need > MAX_RECORDED_BYTES:
-        raise SceneError(file, key,
-                         f"{steps}: {steps} steps x {n} masses (recorded every {record_every}, "
-                         f"{methods} methods) would need {_human_bytes(need)} for the trajectories; "
-                         f"accepted: at most {_human_bytes(MAX_RECORDED_BYTES)} - raise record_every "
-                         f"or lower the steps")
-
-
 def _chain(ld: _Loader, pnames: frozenset[str], env: dict) -> Chain:
     c = ld.table("chain")
     ld.keys(c, CHAIN_KEYS, "chain", required=("n", "mass", "k"), what="[chain]")
@@ -641,14 +601,4 @@ def _initial(ld: _Loader, key: str, value, n: int, chain: bool, pnames, env) -> 
     raise ld.bad(key, value, "not a list of numbers", accepted)
 
 
-def bundled_scene_dir() -> Path:
-    """The ``scenes/`` folder shipped beside the packages."""
-    return Path(__file__).resolve().parent.parent / "scenes"
-
-
-def bundled_scenes() -> list[Path]:
-    return sorted(bundled_scene_dir().glob("*.toml"))
-
-
-__all__ = ["Scene", "Spring", "Damper", "Force", "Chain", "WALL", "load_scene", "bundled_scenes",
-           "bundled_scene_dir", "check_memory", "Num", "RESERVED", "did_you_mean"]
+__all__ = ["Scene", "Spring", "Damper", "Force", "Chain", "WALL", "load_scene", "Num", "RESERVED", "did_you_mean"]

@@ -476,12 +476,11 @@ def run_bench(system: System, x0: np.ndarray, v0: np.ndarray, t_end: float, dt_o
     x0 = np.asarray(x0, dtype=float)
     v0 = np.asarray(v0, dtype=float)
     problem = Problem.from_system(system)
-    exact = bool(system.exact_available and not (system.damped or system.forced)
-                 and "gravity" not in system.effects)
+    exact = bool(system.exact_available and system.conservative)
     if system.n > MAX_MASSES:
         raise RunRefused(f"bench uses the dense modes of the chain: at most {MAX_MASSES} masses (this scene "
                          f"has {system.n}); for long chains see `springchain scaling`")
-    if system.damped or system.forced or "gravity" in system.effects:
+    if not system.conservative:
         raise RunRefused("bench covers conservative scenes (springs, cubic springs); this scene has dampers, "
                          "forces or gravity")
     prog = _Progress(progress, 0)
@@ -722,13 +721,12 @@ def work_precision_figure(result: BenchResult):
     """Error against seconds and against force evaluations, log–log, one line per method."""
     import matplotlib
 
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    from .plots import new_figure
 
-    fig, axes = plt.subplots(1, 2, figsize=(13, 5.5), constrained_layout=True)
+    fig, axes = new_figure(1, 2, figsize=(13, 5.5))
     floor = 1e-17
     markers = "os^vD<>ph*Xd"
-    colors = plt.get_cmap("tab20").colors
+    colors = matplotlib.colormaps["tab20"].colors
     for j, name in enumerate(_method_order(result.records)):
         # connected in the order of the setting (coarse to fine), so timing noise shows as noise
         rs = sorted((r for r in result.records if r.method == name), key=lambda r: -r.error)
@@ -754,11 +752,10 @@ def horizon_figure(result: BenchResult):
     """Error and energy error against the horizon: measured (markers) and model (dashed)."""
     import matplotlib
 
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    from .plots import new_figure
 
-    fig, axes = plt.subplots(1, 2, figsize=(13, 5.5), constrained_layout=True)
-    colors = plt.rcParams["axes.prop_cycle"].by_key()["color"]
+    fig, axes = new_figure(1, 2, figsize=(13, 5.5))
+    colors = matplotlib.rcParams["axes.prop_cycle"].by_key()["color"]
     for j, c in enumerate(result.horizons):
         col = colors[j % len(colors)]
         axes[0].loglog(c.measured_t, np.maximum(c.measured_error, 1e-17), "o-", color=col,

@@ -96,3 +96,12 @@ def atomic_write_bytes(path: str | Path, data: bytes) -> None:
 
 
 __all__ = ["atomic_path", "atomic_write_text", "atomic_write_bytes"]
+
+
+def human_bytes(n: float) -> str:
+    """``n`` bytes as e.g. ``5.96e+03 GiB`` or ``512 MiB``."""
+    for unit in ("B", "KiB", "MiB"):
+        if n < 1024:
+            return f"{n:.3g} {unit}"
+        n /= 1024
+    return f"{n:.3g} GiB"

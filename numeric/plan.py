@@ -255,8 +255,7 @@ class Planner:
         spec: Spectrum = spectrum(system.masses, system.spring_ends, system.stiffness)
         model = LinearChainModel.from_spectrum(spec, x0, v0)
         problem = Problem.from_system(system)
-        exact = bool(system.exact_available and not (system.damped or system.forced)
-                     and "gravity" not in system.effects)
+        exact = bool(system.exact_available and system.conservative)
         steps_, responses, costs, props = [], {}, {}, []
         h_probe = min(dt_out, 0.5 / max(model.omega_max, 1e-300))
         for cls_ in INTEGRATORS.values():

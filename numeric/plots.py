@@ -3,10 +3,19 @@
 from __future__ import annotations
 
 import matplotlib
+import numpy as np
+from matplotlib.figure import Figure
 
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
+
+def new_figure(nrows: int = 1, ncols: int = 1, **kw):
+    """A Figure and its axes, made without pyplot: no global backend, no figure manager.
+
+    Figures are written with ``Figure.savefig`` (an explicit Agg canvas), so the
+    user's backend (a notebook's inline one, say) is never switched.
+    """
+    kw.setdefault("layout", "constrained")
+    fig = Figure(figsize=kw.pop("figsize", (9, 5)), layout=kw.pop("layout"))
+    return fig, fig.subplots(nrows, ncols, **kw)
 
 STYLES = {"modal": dict(ls="-", lw=1.6, alpha=0.8), "verlet": dict(ls="--", lw=1.1)}
 
@@ -25,9 +34,9 @@ def trajectories(t: np.ndarray, series: dict[str, np.ndarray], names, quantity: 
 
     series : dict of method name -> ndarray, shape (S, N)
     """
-    fig, ax = plt.subplots(figsize=(9, 5.5), constrained_layout=True)
+    fig, ax = new_figure(figsize=(9, 5.5))
     off = _offset(series)
-    colors = plt.rcParams["axes.prop_cycle"].by_key()["color"]
+    colors = matplotlib.rcParams["axes.prop_cycle"].by_key()["color"]
     for method, y in series.items():
         style = STYLES.get(method, dict(ls=":", lw=1.0))
         for j, name in enumerate(names):
@@ -46,7 +55,7 @@ def differences(t: np.ndarray, dx: np.ndarray, dv: np.ndarray, names, label: str
 
     dx, dv : ndarray, shape (S, N)
     """
-    fig, axes = plt.subplots(2, 1, figsize=(9, 6), sharex=True, constrained_layout=True)
+    fig, axes = new_figure(2, 1, figsize=(9, 6), sharex=True)
     for j, name in enumerate(names):
         axes[0].plot(t, dx[:, j], lw=1, label=name)
         axes[1].plot(t, dv[:, j], lw=1, label=name)
@@ -62,7 +71,7 @@ def differences(t: np.ndarray, dx: np.ndarray, dv: np.ndarray, names, label: str
 
 def energy(t: np.ndarray, energies: dict[str, np.ndarray], e0: float):
     """Relative energy error (E(t) − E(0)) / |E(0)| per method."""
-    fig, ax = plt.subplots(figsize=(9, 4.5), constrained_layout=True)
+    fig, ax = new_figure(figsize=(9, 4.5))
     scale = abs(e0) if e0 != 0 else 1.0
     for method, e in energies.items():
         ax.plot(t, (e - e0) / scale, label=method, **STYLES.get(method, {}))
@@ -80,12 +89,11 @@ def save(fig, path) -> None:
 
     with atomic_path(path) as tmp:
         fig.savefig(tmp, dpi=110, format=str(path).rsplit(".", 1)[-1])
-    plt.close(fig)
 
 
 def profiles(snapshots: dict[float, np.ndarray], quantity: str = "displacement x", unit: str = "m"):
     """Chain profiles x(i) at a few times. snapshots: time -> ndarray, shape (N,)."""
-    fig, ax = plt.subplots(figsize=(9, 4.5), constrained_layout=True)
+    fig, ax = new_figure(figsize=(9, 4.5))
     for t, y in snapshots.items():
         ax.plot(np.arange(y.shape[0]), y, lw=1, label=f"t = {t:g} s")
     ax.set_xlabel("mass index i")
@@ -102,7 +110,7 @@ def frequency_response(drive: np.ndarray, amplitude: np.ndarray, names, natural:
 
     amplitude : ndarray, shape (W, N); natural : undamped ω_j (vertical lines).
     """
-    fig, ax = plt.subplots(figsize=(9, 4.8), constrained_layout=True)
+    fig, ax = new_figure(figsize=(9, 4.8))
     for j, name in enumerate(names):
         ax.semilogy(drive, amplitude[:, j], lw=1.2, label=name)
     for k, w in enumerate(natural):

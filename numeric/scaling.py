@@ -594,11 +594,13 @@ def _table(records: list[dict], columns: dict[str, str], title: str) -> list[str
 
 def figure(result: ScalingResult):
     """Seconds vs N (log–log): set-up costs, per-step costs and the memory floor."""
-    import matplotlib.pyplot as plt
+    import matplotlib
+
+    from .plots import new_figure
 
     recs = result.records
     n = np.array([r["n"] for r in recs], dtype=float)
-    fig, ax = plt.subplots(figsize=(9, 6), constrained_layout=True)
+    fig, ax = new_figure(figsize=(9, 6))
     series = [
         ("setup_dense_svd", "exact set-up: dense SVD (modal), random chain", "C3", "o-"),
         ("setup_dense_eigh", "exact set-up: dense eigh, random chain", "C1", "s-"),

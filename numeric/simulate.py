@@ -21,12 +21,34 @@ from .modal import ModalSolution
 from .spectrum import Spectrum, spectrum, spectrum_from_closed_form
 from .system import System
 
-EXACT = "modal"
+from .methods import EXACT, METHOD_NAMES
+
+#: Index-dependent chains above this many masses get no default exact solution (dense modes).
+DENSE_EXACT_MAX = 4000
 
 
 def method_names() -> list[str]:
     """Every method selectable by name (``--method``), the exact one first."""
-    return [EXACT, *INTEGRATORS, *ADAPTIVE]
+    return list(METHOD_NAMES)
+
+
+def _long_dense_chain(system: System) -> bool:
+    return bool(system.chain and not system.module.UNIFORM and system.n > DENSE_EXACT_MAX)
+
+
+def default_methods(system: System) -> list[str]:
+    """The exact solution and Verlet where an exact solution applies, else Verlet alone."""
+    return [EXACT, "verlet"] if system.exact_available and not _long_dense_chain(system) else ["verlet"]
+
+
+def applicable(system: System) -> str:
+    """Which methods apply to the system, in words."""
+    if not system.exact_available:
+        why = "cubic springs" if not system.linear else "non-harmonic forces"
+        return f"integrators only ({why}: no exact solution)"
+    if _long_dense_chain(system):
+        return f"integrators (an index-dependent chain has an exact solution up to {DENSE_EXACT_MAX} masses)"
+    return "modal (exact) and every integrator"
 
 
 @dataclass(frozen=True)
@@ -174,10 +196,16 @@ def compare(system: System, runs: dict[str, Run]) -> dict:
 
 def write_npz(path: Path, runs: dict[str, Run]) -> None:
     """NPZ with ``t`` (S,) and ``x_<method>``, ``v_<method>`` (S, N), written atomically."""
-    arrays = {"t": next(iter(runs.values())).t}
-    for name, run in runs.items():
-        arrays[f"x_{name}"] = run.x
-        arrays[f"v_{name}"] = run.v
+    first = next(iter(runs.values()))
+    save_npz(path, first.t, {m: r.x for m, r in runs.items()}, {m: r.v for m, r in runs.items()})
+
+
+def save_npz(path: Path, t: np.ndarray, x: dict[str, np.ndarray], v: dict[str, np.ndarray]) -> None:
+    """NPZ with ``t`` (S,) and ``x_<method>``, ``v_<method>`` (S, N), written atomically."""
+    arrays = {"t": t}
+    for name in x:
+        arrays[f"x_{name}"] = x[name]
+        arrays[f"v_{name}"] = v[name]
     with atomic_path(path, suffix=".npz") as tmp:
         with open(tmp, "wb") as fh:
             np.savez(fh, **arrays)
@@ -267,7 +295,7 @@ def stream_methods(system: System, x0: np.ndarray, v0: np.ndarray, h: float, ste
                 evals = 0
             else:
                 integrator = INTEGRATORS[name]()
-                if name == "verlet" and system.chain and not (system.damped or system.forced):
+                if name == "verlet" and system.chain and system.conservative:
                     integrator = FusedChainVerlet(system)
                 if system.chain:
                     # ω_max ≤ 2·sqrt(max k / min m) per Gershgorin on D: a proven bound, no eigen-solve

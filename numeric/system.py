@@ -79,6 +79,15 @@ class System:
     def forced(self) -> bool:
         return hasattr(self.module, "external_acceleration")
 
+    @property
+    def conservative(self) -> bool:
+        """Springs only (linear or cubic): no dampers, no external forces, no gravity.
+
+        The one definition: bench, plan, the fused chain kernel and the modal
+        solution without augmentation all ask this.
+        """
+        return not (self.damped or self.forced or "gravity" in self.effects)
+
     def damping_rate_matrix(self) -> np.ndarray | None:
         """``-M⁻¹C``, shape (N, N); None without dampers."""
         if not self.damped:

@@ -69,7 +69,7 @@ def seed_path(repo_root) -> Path:
 @pytest.fixture(scope="session")
 def seed_scene(seed_path):
     """The bundled reference scene (masses m, 3m, m; two springs k; free ends)."""
-    from derive.scene import load_scene
+    from springchain.derive.scene import load_scene
 
     return load_scene(seed_path)
 
@@ -77,7 +77,7 @@ def seed_scene(seed_path):
 @pytest.fixture(scope="session")
 def seed_derivation(seed_scene):
     """A fresh derivation of the reference scene (model, modes, rendered source)."""
-    from derive.pipeline import derive
+    from springchain._modules import derive
 
     return derive(seed_scene)
 
@@ -85,13 +85,13 @@ def seed_derivation(seed_scene):
 @pytest.fixture(scope="session")
 def seed_module():
     """The checked-in generated module of the reference scene."""
-    return importlib.import_module("generated.seed")
+    return importlib.import_module("springchain.generated.seed")
 
 
 @pytest.fixture(scope="session")
 def seed_system(seed_module):
     """The reference scene's generated equations at the scene's parameter values (m = k = 1)."""
-    from numeric.system import System
+    from springchain.numeric.system import System
 
     return System.from_module(seed_module)
 
@@ -106,7 +106,7 @@ def reference():
 @pytest.fixture(scope="session")
 def scene_from_text():
     """``scene_from_text(text, label="test.toml")``: a validated Scene from TOML text."""
-    from derive.scene import load_scene
+    from springchain.derive.scene import load_scene
 
     def make(text: str, label: str = "test.toml"):
         return load_scene(label, text=text)
@@ -215,7 +215,7 @@ def example_scene(scene_from_text):
 @pytest.fixture(scope="session")
 def derived(example_scene, seed_derivation):
     """``derived(name)``: a cached derivation of an example scene (``"seed"``: the bundled one)."""
-    from derive.pipeline import derive
+    from springchain._modules import derive
 
     cache = {"seed": seed_derivation}
 

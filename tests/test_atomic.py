@@ -18,10 +18,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-import numeric.files as files
-from derive.cli import main
-from derive.scene import load_scene
-from numeric.files import atomic_path, atomic_write_bytes, atomic_write_text
+import springchain.numeric.files as files
+from springchain.cli import main
+from springchain.derive.scene import load_scene
+from springchain.numeric.files import atomic_path, atomic_write_bytes, atomic_write_text
 
 OLD = "old content\nline 2\n"
 
@@ -87,7 +87,7 @@ def test_success_replaces_and_keeps_the_mode(old_file, tmp_path):
 
 
 def test_npz_failure_keeps_the_old_output(tmp_path, monkeypatch):
-    from numeric import simulate
+    from springchain.numeric import simulate
 
     path = tmp_path / "scene.npz"
     np.savez(path, t=np.arange(3.0))
@@ -111,7 +111,7 @@ def test_npz_failure_keeps_the_old_output(tmp_path, monkeypatch):
 
 def test_generated_module_survives_a_failed_derive(seed_derivation, tmp_path, monkeypatch):
     """pipeline.write: an error mid-write keeps the previous module; the retry writes the new one."""
-    from derive import pipeline
+    from springchain import _modules as pipeline
 
     out = tmp_path / "gen"
     path = pipeline.write(seed_derivation, out)
@@ -188,7 +188,7 @@ def test_two_concurrent_derives_leave_one_valid_module(seed_path, tmp_path):
     out = tmp_path / "gen"
     env = {**os.environ, "SPRINGCHAIN_CACHE": str(tmp_path / "cache"), "OPENBLAS_NUM_THREADS": "1",
            "PYTHONDONTWRITEBYTECODE": "1"}
-    cmd = [sys.executable, "-c", "import sys; from derive.cli import main; raise SystemExit(main(sys.argv[1:]))",
+    cmd = [sys.executable, "-c", "import sys; from springchain.cli import main; raise SystemExit(main(sys.argv[1:]))",
            "derive", str(scene_file), "--out", str(out)]
     procs = [subprocess.Popen(cmd, env=env, cwd=tmp_path, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
                               text=True)
@@ -198,7 +198,7 @@ def test_two_concurrent_derives_leave_one_valid_module(seed_path, tmp_path):
         assert p.returncode == 0, stderr
         assert "Traceback" not in stderr
     assert listing(out) == ["twin.py"]  # one module, no temporary files
-    from derive import pipeline
+    from springchain import _modules as pipeline
 
     fresh = pipeline.derive(load_scene(scene_file)).source
     text = (out / "twin.py").read_text(encoding="utf-8")

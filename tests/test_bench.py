@@ -11,15 +11,15 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-import generated.duffing as duffing_module
-import generated.seed as seed_module
-from numeric.bench import (BenchConfig, ExtendedModalReference, energy_norm, run_bench, targets,
+import springchain.generated.duffing as duffing_module
+import springchain.generated.seed as seed_module
+from springchain.numeric.bench import (BenchConfig, ExtendedModalReference, energy_norm, run_bench, targets,
                            BenchRecord)
-from numeric.integrators import ADAPTIVE, INTEGRATORS
-from numeric.modal import ModalSolution
-from numeric.spectrum import spectrum
-from numeric.system import System
-from numeric.timing import measure, single_threaded_blas
+from springchain.numeric.integrators import ADAPTIVE, INTEGRATORS
+from springchain.numeric.modal import ModalSolution
+from springchain.numeric.spectrum import spectrum
+from springchain.numeric.system import System
+from springchain.numeric.timing import measure, single_threaded_blas
 
 ROOT = Path(__file__).resolve().parent.parent
 X0 = np.array([0.8552, 1.5376, 0.8834])
@@ -30,7 +30,7 @@ FIELDS = {"method", "setting", "error", "energy_error", "seconds", "force_evals"
 @pytest.fixture(scope="module")
 def quick_bench(tmp_path_factory):
     """``springchain bench --quick --json`` on the default (seed) scene."""
-    from derive.cli import main
+    from springchain.cli import main
 
     out = tmp_path_factory.mktemp("bench")
     buf = io.StringIO()

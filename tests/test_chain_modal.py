@@ -18,12 +18,12 @@ import numpy as np
 import pytest
 import scipy.linalg
 
-from derive.chain import ChainModel, render_chain_module
-from derive.scene import load_scene
-from numeric.chain_modal import Basis, ChainModal, uniform_omega
-from numeric.errors import RunRefused
-from numeric.modal import ModalSolution
-from numeric.spectrum import spectrum
+from springchain.derive.chain import ChainModel, render_chain_module
+from springchain.derive.scene import load_scene
+from springchain.numeric.chain_modal import Basis, ChainModal, uniform_omega
+from springchain.numeric.errors import RunRefused
+from springchain.numeric.modal import ModalSolution
+from springchain.numeric.spectrum import spectrum
 
 ENDS = [("free", "free"), ("wall", "wall"), ("wall", "free"), ("free", "wall"), ("ring", "ring")]
 SIZES = [1, 2, 3, 10, 64, 257]

@@ -18,7 +18,7 @@ import numpy as np
 import pytest
 import sympy as sp
 
-from derive.cli import main
+from springchain.cli import main
 
 PNG_MAGIC = b"\x89PNG\r\n\x1a\n"
 

@@ -8,9 +8,9 @@ import numpy as np
 import pytest
 import sympy
 
-from derive.codegen import MAX_PRINTED_MATRIX
-from derive.pipeline import derive
-from derive.scene import load_scene
+from springchain.derive.codegen import MAX_PRINTED_MATRIX
+from springchain._modules import derive
+from springchain.derive.scene import load_scene
 
 
 def scene_text(n: int, gravity: bool) -> str:

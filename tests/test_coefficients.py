@@ -17,14 +17,14 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from numeric.integrators import INTEGRATORS, LinearChain
-from numeric.integrators.blanes_moan4 import BLANES_MOAN4
-from numeric.integrators.blanes_moan6 import BLANES_MOAN6
-from numeric.integrators.chebyshev import ChebyshevCoefficients
-from numeric.integrators.coefficients import CompositionTable, SplittingTable
-from numeric.integrators.kahan_li import KAHAN_LI8
-from numeric.integrators.splitting import SplittingMethod
-from numeric.integrators.yoshida import YOSHIDA4
+from springchain.numeric.integrators import INTEGRATORS, LinearChain
+from springchain.numeric.integrators.blanes_moan4 import BLANES_MOAN4
+from springchain.numeric.integrators.blanes_moan6 import BLANES_MOAN6
+from springchain.numeric.integrators.chebyshev import ChebyshevCoefficients
+from springchain.numeric.integrators.coefficients import CompositionTable, SplittingTable
+from springchain.numeric.integrators.kahan_li import KAHAN_LI8
+from springchain.numeric.integrators.splitting import SplittingMethod
+from springchain.numeric.integrators.yoshida import YOSHIDA4
 
 SPLITTING = {name: cls for name, cls in INTEGRATORS.items() if issubclass(cls, SplittingMethod)}
 COMPOSITIONS = [YOSHIDA4, KAHAN_LI8]

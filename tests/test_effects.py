@@ -17,10 +17,10 @@ import scipy.linalg
 import sympy
 from scipy.integrate import solve_ivp
 
-from derive.pipeline import derive, load_module
-from derive.scene import load_scene
-from numeric.simulate import run_methods, stream_methods
-from numeric.system import System
+from springchain._modules import derive, load_module
+from springchain.derive.scene import load_scene
+from springchain.numeric.simulate import run_methods, stream_methods
+from springchain.numeric.system import System
 
 ROOT = Path(__file__).resolve().parent.parent
 SCENES = ROOT / "scenes"
@@ -244,8 +244,8 @@ def test_hanging_chain_at_static_equilibrium_stays_there():
     for r in run.values():
         assert np.max(np.abs(r.x - x_eq)) <= 1e-10 * np.max(np.abs(x_eq))
     # the reported sag agrees
-    from derive.model import Model
-    from derive.report import static_equilibrium
+    from springchain.derive.model import Model
+    from springchain.derive.report import static_equilibrium
 
     sag = static_equilibrium(Model(scene))
     values = {sympy.Symbol(k, positive=True): v for k, v in scene.parameters.items()}
@@ -267,7 +267,7 @@ def test_damped_energy_balance():
 
 
 def test_nonlinear_scene_refuses_modal():
-    from derive.cli import main
+    from springchain.cli import main
 
     assert main(["simulate", str(SCENES / "duffing.toml"), "--method", "modal", "--no-figures",
                  "--out", "/nonexistent-never-written"]) == 2
@@ -355,10 +355,10 @@ def test_long_chain_streams_with_bounded_memory(tmp_path):
 @pytest.mark.parametrize("ends", [("free", "free"), ("wall", "free"), ("ring", "ring")])
 def test_chain_verlet_fused_kernel_equals_plain_verlet(ends):
     """simulate's chain Verlet (fused kernel) is the same scheme as the reference Verlet."""
-    from numeric.driver import integrate
-    from numeric.integrators import VelocityVerlet
-    from numeric.integrators.base import Problem
-    from numeric.simulate import FusedChainVerlet
+    from springchain.numeric.driver import integrate
+    from springchain.numeric.integrators import VelocityVerlet
+    from springchain.numeric.integrators.base import Problem
+    from springchain.numeric.simulate import FusedChainVerlet
 
     scene = load_scene("ch.toml", text=chain_scene(257, *ends, mass="m*(1 + i % 2)", k="k*(1 + 0.01*i)"))
     module, _ = load_module(scene)

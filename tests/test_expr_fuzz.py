@@ -32,10 +32,10 @@ import sympy as sp
 from hypothesis import assume, example, given, settings
 from hypothesis import strategies as st
 
-import derive.expr as expr_mod
-from derive.errors import SceneError
-from derive.expr import MAX_DEPTH, MAX_LENGTH, MAX_TOTAL_EXPONENT, parse_expression
-from derive.scene import load_scene
+import springchain.derive.expr as expr_mod
+from springchain.derive.errors import SceneError
+from springchain.derive.expr import MAX_DEPTH, MAX_LENGTH, MAX_TOTAL_EXPONENT, parse_expression
+from springchain.derive.scene import load_scene
 
 EXAMPLES = max(200, settings.default.max_examples)
 NAMES = ("a", "b", "c")

@@ -18,10 +18,10 @@ import importlib
 import numpy as np
 import pytest
 
-from derive.chain import ChainModel, render_chain_module
-from derive.scene import load_scene
-from numeric import fast
-from numeric.errors import RunRefused
+from springchain.derive.chain import ChainModel, render_chain_module
+from springchain.derive.scene import load_scene
+from springchain.numeric import fast
+from springchain.numeric.errors import RunRefused
 
 ENDS = [("free", "free"), ("wall", "wall"), ("wall", "free"), ("free", "wall"), ("ring", "ring")]
 BACKENDS = [fast.Backend.NUMPY] + ([fast.Backend.NUMBA] if fast.available() else [])
@@ -170,7 +170,7 @@ def test_kernel_contract_inplace_and_not(chain_module, backend):
 
 
 def test_uniform_module_has_scalar_coefficients():
-    module = importlib.import_module("generated.chain100k")
+    module = importlib.import_module("springchain.generated.chain100k")
     c = fast.ChainCoefficients.from_module(module, None, 10)
     assert c.uniform and c.inv_mass.shape == (1,) and c.k.shape == (1,)
     assert c.left is fast.End.FREE and c.right is fast.End.FREE and not c.cubic
@@ -223,9 +223,9 @@ def test_available_is_a_bool_and_backend_follows_it():
 def test_inplace_kernel_runs_in_the_driver(chain_module):
     """The hook the integrator can use: an in-place fused kernel under numeric.driver.integrate
     records the same trajectory as the NumPy verlet kernel (the driver copies what it records)."""
-    from numeric.driver import integrate
-    from numeric.integrators.base import Problem
-    from numeric.integrators.verlet import VelocityVerlet
+    from springchain.numeric.driver import integrate
+    from springchain.numeric.integrators.base import Problem
+    from springchain.numeric.integrators.verlet import VelocityVerlet
 
     module = chain_module("wall", "free", True)
     n, h, steps = 200, 0.3, 60

@@ -24,8 +24,9 @@ import sympy as sp
 from hypothesis import given
 from hypothesis import strategies as st
 
-from derive.pipeline import derive
-from derive.scene import bundled_scenes, load_scene
+from springchain._modules import derive
+from springchain._scenes import bundled_scenes
+from springchain.derive.scene import load_scene
 
 BUNDLED = bundled_scenes()
 #: Example scenes (tests/conftest.py) rendered to temporary modules.
@@ -254,8 +255,8 @@ def test_render_is_identical_under_another_hash_seed(tmp_path, seed_path, derive
     here = {str(seed_path): derived("seed").source,
             str(scene_file): derive(load_scene(scene_file)).source}
     code = ("import json, sys\n"
-            "from derive.pipeline import derive\n"
-            "from derive.scene import load_scene\n"
+            "from springchain._modules import derive\n"
+            "from springchain.derive.scene import load_scene\n"
             "print(json.dumps({p: derive(load_scene(p)).source for p in sys.argv[1:]}))\n")
     seed = "4242" if os.environ.get("PYTHONHASHSEED") != "4242" else "17"
     env = {**os.environ, "PYTHONHASHSEED": seed}

@@ -22,13 +22,13 @@ import pytest
 import scipy.linalg
 from scipy.integrate import solve_ivp
 
-from numeric.driver import integrate, record_indices, step_grid
-from numeric.errors import RunRefused
-from numeric.integrators import ADAPTIVE, INTEGRATORS, LinearChain, Problem
-from numeric.integrators.chebyshev import ChebyshevCoefficients, ChebyshevPropagator
-from numeric.integrators.expm import step_matrix
-from numeric.modal import ModalSolution
-from numeric.spectrum import incidence, spectrum
+from springchain.numeric.driver import integrate, record_indices, step_grid
+from springchain.numeric.errors import RunRefused
+from springchain.numeric.integrators import ADAPTIVE, INTEGRATORS, LinearChain, Problem
+from springchain.numeric.integrators.chebyshev import ChebyshevCoefficients, ChebyshevPropagator
+from springchain.numeric.integrators.expm import step_matrix
+from springchain.numeric.modal import ModalSolution
+from springchain.numeric.spectrum import incidence, spectrum
 
 FINITE_ORDER = [name for name, cls in INTEGRATORS.items() if math.isfinite(cls.order)]
 PROPAGATORS = ["expm", "chebyshev"]

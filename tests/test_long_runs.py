@@ -20,12 +20,12 @@ import os
 import numpy as np
 import pytest
 
-from numeric.driver import integrate
-from numeric.integrators import VelocityVerlet
-from numeric.integrators.base import Problem
-from numeric.integrators.verlet_compensated import CompensatedVerlet
-from numeric.modal import ModalSolution
-from numeric.spectrum import free_pieces, spectrum, stiffness_matrix
+from springchain.numeric.driver import integrate
+from springchain.numeric.integrators import VelocityVerlet
+from springchain.numeric.integrators.base import Problem
+from springchain.numeric.integrators.verlet_compensated import CompensatedVerlet
+from springchain.numeric.modal import ModalSolution
+from springchain.numeric.spectrum import free_pieces, spectrum, stiffness_matrix
 
 EPS = np.finfo(float).eps
 BUDGET = float(os.environ.get("SPRINGCHAIN_SLOW_BUDGET", "1"))

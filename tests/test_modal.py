@@ -8,10 +8,10 @@ import warnings
 import numpy as np
 import pytest
 
-from numeric.modal import ModalSolution, tsinc
-from numeric.simulate import system_spectrum
-from numeric.spectrum import spectrum
-from numeric.system import System
+from springchain.numeric.modal import ModalSolution, tsinc
+from springchain.numeric.simulate import system_spectrum
+from springchain.numeric.spectrum import spectrum
+from springchain.numeric.system import System
 
 
 @pytest.fixture(scope="module")

@@ -18,16 +18,16 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-import generated.seed as seed_module
-from numeric.bench import ExtendedModalReference
-from numeric.driver import integrate, step_grid
-from numeric.error_models import LinearChainModel, OscillatorResponse, PowerLaw
-from numeric.integrators import INTEGRATORS
-from numeric.integrators.base import Problem
-from numeric.integrators.verlet import VelocityVerlet
-from numeric.plan import Planner
-from numeric.spectrum import spectrum
-from numeric.system import System
+import springchain.generated.seed as seed_module
+from springchain.numeric.bench import ExtendedModalReference
+from springchain.numeric.driver import integrate, step_grid
+from springchain.numeric.error_models import LinearChainModel, OscillatorResponse, PowerLaw
+from springchain.numeric.integrators import INTEGRATORS
+from springchain.numeric.integrators.base import Problem
+from springchain.numeric.integrators.verlet import VelocityVerlet
+from springchain.numeric.plan import Planner
+from springchain.numeric.spectrum import spectrum
+from springchain.numeric.system import System
 
 ROOT = Path(__file__).resolve().parent.parent
 SEED = ROOT / "scenes" / "seed.toml"
@@ -60,7 +60,7 @@ def measured_error(problem, reference, integrator, t_end, dt):
 
 # -- JSON shape ---------------------------------------------------------------------------------------
 def test_plan_json_shape():
-    from derive.cli import main
+    from springchain.cli import main
 
     buf = io.StringIO()
     with redirect_stdout(buf):
@@ -86,7 +86,7 @@ def test_plan_json_shape():
 
 
 def test_plan_unreachable_tolerance_exits_2(capsys):
-    from derive.cli import main
+    from springchain.cli import main
 
     assert main(["plan", str(SEED), "--tol", "1e-17"]) == 2
     err = capsys.readouterr().err

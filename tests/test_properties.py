@@ -16,11 +16,11 @@ import numpy as np
 from hypothesis import assume, example, given, settings
 from hypothesis import strategies as st
 
-from numeric.driver import integrate
-from numeric.integrators import VelocityVerlet
-from numeric.integrators.base import Problem
-from numeric.modal import ModalSolution
-from numeric.spectrum import incidence, spectrum, stiffness_matrix
+from springchain.numeric.driver import integrate
+from springchain.numeric.integrators import VelocityVerlet
+from springchain.numeric.integrators.base import Problem
+from springchain.numeric.modal import ModalSolution
+from springchain.numeric.spectrum import incidence, spectrum, stiffness_matrix
 
 EPS = np.finfo(float).eps
 

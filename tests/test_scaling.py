@@ -24,16 +24,16 @@ import numpy as np
 import pytest
 import sympy as sp
 
-from derive import symbolic_cost
-from derive.chain import ChainModel, render_chain_module
-from derive.scene import load_scene
-from numeric import fast, scaling
-from numeric.chain_modal import ChainModal
+from springchain import symbolic_cost
+from springchain.derive.chain import ChainModel, render_chain_module
+from springchain.derive.scene import load_scene
+from springchain.numeric import fast, scaling
+from springchain.numeric.chain_modal import ChainModal
 
 
 @pytest.fixture(scope="module")
 def cases(import_source):
-    uniform = importlib.import_module("generated.chain100k")
+    uniform = importlib.import_module("springchain.generated.chain100k")
     text = symbolic_cost.chain_scene_text(50, mass=symbolic_cost.RANDOM_MASS, k=symbolic_cost.RANDOM_K,
                                           name="test_random")
     random = import_source(render_chain_module(ChainModel(load_scene("random.toml", text)), bundled=False),
@@ -45,7 +45,7 @@ def cases(import_source):
 @pytest.mark.parametrize("tol", [1e-3, 1e-5])
 def test_error_model_step_meets_tolerance(tol):
     """Verlet with the model's step errs by at most ~tol (relative to the amplitude), and not 100× less."""
-    module = importlib.import_module("generated.chain100k")
+    module = importlib.import_module("springchain.generated.chain100k")
     n, t_end = 12, 40.0
     omega_max = 2.0 * math.sqrt(1.0 / 1.0)  # uniform chain, m = k = 1: ω_max < 2√(k/m)
     h0 = scaling.verlet_step_for(t_end, tol, omega_max)
@@ -185,7 +185,7 @@ def test_ratios_and_markdown_from_records():
 
 
 def test_cli_scaling_writes_its_files(tmp_path, capsys, monkeypatch):
-    from derive.cli import main
+    from springchain.cli import main
 
     quick = scaling.interleaved_samples
     monkeypatch.setattr(scaling, "interleaved_samples",

@@ -21,7 +21,7 @@ import mpmath as mp
 import numpy as np
 import pytest
 
-from numeric.special import (FreeResponse, damped_free, damped_free_rate, omega_from_omega2, sinc, sinhc, tsinc,
+from springchain.numeric.special import (FreeResponse, damped_free, damped_free_rate, omega_from_omega2, sinc, sinhc, tsinc,
                              undamped_forced_cos, undamped_forced_sin)
 
 EPS = np.finfo(float).eps

@@ -23,8 +23,8 @@ import scipy.linalg
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from numeric.modal import ModalSolution
-from numeric.spectrum import rigid_basis, spectrum, stiffness_matrix
+from springchain.numeric.modal import ModalSolution
+from springchain.numeric.spectrum import rigid_basis, spectrum, stiffness_matrix
 
 EPS = np.finfo(float).eps
 OMEGA_RTOL = 1e-12

@@ -14,8 +14,8 @@ import pytest
 import scipy.linalg
 import sympy as sp
 
-from derive.model import Model
-from derive.modes import closed_form_modes
+from springchain.derive.model import Model
+from springchain.derive.modes import closed_form_modes
 
 
 def _is_zero(expr) -> bool:
@@ -260,7 +260,7 @@ def test_one_free_mass(derived):
 # -- gravity and cubic springs: the model's terms are the gradient of V -------------------------------
 @pytest.mark.parametrize("name", ["seed", "wall2", "nonneigh", "hanging", "cubic"])
 def test_terms_are_minus_grad_V(derived, name):
-    from derive.model import Effect
+    from springchain.derive.model import Effect
 
     model = derived(name).model
     forces = model.force_expressions(Effect.SPRING, Effect.CUBIC, Effect.GRAVITY)

@@ -12,12 +12,12 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from numeric.driver import integrate
-from numeric.integrators import INTEGRATORS, Problem, VelocityVerlet
-from numeric.modal import ModalSolution
-from numeric.spectrum import incidence
-from numeric.simulate import check_stable, compare, run_methods, system_spectrum
-from numeric.errors import RunRefused
+from springchain.numeric.driver import integrate
+from springchain.numeric.integrators import INTEGRATORS, Problem, VelocityVerlet
+from springchain.numeric.modal import ModalSolution
+from springchain.numeric.spectrum import incidence
+from springchain.numeric.simulate import check_stable, compare, run_methods, system_spectrum
+from springchain.numeric.errors import RunRefused
 
 
 @pytest.fixture(scope="module")

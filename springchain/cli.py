@@ -13,7 +13,8 @@ import sys
 import time
 from pathlib import Path
 
-from .errors import SceneError
+from . import __version__
+from .derive.errors import SceneError
 
 EXIT_USAGE = 2
 
@@ -48,186 +49,117 @@ def _positive_int(flag):
     return conv
 
 
-def _seed_scene() -> Path:
-    from .scene import bundled_scene_dir
-
-    return bundled_scene_dir() / "seed.toml"
-
-
-# -- commands ---------------------------------------------------------------------------
+# -- commands: parse, call the API, print -------------------------------------------------------
 def cmd_derive(args) -> int:
-    from . import pipeline
-    from .scene import bundled_scenes, load_scene
+    from . import _modules
+    from ._api import load
+    from ._scenes import bundled_scenes
 
-    paths = [Path(p) for p in args.scene] or bundled_scenes()
-    scenes = [load_scene(p) for p in paths]  # validate everything before writing anything
-    out = Path(args.out) if args.out else Path.cwd() / "generated"
+    sources = args.scene or bundled_scenes()
+    if not sources:
+        raise SceneError(None, "SCENE", "no scene given and no bundled scenes found; accepted: scene files")
+    scenes = [load(p) for p in sources]  # validate everything before writing anything
+    out = Path(args.out) if args.out else (None if args.check else Path.cwd() / "generated")
     status = 0
     for scene in scenes:
         t0 = time.perf_counter()
         if args.check:
-            ok, msg = pipeline.check(scene, out)
+            ok, msg = _modules.check(scene, out)
             print(("ok     " if ok else "STALE  ") + msg)
             status |= 0 if ok else 1
         else:
-            d = pipeline.derive(scene)
-            path = pipeline.write(d, out)
+            d = _modules.derive(scene)
+            path = _modules.write(d, out)
             print(f"wrote {path} ({len(d.source.splitlines())} lines, {time.perf_counter() - t0:.2f} s)")
     return status
 
 
 def cmd_modes(args) -> int:
-    from . import pipeline
-    from .scene import load_scene
+    from ._api import modes
 
-    scene = load_scene(args.scene)
-    d = pipeline.derive(scene)
-    if scene.chain is not None:
-        from .chain import chain_report
-
-        text, data = chain_report(d.model, d.modes)
-        print(json.dumps(data, indent=2) if args.json else text, end="" if not args.json else "\n")
-        return 0
-    from .report import modes_json, render_latex, render_text
-
+    m = modes(args.scene)
     if args.json:
-        print(json.dumps(modes_json(d.model, d.modes), indent=2))
+        print(json.dumps(m.to_json(), indent=2))
     elif args.latex:
-        print(render_latex(d.model, d.modes), end="")
+        print(m.to_latex(), end="")
     else:
-        print(render_text(d.model, d.modes), end="")
+        print(m.to_text(), end="")
     return 0
 
 
-def _simulate(scene, args, out: Path, quiet_json: bool) -> dict:
-    import numpy as np
+def _print_simulation(result) -> None:
+    s = result.summary
+    print(f"simulated {s['scene']!r}: {', '.join(s['methods'])}; dt = {s['dt']:g}, {s['steps']} steps, "
+          f"t_end = {s['t_end']:g} (module: {s['module']}); methods that apply: {s['methods_that_apply']}")
+    conservative = s["energy_conserved"]
+    for name, rec in s["methods"].items():
+        line = f"  {name:<13} {rec['seconds'] * 1e3:9.2f} ms"
+        if "max_position_difference" in rec:
+            line += (f"   max |x - x_exact| = {rec['max_position_difference']:.3e}"
+                     f"   max |v - v_exact| = {rec['max_velocity_difference']:.3e}")
+        if not conservative:
+            line += f"   energy change = {rec['energy_drift']:.3e} (not conserved: damping/forcing)"
+        else:
+            line += f"   energy drift = {rec['energy_drift']:.3e} (rel {rec['energy_drift_relative']:.2e})"
+        print(line)
+    if s["npz"]:
+        print(f"  wrote {s['npz']}")
+    for p in s["figures"]:
+        print(f"  wrote {p}")
 
-    from numeric.simulate import compare, method_names, run_methods, stream_methods, write_figures, write_npz
-    from numeric.system import System
 
-    from .pipeline import load_module
-    from .scene import check_memory
+def _simulate(args, scene) -> "object":
+    from ._api import simulate
 
-    module, origin = load_module(scene)
-    system = System.from_module(module)
-    dt = args.dt if args.dt is not None else scene.dt
-    steps = args.steps if args.steps is not None else scene.steps
-    record_every = args.record_every or scene.record_every
-    methods = args.method or (method_names()[:2] if system.exact_available and not
-                              (system.chain and not system.module.UNIFORM and system.n > 4000) else ["verlet"])
-    unknown = [m for m in methods if m not in method_names()]
-    if unknown:
-        raise SceneError(None, "--method", f"{unknown[0]!r} is not a method; accepted: {', '.join(method_names())}")
-    check_memory(scene.file, scene.n, steps, record_every, methods=len(methods),
-                 key="--steps" if args.steps is not None else "simulation.steps")
-    out.mkdir(parents=True, exist_ok=True)
-    if system.chain:
-        summary = stream_methods(system, scene.x0, scene.v0, dt, steps, methods, record_every, out,
-                                 scene.name, figures=not args.no_figures)
-        npz, figures = Path(summary["npz"]), [Path(p) for p in summary["figures"]]
-    else:
-        runs = run_methods(system, scene.x0, scene.v0, dt, steps, methods, record_every,
-                           spectrum_source=args.spectrum, rtol=args.rtol, atol=args.atol)
-        summary = compare(system, runs)
-        npz = out / f"{scene.name}.npz"
-        write_npz(npz, runs)
-        figures = [] if args.no_figures else write_figures(out, scene.name, scene.mass_names, system, runs)
-    summary.update({"scene": scene.name, "module": origin, "dt": dt, "steps": steps,
-                    "t_end": steps * dt, "npz": str(npz), "figures": [str(p) for p in figures]})
-    if not quiet_json:
-        long_chain = system.chain and not system.module.UNIFORM and system.n > 4000
-        applies = ("integrators (an index-dependent chain has an exact solution up to 4000 masses)" if long_chain
-                   else "modal (exact) and every integrator") if system.exact_available else (
-            "integrators only (" + ("cubic springs" if not system.linear else "non-harmonic forces")
-            + ": no exact solution)")
-        print(f"simulated {scene.name!r}: {', '.join(methods)}; dt = {dt:g}, {steps} steps, "
-              f"t_end = {steps * dt:g} (module: {origin}); methods that apply: {applies}")
-        for name, rec in summary["methods"].items():
-            line = f"  {name:<13} {rec['seconds'] * 1e3:9.2f} ms"
-            if "max_position_difference" in rec:
-                line += (f"   max |x - x_exact| = {rec['max_position_difference']:.3e}"
-                         f"   max |v - v_exact| = {rec['max_velocity_difference']:.3e}")
-            if system.damped or system.forced:
-                line += f"   energy change = {rec['energy_drift']:.3e} (not conserved: damping/forcing)"
-            else:
-                line += f"   energy drift = {rec['energy_drift']:.3e} (rel {rec['energy_drift_relative']:.2e})"
-            print(line)
-        print(f"  wrote {npz}")
-        for p in figures:
-            print(f"  wrote {p}")
-    del np
-    return summary
+    try:
+        return simulate(scene, methods=args.method, dt=args.dt, steps=args.steps, record_every=args.record_every,
+                        spectrum=args.spectrum, rtol=args.rtol, atol=args.atol, out=args.out,
+                        figures=not args.no_figures)
+    except SceneError as exc:  # name the flag that set the value, when one did
+        flag = {"steps": "--steps" if args.steps is not None else "simulation.steps"}.get(exc.key)
+        if flag and flag != exc.key:
+            raise SceneError(exc.file, flag, exc.detail) from None
+        raise
 
 
 def cmd_simulate(args) -> int:
-    from .scene import load_scene
-
-    scene = load_scene(args.scene)
-    summary = _simulate(scene, args, Path(args.out), args.json)
+    result = _simulate(args, args.scene)
     if args.json:
-        print(json.dumps(summary, indent=2))
+        print(json.dumps(result.summary, indent=2))
+    else:
+        _print_simulation(result)
     return 0
 
 
 def cmd_run(args) -> int:
-    from . import pipeline
-    from .report import render_text
-    from .scene import load_scene
+    from . import _modules
+    from ._api import load, modes
+    from ._scenes import display_path, resolve
 
     t0 = time.perf_counter()
-    seed = _seed_scene()
-    try:
-        shown = seed.relative_to(Path.cwd())
-    except ValueError:
-        shown = seed
-    scene = load_scene(shown)
-    d = pipeline.derive(scene)
-    print(render_text(d.model, d.modes))
-    path = pipeline.module_path(scene)
-    fresh = path.exists() and path.read_text(encoding="utf-8") == d.source
-    if fresh:
-        print(f"generated module {path} is fresh (equals a new render)")
+    scene = load(display_path(resolve("seed")))
+    m = modes(scene)
+    print(m.to_text())
+    path = _modules.module_path(scene)
+    d = _modules.derive(scene)
+    if path.exists() and path.read_text(encoding="utf-8") == d.source:
+        print(f"generated module {display_path(path)} is fresh (equals a new render)")
     else:
-        print(f"generated module {path} is STALE: regenerate with `springchain derive` in the repository root")
+        print(f"generated module {display_path(path)} is STALE: regenerate with `springchain derive`")
     print()
     args.method, args.dt, args.steps, args.record_every = None, None, None, None
     args.spectrum, args.no_figures, args.rtol, args.atol = "svd", False, 1e-10, 1e-12
-    _simulate(scene, args, Path(args.out), False)
+    _print_simulation(_simulate(args, scene))
     print(f"\nfigures and data are in {Path(args.out).resolve()}  ({time.perf_counter() - t0:.2f} s in all)")
     return 0
 
 
-def _bench_inputs(scene_path, t_end):
-    """Scene, system and horizon for bench/plan (the generated module, no SymPy for bundled scenes)."""
-    from numeric.system import System
-
-    from .pipeline import load_module
-    from .scene import load_scene
-
-    scene = load_scene(scene_path if scene_path else _seed_scene())
-    module, _ = load_module(scene)
-    system = System.from_module(module)
-    horizon = t_end if t_end is not None else scene.dt * scene.steps
-    return scene, system, horizon
-
-
 def cmd_bench(args) -> int:
-    from numeric.bench import BenchConfig, markdown_table, run_bench, with_derive_seconds, write_outputs
-    from numeric.timing import single_threaded_blas
+    from ._api import bench
+    from .numeric.bench import markdown_table, write_outputs
 
-    from . import pipeline
-
-    scene, system, horizon = _bench_inputs(args.scene, args.t_end)
-    import sympy  # noqa: F401  (imported before timing: the derive time excludes the SymPy import)
-
-    t0 = time.perf_counter()
-    pipeline.derive(scene)
-    derive_seconds = time.perf_counter() - t0
-    config = BenchConfig.quick_config() if args.quick else BenchConfig()
-    with single_threaded_blas():
-        result = run_bench(system, scene.x0, scene.v0, horizon, scene.dt * scene.record_every, scene.name,
-                           config, progress=not args.no_progress, methods=tuple(args.method or ()) or None)
-    result = with_derive_seconds(result, derive_seconds)
+    result = bench(args.scene or "seed", args.t_end, quick=args.quick, methods=args.method,
+                   progress=not args.no_progress)
     paths = write_outputs(result, Path(args.out))
     if args.json:
         print(json.dumps(result.as_json(), indent=1, default=float))
@@ -239,44 +171,34 @@ def cmd_bench(args) -> int:
 
 
 def cmd_plan(args) -> int:
-    from numeric.errors import RunRefused
-    from numeric.plan import Planner
-    from numeric.timing import single_threaded_blas
+    from ._api import load, plan
 
-    scene, system, horizon = _bench_inputs(args.scene, args.t_end)
-    if system.damped or system.forced or "gravity" in system.effects:
-        raise RunRefused(f"plan covers conservative scenes (springs, cubic springs); {scene.name!r} has "
-                         "dampers, forces or gravity")
-    with single_threaded_blas():
-        planner = Planner.for_system(system, scene.x0, scene.v0, horizon, scene.dt * scene.record_every)
-        try:
-            plan = planner.plan(args.tol)
-        except ValueError as exc:
-            raise RunRefused(f"--tol {args.tol:g}: {exc}") from None
+    scene = load(args.scene)
+    result = plan(scene, args.tol, args.t_end)
     if args.json:
-        print(json.dumps(plan.as_json(), indent=2))
+        print(json.dumps(result.as_json(), indent=2))
         return 0
+    horizon = args.t_end if args.t_end is not None else scene.dt * scene.steps
     print(f"plan for {scene.name!r}: largest position error <= {args.tol:g} over t = 0 ... {horizon:g} "
           f"(error as in `springchain bench`: max over every step, or the output grid)")
     print(f"{'method':<14}{'dt / rtol':>14}{'steps':>14}{'predicted error':>17}{'predicted s':>14}  model")
-    for c in sorted(plan.candidates, key=lambda c: c.predicted_seconds):
+    for c in sorted(result.candidates, key=lambda c: c.predicted_seconds):
         setting = f"{c.dt:.6g}" if c.dt is not None else (f"rtol {c.rtol:.2g}" if c.rtol is not None else "-")
         steps = str(c.steps) if c.steps is not None else "-"
         print(f"{c.name:<14}{setting:>14}{steps:>14}{c.predicted_error:>17.3e}{c.predicted_seconds:>14.3e}  {c.model}")
-    for c in plan.unreachable:
+    for c in result.unreachable:
         print(f"{c.name:<14} cannot reach {args.tol:g}: best predicted {c.predicted_error:.2e} ({c.model or 'floor'})")
-    r = plan.recommended
+    r = result.recommended
     how = f"dt = {r.dt:.6g}" if r.dt is not None else (f"rtol = {r.rtol:.2g}" if r.rtol is not None else "no step")
     print(f"recommended: {r.name} ({how}), predicted error {r.predicted_error:.2e} in {r.predicted_seconds:.3g} s")
     return 0
 
 
 def cmd_scaling(args) -> int:
-    """Scaling to long chains (numeric.scaling) and the symbolic cost (derive.symbolic_cost)."""
-    from numeric import scaling
-    from numeric.errors import RunRefused
-
+    """Scaling to long chains (numeric.scaling) and the symbolic cost (symbolic_cost)."""
     from . import symbolic_cost
+    from .numeric import scaling
+    from .numeric.errors import RunRefused
 
     if args.max_n < 3:
         raise RunRefused(f"--max-n {args.max_n}: accepted: a whole number >= 3")
@@ -313,6 +235,7 @@ def build_parser() -> argparse.ArgumentParser:
                             "normal modes (SymPy) -> generated NumPy code -> exact and numerical "
                             "simulations with plots.",
                 epilog="Start with `springchain run` (the bundled three-mass reference scene).")
+    p.add_argument("--version", action="version", version=f"springchain {__version__}")
     sub = p.add_subparsers(dest="command", required=True, parser_class=_Parser)
 
     r = sub.add_parser("run", help="the main job on the bundled reference scene",
@@ -326,7 +249,7 @@ def build_parser() -> argparse.ArgumentParser:
     d = sub.add_parser("derive", help="generate NumPy modules from scenes",
                        description="Derive each scene and write DIR/<name>.py (plain NumPy, deterministic). "
                                    "With no SCENE: every bundled scene.")
-    d.add_argument("scene", nargs="*", help="scene files (default: all bundled scenes)")
+    d.add_argument("scene", nargs="*", help="scene files or bundled names (default: all bundled scenes)")
     d.add_argument("--out", help="folder for the modules (default: ./generated under the current folder)")
     d.add_argument("--check", action="store_true",
                    help="write nothing; exit 1 if a module on disk differs from a fresh render")
@@ -334,19 +257,20 @@ def build_parser() -> argparse.ArgumentParser:
 
     m = sub.add_parser("modes", help="print equations of motion and closed-form normal modes",
                        description="Print the Lagrangian derivation and the normal modes of a scene.")
-    m.add_argument("scene", help="scene file (TOML)")
+    m.add_argument("scene", help="a scene file (TOML) or the name of a bundled scene, e.g. seed")
     g = m.add_mutually_exclusive_group()
     g.add_argument("--json", action="store_true", help="print one JSON object (see README) and nothing else")
     g.add_argument("--latex", action="store_true", help="print the derivation as LaTeX (amsmath)")
     m.set_defaults(func=cmd_modes)
 
-    from numeric.simulate import method_names
+    from .numeric.methods import METHOD_NAMES
 
+    method_names = lambda: METHOD_NAMES  # noqa: E731
     s = sub.add_parser("simulate", help="simulate a scene with exact and numerical methods",
                        description="Run the chosen methods from the scene's initial state and write "
                                    "DIR/<name>.npz (t, x_<method>, v_<method>) and PNG figures: positions, "
                                    "velocities, method - exact, energy.")
-    s.add_argument("scene", help="scene file (TOML)")
+    s.add_argument("scene", help="a scene file (TOML) or the name of a bundled scene, e.g. seed")
     s.add_argument("--method", action="append", choices=method_names(), metavar="NAME",
                    help=f"method to run, repeatable ({', '.join(method_names())}; default: modal and verlet "
                         "for linear scenes, verlet otherwise)")
@@ -371,7 +295,7 @@ def build_parser() -> argparse.ArgumentParser:
                                    "precision) or very accurate reference, count force evaluations and time "
                                    "each run (min of repeats, single-threaded BLAS). Writes bench-<scene>.md, "
                                    ".json, a work-precision figure and an error-vs-horizon figure.")
-    b.add_argument("scene", nargs="?", help="scene file (default: the bundled reference scene seed.toml)")
+    b.add_argument("scene", nargs="?", help="a scene file or bundled name (default: seed, the reference scene)")
     b.add_argument("--t-end", type=_positive_float("--t-end"),
                    help="horizon T (default: the scene's dt x steps)")
     b.add_argument("--quick", action="store_true", help="a small sweep (seconds, for tests)")
@@ -387,7 +311,7 @@ def build_parser() -> argparse.ArgumentParser:
                         description="Predict, from closed-form error models and measured costs, the step (or "
                                     "tolerance) each method needs to keep the largest position error below TOL "
                                     "over the horizon, and recommend the cheapest.")
-    pl.add_argument("scene", help="scene file (TOML)")
+    pl.add_argument("scene", help="a scene file (TOML) or the name of a bundled scene, e.g. seed")
     pl.add_argument("--tol", type=_positive_float("--tol"), required=True, help="largest position error allowed")
     pl.add_argument("--t-end", type=_positive_float("--t-end"), help="horizon T (default: the scene's dt x steps)")
     pl.add_argument("--json", action="store_true", help="print one JSON object and nothing else")
@@ -418,7 +342,7 @@ def main(argv: list[str] | None = None) -> int:
         sys.stderr.write(f"springchain: error: {exc}\n")
         return EXIT_USAGE
     except ValueError as exc:  # numeric refusals (RunRefused) and other input problems
-        from numeric.errors import RunRefused
+        from .numeric.errors import RunRefused
 
         if isinstance(exc, RunRefused):
             sys.stderr.write(f"springchain: error: {exc}\n")

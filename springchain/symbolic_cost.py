@@ -93,10 +93,11 @@ def scaling_cases():
     -------
     uniform, random : numeric.scaling.ChainCase
     """
-    from numeric.scaling import ChainCase
+    from .numeric.scaling import ChainCase
 
-    from .pipeline import load_module
-    from .scene import bundled_scene_dir, load_scene
+    from ._modules import load_module
+    from ._scenes import bundled_scene_dir
+    from .derive.scene import load_scene
 
     uniform, _ = load_module(load_scene(bundled_scene_dir() / "chain100k.toml"))
     text = chain_scene_text(1000, mass=RANDOM_MASS, k=RANDOM_K, name="scaling_random")
@@ -134,8 +135,8 @@ def lagrange_matrices(n: int):
 
 def model_matrices(n: int):
     """M and K of :class:`derive.model.Model` for the ``[masses]`` chain of :func:`masses_scene_text`."""
-    from .model import Model
-    from .scene import load_scene
+    from .derive.model import Model
+    from .derive.scene import load_scene
 
     model = Model(load_scene(f"cost{n}.toml", masses_scene_text(n)))
     return model.M, model.K
@@ -153,10 +154,10 @@ def work(route: Route, n: int) -> dict:
         return {"equations": total, "total": total}
     import sympy  # noqa: F401
 
-    from .scene import load_scene
+    from .derive.scene import load_scene
 
     if route is Route.CHAIN:
-        from .chain import ChainModel, chain_modes, render_chain_module
+        from .derive.chain import ChainModel, chain_modes, render_chain_module
 
         t0 = time.perf_counter()
         scene = load_scene(f"costchain{n}.toml", chain_scene_text(n))
@@ -169,9 +170,9 @@ def work(route: Route, n: int) -> dict:
         t3 = time.perf_counter()
         return {"scene": t1 - t0, "equations": t2 - t1, "codegen": t3 - t2, "total": t3 - t0,
                 "modes": 0.0, "closed_form": modes.closed_form, "source_lines": source.count("\n")}
-    from .codegen import render_module
-    from .model import Model
-    from .modes import DEFAULT_BUDGET, closed_form_modes
+    from .derive.codegen import render_module
+    from .derive.model import Model
+    from .derive.modes import DEFAULT_BUDGET, closed_form_modes
 
     t0 = time.perf_counter()
     scene = load_scene(f"cost{n}.toml", masses_scene_text(n))
@@ -193,6 +194,7 @@ def work(route: Route, n: int) -> dict:
 # -- the routes, each in a fresh process ------------------------------------------------------------
 def _python_env() -> dict:
     env = dict(os.environ)
+    # the child imports the same springchain as this process (installed or editable)
     root = str(Path(__file__).resolve().parent.parent)
     env["PYTHONPATH"] = root + (os.pathsep + env["PYTHONPATH"] if env.get("PYTHONPATH") else "")
     return env
@@ -216,7 +218,7 @@ def measure(route: Route, n: int, timeout: float = CASE_TIMEOUT) -> dict:
     """
     t0 = time.perf_counter()
     try:
-        done = subprocess.run([sys.executable, "-m", "derive.symbolic_cost", route.value, str(n)],
+        done = subprocess.run([sys.executable, "-m", "springchain.symbolic_cost", route.value, str(n)],
                               capture_output=True, text=True, timeout=timeout, env=_python_env())
     except subprocess.TimeoutExpired:
         return {"timeout": True, "wall": time.perf_counter() - t0, "total": None}
@@ -319,9 +321,11 @@ def markdown(result: SymbolicResult) -> str:
 
 def figure(result: SymbolicResult):
     """Work seconds vs N (log–log), one line per route (and the modes share of [masses])."""
-    import matplotlib.pyplot as plt
+    import matplotlib
 
-    fig, ax = plt.subplots(figsize=(8, 5), constrained_layout=True)
+    from .numeric.plots import new_figure
+
+    fig, ax = new_figure(figsize=(8, 5))
     styles = {Route.CHAIN: ("C2", "o-"), Route.ELEMENTS: ("C0", "s-"), Route.LAGRANGE: ("C3", "^-")}
     for route, (color, style) in styles.items():
         pts = sorted((r["n"], r["total"]) for r in result.records if r["route"] == route.value and r.get("total"))
@@ -343,8 +347,8 @@ def figure(result: SymbolicResult):
 
 def write(result: SymbolicResult, out: Path) -> list[Path]:
     """Write symbolic-cost.json, symbolic-cost.md and symbolic-cost.png into ``out``."""
-    from numeric import plots
-    from numeric.files import atomic_write_text
+    from .numeric import plots
+    from .numeric.files import atomic_write_text
 
     out = Path(out)
     paths = [out / "symbolic-cost.json", out / "symbolic-cost.md", out / "symbolic-cost.png"]

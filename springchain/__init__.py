@@ -1,0 +1,43 @@
+"""springchain: mass–spring chains from a scene file to equations, closed-form normal modes,
+generated NumPy code and trustworthy simulations.
+
+The public API (each name loads what it needs on first use, so ``import springchain`` is cheap)::
+
+    import springchain as sc
+    scene = sc.load("seed")            # a path or a bundled scene's name
+    m = sc.modes(scene)                # equations and modes; m.to_json(), m._repr_latex_()
+    run = sc.simulate(scene)           # run.t (S,), run.x["modal"] (S, N), run.plot(), run.save(path)
+    sc.plan(scene, tol=1e-6)           # the cheapest method and step for a tolerance
+    sc.bench(scene, quick=True)        # work-precision benchmark
+
+Subpackages: :mod:`springchain.derive` (SymPy), :mod:`springchain.numeric` (NumPy/SciPy),
+:mod:`springchain.generated` (generated modules of the bundled scenes).
+"""
+
+from __future__ import annotations
+
+__version__ = "0.2.0"
+
+#: Public names and the module that defines each (imported on first use).
+_LAZY = {
+    "load": "._api", "modes": "._api", "simulate": "._api", "plan": "._api", "bench": "._api",
+    "method_names": "._api", "Modes": "._api", "Simulation": "._api",
+    "SceneError": ".derive.errors", "RunRefused": ".numeric.errors", "Scene": ".derive.scene",
+    "bundled_scenes": "._scenes",
+}
+
+__all__ = ["__version__", *_LAZY]
+
+
+def __getattr__(name: str):
+    if name in _LAZY:
+        import importlib
+
+        value = getattr(importlib.import_module(_LAZY[name], __name__), name)
+        globals()[name] = value
+        return value
+    raise AttributeError(f"module 'springchain' has no attribute {name!r}")
+
+
+def __dir__():
+    return sorted(set(globals()) | set(_LAZY))

@@ -1,0 +1,400 @@
+"""The Python API: what every ``springchain`` command does, callable from a notebook or a script.
+
+The command line (:mod:`springchain.cli`) only parses flags, calls these and prints.
+Heavy packages (SymPy, SciPy, matplotlib) are imported by the function that needs them.
+"""
+
+from __future__ import annotations
+
+import math
+import shutil
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from ._scenes import resolve
+from .derive.errors import SceneError
+from .derive.scene import Scene
+from .numeric.files import human_bytes as _human_bytes
+
+#: The most memory a simulation's recorded trajectories may take (in-memory runs).
+MAX_RECORDED_BYTES = 4 * 2**30
+#: Default output folder of the commands that write files.
+DEFAULT_OUT = "springchain-out"
+
+
+# -- scenes -----------------------------------------------------------------------------------------
+def load(source: str | Path | Scene) -> Scene:
+    """Read and validate a scene.
+
+    Parameters
+    ----------
+    source : str, Path or Scene
+        A path to a TOML scene file, or the name of a bundled scene (``"seed"``,
+        ``"building"``, ...). A :class:`Scene` is returned as it is.
+
+    Returns
+    -------
+    Scene
+
+    Raises
+    ------
+    SceneError
+        (a ``ValueError``) with the one-line message the command prints.
+    """
+    if isinstance(source, Scene):
+        return source
+    from .derive.scene import load_scene
+
+    return load_scene(resolve(source))
+
+
+def _system(scene: Scene):
+    """The generated module bound to the scene's parameters (no SymPy for fresh bundled scenes)."""
+    from ._modules import load_module
+    from .numeric.system import System
+
+    module, origin = load_module(scene)
+    return System.from_module(module), origin
+
+
+# -- modes ------------------------------------------------------------------------------------------
+@dataclass(frozen=True)
+class Modes:
+    """A scene's equations of motion and normal modes.
+
+    Attributes
+    ----------
+    scene : Scene
+    model : the symbolic model (``springchain.derive.model.Model`` or ``...chain.ChainModel``)
+    modes : the mode set (closed forms as SymPy expressions)
+    """
+
+    scene: Scene
+    model: object = field(repr=False)
+    modes: object = field(repr=False)
+
+    @property
+    def chain(self) -> bool:
+        return self.scene.chain is not None
+
+    def to_json(self) -> dict:
+        """Exactly what ``springchain modes SCENE --json`` prints."""
+        if self.chain:
+            from .derive.chain import chain_report
+
+            return chain_report(self.model, self.modes)[1]
+        from .derive.report import modes_json
+
+        return modes_json(self.model, self.modes)
+
+    def to_text(self) -> str:
+        """What ``springchain modes SCENE`` prints."""
+        if self.chain:
+            from .derive.chain import chain_report
+
+            return chain_report(self.model, self.modes)[0]
+        from .derive.report import render_text
+
+        return render_text(self.model, self.modes)
+
+    def to_latex(self) -> str:
+        """What ``springchain modes SCENE --latex`` prints (amsmath)."""
+        if self.chain:
+            import sympy as sp
+
+            return "\\begin{align*}\n\\omega_j^2 &= " + sp.latex(self.modes.omega2) + "\n\\end{align*}\n" \
+                if self.modes.omega2 is not None else self.to_text()
+        from .derive.report import render_latex
+
+        return render_latex(self.model, self.modes)
+
+    @property
+    def omega2(self) -> list:
+        """ω² of each mode as SymPy expressions (ascending at the scene's values)."""
+        return [m.omega2 for m in getattr(self.modes, "modes", ())]
+
+    @property
+    def omega2_values(self):
+        """ω² at the scene's parameter values, ndarray, shape (number of distinct modes,)."""
+        import numpy as np
+
+        return np.array([rec["omega2_value"] for rec in self.to_json().get("modes", [])], dtype=float)
+
+    def __str__(self) -> str:
+        return self.to_text()
+
+    def _repr_latex_(self) -> str:
+        text = self.to_latex()
+        return text if text.lstrip().startswith(("$", "\\begin")) else f"$${text}$$"
+
+
+def modes(scene: str | Path | Scene) -> Modes:
+    """Derive a scene's equations of motion and normal modes (SymPy).
+
+    Parameters
+    ----------
+    scene : str, Path or Scene
+        As for :func:`load`.
+    """
+    from ._modules import derive
+
+    sc = load(scene)
+    d = derive(sc)
+    return Modes(sc, d.model, d.modes)
+
+
+# -- simulation -------------------------------------------------------------------------------------
+def method_names() -> list[str]:
+    """Every method :func:`simulate` takes by name, the exact one first."""
+    from .numeric.methods import METHOD_NAMES
+
+    return list(METHOD_NAMES)
+
+
+@dataclass(frozen=True)
+class Simulation:
+    """Recorded trajectories of one or more methods on one scene.
+
+    Attributes
+    ----------
+    scene : Scene
+    t : ndarray, shape (S,)
+        Recorded times ``t = i·dt``.
+    x, v : dict of str to ndarray, shape (S, N)
+        Positions and velocities per method (read from the NPZ for streamed ``[chain]`` runs).
+    summary : dict
+        What ``springchain simulate --json`` prints.
+    npz : Path or None
+        Where the trajectories were written, if they were.
+    figures : tuple of Path
+    """
+
+    scene: Scene
+    t: object = field(repr=False)
+    x: dict = field(repr=False)
+    v: dict = field(repr=False)
+    summary: dict = field(repr=False)
+    npz: Path | None = None
+    figures: tuple[Path, ...] = ()
+
+    @property
+    def methods(self) -> list[str]:
+        return list(self.x)
+
+    def save(self, path: str | Path) -> Path:
+        """Write the NPZ ``springchain simulate`` writes (``t``, ``x_<method>``, ``v_<method>``)."""
+        from .numeric.simulate import save_npz
+
+        path = Path(path)
+        save_npz(path, self.t, self.x, self.v)
+        return path
+
+    def plot(self, quantity: str = "x"):
+        """A matplotlib Figure of every mass's position (``"x"``) or velocity (``"v"``), all methods."""
+        from .numeric import plots
+
+        if quantity not in ("x", "v"):
+            raise ValueError(f"quantity {quantity!r}: accepted: 'x' or 'v'")
+        series = self.x if quantity == "x" else self.v
+        label, unit = ("position x", "m") if quantity == "x" else ("velocity v", "m/s")
+        names = self.scene.mass_names if len(self.scene.mass_names) <= 12 else self.scene.mass_names[:12]
+        cut = {m: s[:, : len(names)] for m, s in series.items()}
+        return plots.trajectories(self.t, cut, names, label, unit,
+                                  f"{self.scene.name}: {label.split()[0]}s (" + " vs ".join(series) + ")")
+
+    def __repr__(self) -> str:
+        return (f"Simulation(scene={self.scene.name!r}, methods={self.methods}, samples={len(self.t)}, "
+                f"masses={self.scene.n})")
+
+
+def _check_memory(scene: Scene, steps: int, record_every: int, methods: int, key: str) -> None:
+    frames = steps // record_every + 1
+    need = frames * scene.n * 8 * 2 * methods
+    if need > MAX_RECORDED_BYTES:
+        raise SceneError(scene.file, key,
+                         f"{steps}: {steps} steps x {scene.n} masses (recorded every {record_every}, "
+                         f"{methods} methods) would need {_human_bytes(need)} for the trajectories; "
+                         f"accepted: at most {_human_bytes(MAX_RECORDED_BYTES)} - raise the recording "
+                         f"stride (--record-every) or lower the steps (--steps)")
+
+
+def _check_disk(scene: Scene, steps: int, record_every: int, methods: int, out: Path, key: str) -> None:
+    frames = steps // record_every + 1
+    need = frames * scene.n * 8 * 2 * methods
+    probe = out
+    while not probe.exists() and probe != probe.parent:
+        probe = probe.parent
+    free = shutil.disk_usage(probe).free
+    if need > 0.95 * free:
+        raise SceneError(scene.file, key,
+                         f"{steps}: {steps} steps x {scene.n} masses (recorded every {record_every}, "
+                         f"{methods} methods) would write {_human_bytes(need)} into {out}, which has "
+                         f"{_human_bytes(free)} free; accepted: a run that fits - raise the recording "
+                         f"stride (--record-every), lower the steps (--steps) or choose another --out")
+
+
+def simulate(scene: str | Path | Scene, methods: list[str] | None = None, dt: float | None = None,
+             steps: int | None = None, record_every: int | None = None, *, spectrum: str = "svd",
+             rtol: float = 1e-10, atol: float = 1e-12, out: str | Path | None = None,
+             figures: bool = False, progress: bool | None = None) -> Simulation:
+    """Simulate a scene from its initial state with exact and numerical methods.
+
+    Parameters
+    ----------
+    scene : str, Path or Scene
+        As for :func:`load`.
+    methods : list of str, optional
+        Names from :func:`method_names`. Default: the exact ``modal`` solution and ``verlet``
+        for linear scenes with an exact solution, ``verlet`` otherwise.
+    dt, steps, record_every : optional
+        Override the scene's ``[simulation]`` values. Times are ``t = i·dt``.
+    spectrum : {"svd", "closed-form"}
+        Modes of the exact solution: the spring-factor SVD (accurate) or the generated closed forms.
+    rtol, atol : float
+        Tolerances of the adaptive methods (``rk45``, ``dop853``, ``lsoda``).
+    out : str or Path, optional
+        Folder for ``<scene>.npz`` (and figures with ``figures=True``). ``[chain]`` scenes stream
+        their frames to disk, into ``out`` or ``springchain-out``.
+    figures : bool
+        Write PNG figures into ``out``.
+    progress : bool, optional
+        Progress on stderr (default: only on a terminal, for long runs).
+
+    Returns
+    -------
+    Simulation
+    """
+    import time
+
+    import numpy as np
+
+    from .numeric.errors import RunRefused
+    from .numeric import simulate as sim
+
+    sc = load(scene)
+    dt = dt if dt is not None else sc.dt
+    steps = steps if steps is not None else sc.steps
+    record_every = record_every if record_every is not None else sc.record_every
+    if not (isinstance(dt, float | int) and math.isfinite(dt) and dt > 0):
+        raise RunRefused(f"dt {dt!r}: accepted: a finite number > 0")
+    for what, value in (("steps", steps), ("record_every", record_every)):
+        if not (isinstance(value, int | np.integer) and value > 0):
+            raise RunRefused(f"{what} {value!r}: accepted: a whole number > 0")
+    if sc.chain is None:  # refuse before any derivation when even one method would not fit
+        _check_memory(sc, steps, record_every, len(methods) if methods else 1, "steps")
+    system, origin = _system(sc)
+    names = methods or sim.default_methods(system)
+    unknown = [m for m in names if m not in method_names()]
+    if unknown:
+        raise RunRefused(f"method {unknown[0]!r} is unknown; accepted: {', '.join(method_names())}")
+    if spectrum not in ("svd", "closed-form"):
+        raise RunRefused(f"spectrum {spectrum!r}: accepted: 'svd' or 'closed-form'")
+    t0 = time.perf_counter()
+    if system.chain:
+        out = Path(out if out is not None else DEFAULT_OUT)
+        _check_disk(sc, steps, record_every, len(names), out, "steps")
+        out.mkdir(parents=True, exist_ok=True)
+        summary = sim.stream_methods(system, sc.x0, sc.v0, dt, steps, names, record_every, out, sc.name,
+                                     figures=figures)
+        npz = Path(summary["npz"])
+        figs = tuple(Path(p) for p in summary["figures"])
+        data = np.load(npz)
+        t = data["t"]
+        x = {m: data[f"x_{m}"] for m in names}
+        v = {m: data[f"v_{m}"] for m in names}
+    else:
+        _check_memory(sc, steps, record_every, len(names), "steps")
+        runs = sim.run_methods(system, sc.x0, sc.v0, dt, steps, names, record_every,
+                               spectrum_source=spectrum, rtol=rtol, atol=atol, progress=progress)
+        summary = sim.compare(system, runs)
+        t = next(iter(runs.values())).t
+        x = {m: r.x for m, r in runs.items()}
+        v = {m: r.v for m, r in runs.items()}
+        npz, figs = None, ()
+        if out is not None:
+            out = Path(out)
+            out.mkdir(parents=True, exist_ok=True)
+            npz = out / f"{sc.name}.npz"
+            sim.save_npz(npz, t, x, v)
+            if figures:
+                figs = tuple(sim.write_figures(out, sc.name, sc.mass_names, system, runs))
+    summary.update({"scene": sc.name, "module": origin, "dt": dt, "steps": steps, "t_end": steps * dt,
+                    "npz": None if npz is None else str(npz), "figures": [str(p) for p in figs],
+                    "methods_that_apply": sim.applicable(system),
+                    "energy_conserved": not (system.damped or system.forced),
+                    "seconds": time.perf_counter() - t0})
+    return Simulation(sc, t, x, v, summary, npz, figs)
+
+
+# -- plan and bench ---------------------------------------------------------------------------------
+def _horizon(sc: Scene, t_end: float | None) -> float:
+    return t_end if t_end is not None else sc.dt * sc.steps
+
+
+def plan(scene: str | Path | Scene, tol: float, t_end: float | None = None):
+    """The cheapest method and step (or tolerance) to keep the largest position error below ``tol``.
+
+    Parameters
+    ----------
+    scene : str, Path or Scene
+    tol : float
+        Largest position error allowed over ``t = 0 ... t_end``.
+    t_end : float, optional
+        Horizon (default: the scene's ``dt·steps``).
+
+    Returns
+    -------
+    springchain.numeric.plan.Plan
+        ``.recommended``, ``.candidates``, ``.unreachable`` and ``.as_json()``.
+    """
+    from .numeric.errors import RunRefused
+    from .numeric.plan import Planner
+    from .numeric.timing import single_threaded_blas
+
+    if not (isinstance(tol, float | int) and math.isfinite(tol) and tol > 0):
+        raise RunRefused(f"tol {tol!r}: accepted: a finite number > 0")
+    sc = load(scene)
+    system, _ = _system(sc)
+    if not system.conservative:
+        raise RunRefused(f"plan covers conservative scenes (springs, cubic springs); {sc.name!r} has "
+                         "dampers, forces or gravity")
+    with single_threaded_blas():
+        planner = Planner.for_system(system, sc.x0, sc.v0, _horizon(sc, t_end), sc.dt * sc.record_every)
+        try:
+            return planner.plan(tol)
+        except ValueError as exc:
+            raise RunRefused(f"tol {tol:g}: {exc}") from None
+
+
+def bench(scene: str | Path | Scene = "seed", t_end: float | None = None, *, quick: bool = False,
+          methods: list[str] | None = None, progress: bool = False):
+    """Work-precision benchmark: every method's error against an exact reference, and its cost.
+
+    Returns
+    -------
+    springchain.numeric.bench.BenchResult
+        ``.records``, ``.targets`` and ``.as_json()``; write its files with
+        :func:`springchain.numeric.bench.write_outputs`.
+    """
+    import time
+
+    from ._modules import derive
+    from .numeric.bench import BenchConfig, run_bench, with_derive_seconds
+    from .numeric.timing import single_threaded_blas
+
+    sc = load(scene)
+    system, _ = _system(sc)
+    import sympy  # noqa: F401  (imported before timing: the derive time excludes the SymPy import)
+
+    t0 = time.perf_counter()
+    derive(sc)
+    derive_seconds = time.perf_counter() - t0
+    config = BenchConfig.quick_config() if quick else BenchConfig()
+    with single_threaded_blas():
+        result = run_bench(system, sc.x0, sc.v0, _horizon(sc, t_end), sc.dt * sc.record_every, sc.name,
+                           config, progress=progress, methods=tuple(methods or ()) or None)
+    return with_derive_seconds(result, derive_seconds)
+
+
+__all__ = ["load", "modes", "simulate", "plan", "bench", "method_names", "Modes", "Simulation",
+           "MAX_RECORDED_BYTES"]

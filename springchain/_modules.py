@@ -1,0 +1,108 @@
+"""Generated modules on disk: the checked-in ones of bundled scenes, a per-user cache for any other
+scene, freshness checks and atomic writes.
+
+Bundled scenes use the checked-in ``springchain.generated.<name>`` when it matches the scene's
+hash (no SymPy needed). Any other scene (a user's file anywhere on disk) is derived into a
+per-user cache (``$SPRINGCHAIN_CACHE`` or ``~/.cache/springchain``), never into the installed
+package.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import importlib
+import importlib.util
+import os
+import sys
+from pathlib import Path
+from types import ModuleType
+
+from ._scenes import is_bundled
+from .derive.scene import Scene
+
+GENERATED = __package__ + ".generated"
+
+
+def derive(scene: Scene, budget: float | None = None):
+    """:func:`springchain.derive.pipeline.derive` with the bundled flag filled in."""
+    from .derive.pipeline import derive as _derive
+
+    return _derive(scene, budget=budget, bundled=is_bundled(scene.file))
+
+
+def generated_dir() -> Path:
+    """The folder of the checked-in generated modules (``springchain.generated``)."""
+    from . import generated
+
+    return Path(next(iter(generated.__path__))).resolve()
+
+
+def module_path(scene: Scene, out_dir: Path | None = None) -> Path:
+    return (out_dir or generated_dir()) / f"{scene.name}.py"
+
+
+def _code_version() -> str:
+    """Hash of the derive/ sources: cached modules are redone when the generator changes."""
+    from . import derive as derive_pkg
+
+    h = hashlib.sha256()
+    for p in sorted(Path(next(iter(derive_pkg.__path__))).glob("*.py")):
+        h.update(p.read_bytes())
+    return h.hexdigest()[:12]
+
+
+def cache_dir() -> Path:
+    base = os.environ.get("SPRINGCHAIN_CACHE")
+    if base:
+        return Path(base)
+    xdg = os.environ.get("XDG_CACHE_HOME")
+    return (Path(xdg) if xdg else Path.home() / ".cache") / "springchain"
+
+
+def _import_file(path: Path, name: str) -> ModuleType:
+    spec = importlib.util.spec_from_file_location(name, path)
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+def bundled_module(scene: Scene) -> ModuleType | None:
+    """The checked-in generated module of a bundled scene if its scene hash matches."""
+    if not is_bundled(scene.file) or not module_path(scene).exists():
+        return None
+    module = importlib.import_module(f"{GENERATED}.{scene.name}")
+    return module if getattr(module, "SCENE_SHA256", None) == scene.sha256 else None
+
+
+def load_module(scene: Scene) -> tuple[ModuleType, str]:
+    """The generated module for a scene, and where it came from ("generated" or "cache")."""
+    from .numeric.files import atomic_write_text
+
+    module = bundled_module(scene)
+    if module is not None:
+        return module, "generated"
+    path = cache_dir() / f"{scene.name}-{scene.sha256[:16]}-{_code_version()}.py"
+    if not path.exists():
+        atomic_write_text(path, derive(scene).source)
+    return _import_file(path, f"springchain_cache_{scene.name}_{scene.sha256[:16]}"), "cache"
+
+
+def check(scene: Scene, out_dir: Path | None = None) -> tuple[bool, str]:
+    """Whether the module on disk equals a fresh render. Writes nothing."""
+    path = module_path(scene, out_dir)
+    fresh = derive(scene).source
+    if not path.exists():
+        return False, f"{path}: missing (run `springchain derive {scene.file}`)"
+    if path.read_text(encoding="utf-8") != fresh:
+        return False, f"{path}: stale (run `springchain derive {scene.file}`)"
+    return True, f"{path}: fresh"
+
+
+def write(derivation, out_dir: Path | None = None) -> Path:
+    """Write a derivation's module atomically into ``out_dir`` (default: the package's generated/)."""
+    from .numeric.files import atomic_write_text
+
+    path = module_path(derivation.scene, out_dir)
+    atomic_write_text(path, derivation.source)
+    sys.modules.pop(f"{GENERATED}.{derivation.scene.name}", None)  # a re-import must see the new text
+    return path
