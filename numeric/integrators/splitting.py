@@ -20,11 +20,19 @@ from .base import Integrator, Problem, StepKernel, finite_positive
 from .coefficients import SplittingTable
 
 
+class _TableStabilityLimit:
+    """``stability_limit`` read from the class's table on first use (a scan: no work at import)."""
+
+    def __get__(self, obj, cls=None):
+        return (cls or type(obj)).table.stability_limit
+
+
 class SplittingMethod(Integrator):
     """A symplectic ``BAB`` splitting method given by its coefficient table."""
 
     table: ClassVar[SplittingTable]
     symplectic = True
+    stability_limit = _TableStabilityLimit()
 
     def __init_subclass__(cls, **kwargs):
         super().__init_subclass__(**kwargs)
@@ -32,7 +40,6 @@ class SplittingMethod(Integrator):
         if table is not None:
             cls.order = table.order
             cls.evals_per_step = float(table.stages)
-            cls.stability_limit = table.stability_limit
 
     def kernel(self, problem: Problem, h: float) -> StepKernel:
         h = finite_positive(h)

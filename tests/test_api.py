@@ -1,0 +1,169 @@
+"""The Python API (springchain.load / modes / simulate / plan / bench) against the commands it backs.
+
+* the API returns what the command prints (``modes --json``, the NPZ of ``simulate``);
+* bad input raises :class:`springchain.SceneError` (a ValueError) with the command's one line;
+* the README's notebook example runs as written;
+* the one import namespace: only ``springchain`` at the top, no module loaded twice;
+* the light method-name table agrees with the integrator registries.
+"""
+
+from __future__ import annotations
+
+import json
+import re
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import springchain
+from springchain.cli import main
+
+README = Path(__file__).resolve().parent.parent / "README.md"
+
+
+def test_version_is_the_distribution_version(capsys):
+    import importlib.metadata
+
+    assert springchain.__version__ == importlib.metadata.version("springchain")
+    with pytest.raises(SystemExit) as exc:
+        main(["--version"])
+    assert exc.value.code == 0
+    assert capsys.readouterr().out.strip() == f"springchain {springchain.__version__}"
+
+
+def test_load_by_bundled_name_and_by_path(seed_path):
+    by_name = springchain.load("seed")
+    by_path = springchain.load(seed_path)
+    assert by_name.sha256 == by_path.sha256 and by_name.name == "seed"
+    assert springchain.load(by_name) is by_name
+
+
+def test_load_errors_are_scene_errors_with_the_command_line(tmp_path, capsys):
+    bad = tmp_path / "bad.toml"
+    bad.write_text('name = "x"\n[masses]\nm1 = "-1"\n')
+    with pytest.raises(springchain.SceneError) as exc:
+        springchain.load(bad)
+    assert isinstance(exc.value, ValueError)
+    assert main(["modes", str(bad)]) == 2
+    assert capsys.readouterr().err == f"springchain: error: {exc.value}\n"
+    with pytest.raises(springchain.SceneError, match="not a bundled scene.*seed"):
+        springchain.load("no_such_scene_name")
+
+
+def test_modes_to_json_is_what_the_command_prints(capsys):
+    m = springchain.modes("seed")
+    assert main(["modes", "seed", "--json"]) == 0
+    assert json.loads(capsys.readouterr().out) == m.to_json()
+    import sympy as sp
+
+    k, mm = sp.symbols("k m", positive=True)
+    assert [sp.simplify(w - ref) for w, ref in zip(m.omega2, [0, k / mm, 5 * k / (3 * mm)])] == [0, 0, 0]
+    np.testing.assert_allclose(m.omega2_values, [0.0, 1.0, 5 / 3], rtol=1e-15, atol=0)
+    latex = m._repr_latex_()
+    assert "\\frac" in latex and latex.strip().startswith(("$", "\\begin"))
+    assert main(["modes", "seed"]) == 0
+    assert capsys.readouterr().out == m.to_text()
+
+
+def test_simulate_matches_the_command_npz(tmp_path):
+    run = springchain.simulate("seed", steps=200)
+    assert run.methods == ["modal", "verlet"]
+    assert run.t.shape == (201,) and run.x["modal"].shape == (201, 3) and run.v["verlet"].shape == (201, 3)
+    np.testing.assert_allclose(run.t, np.arange(201) * 0.1, rtol=0, atol=1e-15)
+    assert main(["simulate", "seed", "--steps", "200", "--out", str(tmp_path / "cmd"), "--no-figures"]) == 0
+    cmd = np.load(tmp_path / "cmd" / "seed.npz")
+    saved = np.load(run.save(tmp_path / "api.npz"))
+    assert sorted(cmd.files) == sorted(saved.files) == ["t", "v_modal", "v_verlet", "x_modal", "x_verlet"]
+    for key in cmd.files:
+        np.testing.assert_allclose(saved[key], cmd[key], rtol=1e-12, atol=1e-14)
+    fig = run.plot()
+    from matplotlib.figure import Figure
+
+    assert isinstance(fig, Figure)
+    ax = fig.axes[0]
+    assert ax.get_xlabel() == "time t [s]" and "position" in ax.get_ylabel() and ax.get_legend() is not None
+
+
+def test_simulate_defaults_follow_the_scene(seed_path):
+    scene = springchain.load(seed_path)
+    run = springchain.simulate(scene, methods=["verlet"])
+    assert run.t.shape == (scene.steps // scene.record_every + 1,)
+    assert run.summary["dt"] == scene.dt and run.summary["steps"] == scene.steps
+    with pytest.raises(springchain.RunRefused, match="method 'nope'.*accepted"):
+        springchain.simulate(scene, methods=["nope"])
+    with pytest.raises(springchain.RunRefused, match="dt"):
+        springchain.simulate(scene, dt=-1.0)
+
+
+def test_simulate_memory_is_checked_with_the_effective_settings(seed_path):
+    scene = springchain.load(seed_path)
+    with pytest.raises(springchain.SceneError, match="GiB"):
+        springchain.simulate(scene, steps=10**12)
+    run = springchain.simulate(scene, methods=["modal"], steps=10**6, record_every=10**5)  # 11 frames: fine
+    assert run.t.shape == (11,)
+
+
+def test_plan_and_bench_through_the_api():
+    plan = springchain.plan("seed", tol=1e-3)
+    assert plan.recommended.predicted_error <= 1e-3
+    assert json.loads(json.dumps(plan.as_json()))
+    result = springchain.bench("seed", quick=True, methods=["verlet"])
+    assert result.records and all(r.method in ("verlet", "modal") or r.method for r in result.records)
+
+
+def _readme_python_example() -> str:
+    text = README.read_text(encoding="utf-8")
+    m = re.search(r"## Python API.*?```python\n(.*?)```", text, re.S)
+    assert m, "README has a '## Python API' section with a python example"
+    return m.group(1)
+
+
+def test_readme_api_example_runs_as_written(tmp_path):
+    code = _readme_python_example()
+    out = subprocess.run([sys.executable, "-c", code], cwd=tmp_path, capture_output=True, text=True, timeout=300)
+    assert out.returncode == 0, out.stderr[-2000:]
+    assert "5*k/(3*m)" in out.stdout
+
+
+def test_one_namespace_and_no_module_loaded_twice():
+    code = ("import sys, springchain\n"
+            "springchain.simulate('seed', steps=10)\n"
+            "springchain.modes('seed')\n"
+            "bad = sorted(m for m in sys.modules if m.split('.')[0] in ('derive', 'numeric', 'generated', 'scenes'))\n"
+            "print(bad)\n")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=300, cwd="/")
+    assert out.returncode == 0, out.stderr[-2000:]
+    assert out.stdout.strip() == "[]"
+
+
+def test_import_is_light_and_sets_no_backend():
+    code = ("import sys, matplotlib\n"
+            "before = matplotlib.get_backend()\n"
+            "import springchain, springchain.cli\n"
+            "heavy = [m for m in ('sympy', 'scipy', 'numba', 'matplotlib.pyplot') if m in sys.modules]\n"
+            "import springchain.numeric.plots, springchain.numeric.simulate\n"
+            "print(heavy, matplotlib.get_backend() == before, 'matplotlib.pyplot' in sys.modules)\n")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120, cwd="/")
+    assert out.returncode == 0, out.stderr[-2000:]
+    assert out.stdout.strip() == "[] True False"
+
+
+def test_method_name_table_matches_the_registries():
+    from springchain.numeric.integrators import ADAPTIVE, INTEGRATORS
+    from springchain.numeric.methods import ADAPTIVE as ADAPTIVE_NAMES
+    from springchain.numeric.methods import EXACT, FIXED_STEP, METHOD_NAMES
+
+    assert FIXED_STEP == tuple(INTEGRATORS) and ADAPTIVE_NAMES == tuple(ADAPTIVE)
+    assert METHOD_NAMES[0] == EXACT and springchain.method_names() == list(METHOD_NAMES)
+
+
+def test_stability_limits_are_computed_on_first_use_not_at_import():
+    code = ("import springchain.numeric.integrators as I\n"
+            "print('stability_limit' in I.KahanLi8.table.__dict__)\n"
+            "I.KahanLi8.stability_limit\n"
+            "print('stability_limit' in I.KahanLi8.table.__dict__)\n")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120, cwd="/")
+    assert out.stdout.split() == ["False", "True"], out.stderr[-2000:]
