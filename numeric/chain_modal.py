@@ -200,7 +200,7 @@ class ChainModal:
             return cls.uniform(float(masses[0]), float(ks[0]) if ks.size else 1.0, left, right, x0, v0)
         if n > MAX_FALLBACK:
             raise RunRefused(f"index-dependent chain of n = {n} masses: no closed-form modes, and the "
-                             f"eigenvector fallback is limited to n <= {MAX_FALLBACK}; use --method verlet")
+                             f"eigenvector fallback is limited to n <= {MAX_FALLBACK}; use method 'verlet'", quantity="method")
         return cls._eigenvectors(module, values, masses, ks, x0, v0)
 
     @classmethod

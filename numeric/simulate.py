@@ -77,7 +77,8 @@ def check_stable(omega_max: float, h: float, method: str, limit: float = 2.0) ->
     if omega_max * h >= limit:
         raise RunRefused(f"dt = {h:g} is at or beyond {method}'s stability limit: ω_max = {omega_max:.6g}, "
                          f"so dt must be < {limit:g}/ω_max = {limit / omega_max:.6g}; use a smaller dt "
-                         f"(--dt or simulation.dt) or --method modal (exact, any dt)")
+                         f"(the scene's simulation.dt or the run's) or the exact method 'modal' (any dt)",
+                         quantity="dt")
 
 
 def problem_for(system: System) -> Problem:
@@ -136,8 +137,8 @@ def run_methods(system: System, x0: np.ndarray, v0: np.ndarray, h: float, steps:
             if not system.exact_available:
                 why = ("this scene has cubic springs" if not linear
                        else "its external forces are not constant + harmonic")
-                raise RunRefused(f"--method modal: no exact solution applies ({why}); use "
-                                 + ", ".join(INTEGRATORS))
+                raise RunRefused(f"method 'modal': no exact solution applies ({why}); use "
+                                 + ", ".join(INTEGRATORS), quantity="method")
             t0 = time.perf_counter()
             if plain and "gravity" not in system.effects:
                 sol = ModalSolution.from_initial(system_spectrum(system, spectrum_source), x0, v0)

@@ -276,19 +276,20 @@ def simulate(scene: str | Path | Scene, methods: list[str] | None = None, dt: fl
     steps = steps if steps is not None else sc.steps
     record_every = record_every if record_every is not None else sc.record_every
     if not (isinstance(dt, float | int) and math.isfinite(dt) and dt > 0):
-        raise RunRefused(f"dt {dt!r}: accepted: a finite number > 0")
+        raise RunRefused(f"dt {dt!r}: accepted: a finite number > 0", quantity="dt")
     for what, value in (("steps", steps), ("record_every", record_every)):
         if not (isinstance(value, int | np.integer) and value > 0):
-            raise RunRefused(f"{what} {value!r}: accepted: a whole number > 0")
+            raise RunRefused(f"{what} {value!r}: accepted: a whole number > 0", quantity=what)
     if sc.chain is None:  # refuse before any derivation when even one method would not fit
         _check_memory(sc, steps, record_every, len(methods) if methods else 1, "steps")
     system, origin = _system(sc)
     names = methods or sim.default_methods(system)
     unknown = [m for m in names if m not in method_names()]
     if unknown:
-        raise RunRefused(f"method {unknown[0]!r} is unknown; accepted: {', '.join(method_names())}")
+        raise RunRefused(f"method {unknown[0]!r} is unknown; accepted: {', '.join(method_names())}",
+                         quantity="method")
     if spectrum not in ("svd", "closed-form"):
-        raise RunRefused(f"spectrum {spectrum!r}: accepted: 'svd' or 'closed-form'")
+        raise RunRefused(f"spectrum {spectrum!r}: accepted: 'svd' or 'closed-form'", quantity="spectrum")
     t0 = time.perf_counter()
     if system.chain:
         out = Path(out if out is not None else DEFAULT_OUT)
@@ -352,7 +353,7 @@ def plan(scene: str | Path | Scene, tol: float, t_end: float | None = None):
     from .numeric.timing import single_threaded_blas
 
     if not (isinstance(tol, float | int) and math.isfinite(tol) and tol > 0):
-        raise RunRefused(f"tol {tol!r}: accepted: a finite number > 0")
+        raise RunRefused(f"tol {tol!r}: accepted: a finite number > 0", quantity="tol")
     sc = load(scene)
     system, _ = _system(sc)
     if not system.conservative:
@@ -363,7 +364,7 @@ def plan(scene: str | Path | Scene, tol: float, t_end: float | None = None):
         try:
             return planner.plan(tol)
         except ValueError as exc:
-            raise RunRefused(f"tol {tol:g}: {exc}") from None
+            raise RunRefused(f"tol {tol:g}: {exc}", quantity="tol") from None
 
 
 def bench(scene: str | Path | Scene = "seed", t_end: float | None = None, *, quick: bool = False,

@@ -333,6 +333,17 @@ def build_parser() -> argparse.ArgumentParser:
     return p
 
 
+#: The flag that sets each quantity a library error may name.
+FLAGS = {"dt": "--dt", "steps": "--steps", "record_every": "--record-every", "method": "--method",
+         "rtol": "--rtol", "atol": "--atol", "tol": "--tol", "spectrum": "--spectrum"}
+
+
+def _flag_for(args, quantity: str | None) -> str | None:
+    """The flag behind a refused quantity, when the user set it on the command line."""
+    flag = FLAGS.get(quantity or "")
+    return flag if flag and getattr(args, quantity, None) is not None else None
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)
@@ -345,7 +356,8 @@ def main(argv: list[str] | None = None) -> int:
         from .numeric.errors import RunRefused
 
         if isinstance(exc, RunRefused):
-            sys.stderr.write(f"springchain: error: {exc}\n")
+            flag = _flag_for(args, exc.quantity)
+            sys.stderr.write(f"springchain: error: {flag + ': ' if flag else ''}{exc}\n")
             return EXIT_USAGE
         raise
     except BrokenPipeError:  # output piped into e.g. `head`

@@ -167,3 +167,16 @@ def test_stability_limits_are_computed_on_first_use_not_at_import():
             "print('stability_limit' in I.KahanLi8.table.__dict__)\n")
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120, cwd="/")
     assert out.stdout.split() == ["False", "True"], out.stderr[-2000:]
+
+
+def test_library_errors_name_the_quantity_and_the_command_adds_the_flag(tmp_path, capsys):
+    with pytest.raises(springchain.RunRefused) as exc:
+        springchain.simulate("seed", methods=["verlet"], dt=5.0)
+    assert exc.value.quantity == "dt" and "--" not in str(exc.value)
+    argv = ["simulate", "seed", "--method", "verlet", "--dt", "5", "--no-figures", "--out", str(tmp_path)]
+    assert main(argv) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("springchain: error: --dt: dt = 5 is at or beyond verlet's stability limit"), err
+    with pytest.raises(springchain.RunRefused) as exc:
+        springchain.simulate("duffing", methods=["modal"])
+    assert exc.value.quantity == "method" and str(exc.value).startswith("method 'modal'")

@@ -348,7 +348,7 @@ def test_chebyshev_runs_from_a_stencil():
 
 @pytest.mark.parametrize("name", PROPAGATORS)
 def test_propagators_refuse_a_problem_without_springs(name, seed_system):
-    with pytest.raises(RunRefused, match=f"{name} needs a linear chain of springs only"):
+    with pytest.raises(RunRefused, match=f"method '{name}' needs a linear chain of springs only"):
         integrate(INTEGRATORS[name](), Problem(seed_system.acceleration_fn), np.zeros(3), np.zeros(3), 0.1, 2)
 
 

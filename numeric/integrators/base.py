@@ -158,8 +158,8 @@ class Integrator(abc.ABC):
     def check(self, problem: Problem) -> None:
         """Refuse a problem this method cannot integrate (raises :class:`~numeric.errors.RunRefused`)."""
         if problem.damping is not None and not self.supports_damping:
-            raise RunRefused(f"--method {self.name} integrates conservative and external forces only; "
-                             f"this scene has dampers: use rk4 or an adaptive method (rk45, dop853, lsoda)")
+            raise RunRefused(f"method {self.name!r} integrates conservative and external forces only; "
+                             f"this scene has dampers: use rk4 or an adaptive method (rk45, dop853, lsoda)", quantity="method")
 
     def init(self, problem: Problem, x0: np.ndarray, v0: np.ndarray) -> State:
         """The state at ``i = 0``. x0, v0 : array_like, shape (N, B)."""

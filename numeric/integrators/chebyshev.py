@@ -128,7 +128,7 @@ class ChebyshevPropagator(LinearPropagator):
     def check(self, problem: Problem) -> None:
         super().check(problem)
         if np.any(problem.linear.stiffness < 0):
-            raise RunRefused(f"--method {self.name} needs non-negative spring constants")
+            raise RunRefused(f"method {self.name!r} needs non-negative spring constants", quantity="method")
 
     def coefficients(self, problem: Problem, h: float) -> ChebyshevCoefficients:
         return ChebyshevCoefficients.from_bessel(h, problem.linear.omega2_bound())

@@ -62,7 +62,7 @@ class AdaptiveMethod:
             x, v shape (S, N, B) (B = 1 for 1-D input).
         """
         if not (rtol > 0 and atol > 0):
-            raise RunRefused(f"--method {self.name}: rtol and atol must be > 0, got {rtol!r}, {atol!r}")
+            raise RunRefused(f"method {self.name!r}: rtol and atol must be > 0, got {rtol!r}, {atol!r}", quantity="rtol")
         t_eval = np.asarray(t_eval, dtype=float)
         x0 = np.asarray(x0, dtype=float)
         v0 = np.asarray(v0, dtype=float)
@@ -88,7 +88,7 @@ class AdaptiveMethod:
         sol = solve_ivp(rhs, (float(t_eval[0]), float(t_eval[-1])), y0, method=self.scipy_method,
                         t_eval=t_eval, rtol=rtol, atol=atol)
         if not sol.success:
-            raise RunRefused(f"--method {self.name} failed: {sol.message}")
+            raise RunRefused(f"method {self.name!r} failed: {sol.message}", quantity="method")
         y = sol.y.T  # (S, 2NB)
         x = y[:, :nb].reshape(-1, n, b)
         v = y[:, nb:].reshape(-1, n, b)

@@ -21,9 +21,9 @@ class LinearPropagator(Integrator):
 
     def check(self, problem: Problem) -> None:
         if problem.linear is None:
-            raise RunRefused(f"--method {self.name} needs a linear chain of springs only (no cubic springs, "
-                             f"dampers, gravity or external forces); use --method modal for the exact solution "
-                             f"of a linear scene with effects, or a step method such as blanes-moan6")
+            raise RunRefused(f"method {self.name!r} needs a linear chain of springs only (no cubic springs, "
+                             f"dampers, gravity or external forces); use the exact method 'modal' for the exact solution "
+                             f"of a linear scene with effects, or a step method such as blanes-moan6", quantity="method")
         if problem.damping is not None or problem.external is not None:
-            raise RunRefused(f"--method {self.name} propagates free oscillations only; this scene has "
-                             f"dampers or external forces: use rk4 or dop853")
+            raise RunRefused(f"method {self.name!r} propagates free oscillations only; this scene has "
+                             f"dampers or external forces: use rk4 or dop853", quantity="method")
