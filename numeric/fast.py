@@ -198,9 +198,12 @@ class ChainCoefficients:
 
     @property
     def omega_max_bound(self) -> float:
-        """Gershgorin bound on ω_max: ``√(max_i 2 (k_{i-1} + k_i)/m_i)`` (≥ the true ω_max)."""
-        ks = [np.max(self.k) if self.n > 1 else 0.0, self.k_left, self.k_right]
-        return math.sqrt(2.0 * 2.0 * max(ks) * float(np.max(self.inv_mass)))
+        """Gershgorin bound on ω_max (:func:`numeric.bounds.chain_omega2_bound`; ≥ the true ω_max)."""
+        from .bounds import chain_omega2_bound
+
+        inner = self.k if self.n > 1 else np.zeros(0)
+        ring = self.right is End.RING
+        return math.sqrt(chain_omega2_bound(self.n, self.inv_mass, inner, self.k_left, self.k_right, ring))
 
     def kernel_args(self) -> tuple:
         """The positional coefficient arguments of the compiled sweeps.

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -9,6 +10,7 @@ from pathlib import Path
 import numpy as np
 
 from . import plots
+from .bounds import omega2_bound
 from .driver import Progress, integrate
 from .effects import EffectSplitting
 from .linear_exact import AugmentedLinear
@@ -299,8 +301,8 @@ def stream_methods(system: System, x0: np.ndarray, v0: np.ndarray, h: float, ste
                 if name == "verlet" and system.chain and system.conservative:
                     integrator = FusedChainVerlet(system)
                 if system.chain:
-                    # ω_max ≤ 2·sqrt(max k / min m) per Gershgorin on D: a proven bound, no eigen-solve
-                    bound = 2.0 * np.sqrt(2.0 * np.max(system.stiffness) / np.min(system.masses))
+                    # a proven bound (Gershgorin), no eigen-solve
+                    bound = math.sqrt(omega2_bound(system.masses, system.spring_ends, system.stiffness))
                     check_stable(bound, h, name, getattr(integrator, "stability_limit", 2.0))
                 bar = Progress(steps, name)
                 traj = integrate(integrator, problem_for(system), x0, v0, h, steps, record_every,

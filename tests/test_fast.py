@@ -242,3 +242,30 @@ def test_inplace_kernel_runs_in_the_driver(chain_module):
     np.testing.assert_array_equal(got.t, ref.t)
     assert rel(got.x, ref.x) <= 1e-13 and rel(got.v, ref.v) <= 1e-13
     assert np.all(x0 == state(n, None, seed=11)[0])  # the caller's arrays are untouched
+
+
+def test_one_gershgorin_bound_for_stencils_and_spring_lists():
+    """numeric.bounds: the stencil form equals the spring-list form and bounds the true ω²_max."""
+    from springchain.numeric.bounds import chain_omega2_bound, omega2_bound
+    from springchain.numeric.spectrum import spectrum
+
+    rng = np.random.default_rng(5)
+    for n in (1, 2, 3, 7, 30):
+        m = rng.uniform(0.1, 10.0, n)
+        k = rng.uniform(0.1, 10.0, n + 1)
+        for left, right, ring in ((True, True, False), (False, False, False), (True, False, False),
+                                  (False, True, True)):
+            ends = [(i, i + 1) for i in range(n - 1)]
+            ks = list(k[1:n])
+            if left:
+                ends.insert(0, (-1, 0)); ks.insert(0, k[0])
+            if right:
+                ends.append((n - 1, 0) if ring else (n - 1, -1)); ks.append(k[n])
+            if ring and n < 3:
+                continue
+            ends, ks = np.array(ends, dtype=np.intp).reshape(-1, 2), np.array(ks)
+            full = omega2_bound(m, ends, ks)
+            stencil = chain_omega2_bound(n, 1.0 / m, k[1:n], k[0] if left else 0.0, k[n] if right else 0.0, ring)
+            assert stencil == pytest.approx(full, rel=1e-14)
+            if ks.size:
+                assert full >= spectrum(m, ends, ks).omega_max ** 2 * (1 - 1e-13)

@@ -78,12 +78,10 @@ class LinearChain:
         return spectrum(self.masses, self.spring_ends, self.stiffness)
 
     def omega2_bound(self) -> float:
-        """A rigorous upper bound on ω²_max: Gershgorin on ``M⁻¹K``, ``max_i 2 Σ_{s∋i} k_s / m_i``."""
-        load = np.zeros(self.n)
-        for col in (0, 1):
-            idx = self.spring_ends[:, col]
-            np.add.at(load, idx[idx >= 0], np.abs(self.stiffness[idx >= 0]))
-        return float(np.max(2.0 * load / self.masses)) if self.n else 0.0
+        """A rigorous upper bound on ω²_max (:func:`numeric.bounds.omega2_bound`)."""
+        from ..bounds import omega2_bound
+
+        return omega2_bound(self.masses, self.spring_ends, self.stiffness)
 
 
 @dataclass(frozen=True)
