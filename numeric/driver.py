@@ -123,19 +123,35 @@ def integrate(integrator: Integrator, problem: Problem, x0: np.ndarray, v0: np.n
     else:
         on_frame(0, x, v)
     targets = idx.tolist()
-    j = 1
-    nxt = targets[1] if len(targets) > 1 else -1
-    for i in range(steps):
-        x, v, a = kernel(x, v, a, i)
-        if i + 1 == nxt:
+    advance = getattr(kernel, "advance", None)
+    if advance is not None and getattr(kernel, "inplace", False):
+        # an in-place kernel with a multi-step sweep: run straight from frame to frame at the
+        # sweep's speed, on private copies (the caller's arrays are never touched)
+        x, v, a = (np.array(arr, dtype=float, order="C", copy=True) for arr in (x, v, a))
+        done = 0
+        for j, target in enumerate(targets[1:], start=1):
+            x, v, a = advance(x, v, a, target - done)
+            done = target
             if keep:
                 xs[j], vs[j] = x, v
             else:
-                on_frame(nxt, x, v)
-            j += 1
-            nxt = targets[j] if j < len(targets) else -1
-        if progress is not None and not (i + 1) & 255:
-            progress.update(i + 1)
+                on_frame(target, x, v)
+            if progress is not None:
+                progress.update(done)
+    else:
+        j = 1
+        nxt = targets[1] if len(targets) > 1 else -1
+        for i in range(steps):
+            x, v, a = kernel(x, v, a, i)
+            if i + 1 == nxt:
+                if keep:
+                    xs[j], vs[j] = x, v
+                else:
+                    on_frame(nxt, x, v)
+                j += 1
+                nxt = targets[j] if j < len(targets) else -1
+            if progress is not None and not (i + 1) & 255:
+                progress.update(i + 1)
     if progress is not None:
         progress.update(steps)
     t = idx.astype(float) * h

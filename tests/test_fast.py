@@ -269,3 +269,37 @@ def test_one_gershgorin_bound_for_stencils_and_spring_lists():
             assert stencil == pytest.approx(full, rel=1e-14)
             if ks.size:
                 assert full >= spectrum(m, ends, ks).omega_max ** 2 * (1 - 1e-13)
+
+
+def test_driver_runs_the_multi_step_sweep_between_frames(chain_module):
+    """With an in-place kernel that has ``advance``, the driver makes one sweep call per recorded
+    frame (never a per-step call) and records the per-step kernel's trajectory."""
+    from springchain.numeric.driver import integrate
+    from springchain.numeric.integrators.base import Problem
+    from springchain.numeric.integrators.verlet import VelocityVerlet
+
+    module = chain_module("free", "free", False)
+    n, h, steps = 150, 0.2, 60
+    problem = Problem(module.make_acceleration(**dict(module.DEFAULTS), n=n))
+    fused = fast.chain_verlet_kernel(module, None, n, h, inplace=True)
+    calls = []
+
+    def step(x, v, a, i):
+        raise AssertionError("per-step call of a kernel that can sweep")
+
+    def advance(x, v, a, k):
+        calls.append(k)
+        return fused.advance(x, v, a, k)
+
+    step.inplace, step.advance = True, advance
+
+    class Sweeping(VelocityVerlet):
+        def kernel(self, problem, h):
+            return step
+
+    x0, v0 = state(n, None, seed=3)
+    ref = integrate(VelocityVerlet(), problem, x0, v0, h, steps, record_every=7)
+    got = integrate(Sweeping(), problem, x0, v0, h, steps, record_every=7)
+    assert calls == [7] * 8 + [4]
+    assert rel(got.x, ref.x) <= 1e-12 and rel(got.v, ref.v) <= 1e-12
+    assert np.all(x0 == state(n, None, seed=3)[0])
