@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import math
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -10,16 +9,10 @@ from pathlib import Path
 import numpy as np
 
 from . import plots
-from .bounds import omega2_bound
-from .driver import Progress, integrate
-from .effects import EffectSplitting
-from .linear_exact import AugmentedLinear
 from .errors import RunRefused
 from .files import atomic_path
-from .integrators import ADAPTIVE, INTEGRATORS
 from .integrators.base import Problem
 from .integrators.verlet import VelocityVerlet
-from .modal import ModalSolution
 from .spectrum import Spectrum, spectrum, spectrum_from_closed_form
 from .system import System
 
@@ -83,18 +76,6 @@ def check_stable(omega_max: float, h: float, method: str, limit: float = 2.0) ->
                          quantity="dt")
 
 
-def problem_for(system: System) -> Problem:
-    """The conservative problem (with the chain operator when the scene is plain linear)."""
-    return Problem.from_system(system)
-
-
-def full_problem(system: System) -> Problem:
-    """Conservative + damping + external forces, for methods that take them all (adaptive)."""
-    Ad = system.damping_rate_matrix()
-    return Problem(system.acceleration_fn, damping=None if Ad is None else (lambda v: Ad @ v),
-                   external=system.external_fn)
-
-
 class FusedChainVerlet(VelocityVerlet):
     """Velocity Verlet on a ``[chain]`` scene through the fused single-pass kernel
     (:mod:`numeric.fast`: numba when installed, else the NumPy stencil). Same scheme,
@@ -112,7 +93,7 @@ class FusedChainVerlet(VelocityVerlet):
 def run_methods(system: System, x0: np.ndarray, v0: np.ndarray, h: float, steps: int,
                 methods: list[str], record_every: int = 1, spectrum_source: str = "svd",
                 progress: bool | None = None, rtol: float = 1e-10, atol: float = 1e-12) -> dict[str, Run]:
-    """Run each named method from (x0, v0) on the grid t = i·h, i = 0..steps.
+    """Run each named method from (x0, v0) on the grid t = i·h, i = 0..steps, keeping the frames.
 
     Parameters
     ----------
@@ -124,49 +105,19 @@ def run_methods(system: System, x0: np.ndarray, v0: np.ndarray, h: float, steps:
     -------
     dict of str to Run
     """
-    linear = system.linear
-    spec = None
-    if linear:
-        spec = system_spectrum(system, spectrum_source)
-    plain = not (system.damped or system.forced)
+    from .runners import Grid, MemoryRecorder, RunContext, method
+
+    ctx = RunContext(system, spectrum_source, rtol, atol, progress)
+    grid = Grid(h, steps, record_every)
+    chosen = [method(name) for name in methods]
+    for m in chosen:  # refuse before running anything
+        m.check(system)
     out: dict[str, Run] = {}
-    idx = np.arange(0, steps + 1, record_every)
-    if idx[-1] != steps:
-        idx = np.append(idx, steps)
-    t = idx * h
-    for name in methods:
-        if name == EXACT:
-            if not system.exact_available:
-                why = ("this scene has cubic springs" if not linear
-                       else "its external forces are not constant + harmonic")
-                raise RunRefused(f"method 'modal': no exact solution applies ({why}); use "
-                                 + ", ".join(INTEGRATORS), quantity="method")
-            t0 = time.perf_counter()
-            if plain and "gravity" not in system.effects:
-                sol = ModalSolution.from_initial(system_spectrum(system, spectrum_source), x0, v0)
-                x, v = sol.at(t)
-            else:
-                x, v = AugmentedLinear.from_system(system).solve(x0, v0, t, h * record_every)
-            out[name] = Run(name, t, x, v, time.perf_counter() - t0, 0)
-            continue
-        if name in ADAPTIVE:
-            t0 = time.perf_counter()
-            res = ADAPTIVE[name]().solve(full_problem(system), x0, v0, t, rtol, atol)
-            out[name] = Run(name, t, res.x[..., 0], res.v[..., 0], time.perf_counter() - t0, res.force_evals)
-            continue
-        integrator = INTEGRATORS[name]()
-        if not plain:
-            integrator = EffectSplitting(integrator, system.damping_rate_matrix(), system.external_fn)
-        if spec is not None:
-            check_stable(spec.omega_max, h, name, getattr(integrator, "stability_limit", 2.0))
-        bar = Progress(steps, name, enabled=progress if progress is not None else None)
-        if not (steps * system.n > 2_000_000):
-            bar.enabled = False
+    for m in chosen:
+        rec = MemoryRecorder(grid.indices.shape[0], system.n)
         t0 = time.perf_counter()
-        traj = integrate(integrator, problem_for(system), x0, v0, h, steps, record_every, progress=bar)
-        n = system.n
-        out[name] = Run(name, traj.t, traj.x[:, :n, 0], traj.v[:, :n, 0], time.perf_counter() - t0,
-                        traj.force_evals)
+        evals = m.run(ctx, x0, v0, grid, rec)
+        out[m.name] = Run(m.name, grid.t, rec.x, rec.v, time.perf_counter() - t0, evals)
     return out
 
 
@@ -254,91 +205,75 @@ def write_figures(out: Path, scene_name: str, names, system: System, runs: dict[
     return paths
 
 
+class _StreamRecorder:
+    """Writes one method's frames into the chunked NPZ; keeps the energy per frame and a few profiles."""
+
+    def __init__(self, writer, system: System, name: str, t: np.ndarray, keep: set[int]):
+        self.writer, self.system, self.name, self.t, self.keep = writer, system, name, t, keep
+        self.energy = np.empty(t.shape[0])
+        self.snapshots: dict[float, np.ndarray] = {}
+
+    def frame(self, row: int, x: np.ndarray, v: np.ndarray) -> None:
+        n = self.system.n
+        x1, v1 = np.reshape(x, (-1, 1))[:n], np.reshape(v, (-1, 1))[:n]
+        self.writer.frame(self.name, row, x1, v1)
+        self.energy[row] = float(self.system.energy(x1, v1)[0])
+        if row in self.keep:
+            self.snapshots[float(self.t[row])] = np.array(x1[:, 0])
+
+
 def stream_methods(system: System, x0: np.ndarray, v0: np.ndarray, h: float, steps: int,
                    methods: list[str], record_every: int, out: Path, scene_name: str,
-                   snapshots: int = 5, figures: bool = True) -> dict:
+                   snapshots: int = 5, figures: bool = True, progress: bool | None = None) -> dict:
     """Run long simulations writing frames straight to ``out/<name>.npz`` (bounded memory).
 
     Keeps only the energy per frame and a few profile snapshots in memory.
     Returns a summary like :func:`compare`'s, plus the paths written.
     """
     from .chunked import ChunkedNPZ
+    from .runners import Grid, RunContext, method
 
-    idx = np.arange(0, steps + 1, record_every)
-    if idx[-1] != steps:
-        idx = np.append(idx, steps)
-    t = idx * h
-    row_of = {int(i): r for r, i in enumerate(idx)}
-    keep = set(np.linspace(0, len(idx) - 1, min(snapshots, len(idx))).round().astype(int).tolist())
+    ctx = RunContext(system, progress=progress)
+    grid = Grid(h, steps, record_every)
+    t = grid.t
+    chosen = [method(name) for name in methods]
+    for m in chosen:
+        m.check(system)
+    keep = set(np.linspace(0, len(t) - 1, min(snapshots, len(t))).round().astype(int).tolist())
     summary: dict = {"methods": {}}
-    snaps: dict[str, dict[float, np.ndarray]] = {}
+    recorders: dict[str, _StreamRecorder] = {}
     npz = out / f"{scene_name}.npz"
     with ChunkedNPZ(npz, t, system.n, methods) as writer:
-        for name in methods:
-            energies = np.empty(len(idx))
-            snaps[name] = {}
-
-            def on_frame(i, x, v, name=name, energies=energies):
-                r = row_of[int(i)]
-                x1, v1 = x[: system.n, :1], v[: system.n, :1]
-                writer.frame(name, r, x1, v1)
-                energies[r] = float(system.energy(x1, v1)[0])
-                if r in keep:
-                    snaps[name][float(t[r])] = np.array(x1[:, 0])
-
+        for m in chosen:
+            rec = recorders[m.name] = _StreamRecorder(writer, system, m.name, t, keep)
             t0 = time.perf_counter()
-            if name == EXACT:
-                from .chain_modal import ChainModal
-
-                # uniform chains: sine/cosine/Fourier transforms, O(N log N) per frame, no N x N
-                sol = ChainModal.from_module(system.module, system.params, x0, v0)
-                for r, ti in enumerate(t):
-                    x, v = sol.at(float(ti))
-                    on_frame(idx[r], np.reshape(x, (system.n, -1)), np.reshape(v, (system.n, -1)))
-                evals = 0
-            else:
-                integrator = INTEGRATORS[name]()
-                if name == "verlet" and system.chain and system.conservative:
-                    integrator = FusedChainVerlet(system)
-                if system.chain:
-                    # a proven bound (Gershgorin), no eigen-solve
-                    bound = math.sqrt(omega2_bound(system.masses, system.spring_ends, system.stiffness))
-                    check_stable(bound, h, name, getattr(integrator, "stability_limit", 2.0))
-                bar = Progress(steps, name)
-                traj = integrate(integrator, problem_for(system), x0, v0, h, steps, record_every,
-                                 on_frame=on_frame, progress=bar)
-                evals = traj.force_evals
-            seconds = time.perf_counter() - t0
-            summary["methods"][name] = {
-                "seconds": seconds, "force_evals": evals,
-                "energy_drift": float(np.max(np.abs(energies - energies[0]))),
-                "energy_drift_relative": float(np.max(np.abs(energies - energies[0]))
-                                               / max(np.max(np.abs(energies)), 1e-300)),
+            evals = m.run(ctx, x0, v0, grid, rec)
+            e = rec.energy
+            summary["methods"][m.name] = {
+                "seconds": time.perf_counter() - t0, "force_evals": evals,
+                "energy_drift": float(np.max(np.abs(e - e[0]))),
+                "energy_drift_relative": float(np.max(np.abs(e - e[0])) / max(np.max(np.abs(e)), 1e-300)),
             }
-            summary["methods"][name]["_energy"] = energies
         if EXACT in methods:  # differences from exact, one frame at a time (bounded memory)
             for name in methods:
                 if name == EXACT:
                     continue
                 dx = dv = 0.0
-                for r in range(len(idx)):
+                for r in range(len(t)):
                     dx = max(dx, float(np.max(np.abs(writer.arrays[f"x_{name}"][r] - writer.arrays[f"x_{EXACT}"][r]))))
                     dv = max(dv, float(np.max(np.abs(writer.arrays[f"v_{name}"][r] - writer.arrays[f"v_{EXACT}"][r]))))
                 summary["methods"][name]["max_position_difference"] = dx
                 summary["methods"][name]["max_velocity_difference"] = dv
     paths = []
     if figures:
-        for name, sn in snaps.items():
-            fig = plots.profiles(sn)
+        for name, rec in recorders.items():
+            fig = plots.profiles(rec.snapshots)
             paths.append(out / f"{scene_name}-{name}-profiles.png")
             plots.save(fig, paths[-1])
-        energies = {m: rec.pop("_energy") for m, rec in summary["methods"].items()}
+        energies = {name: rec.energy for name, rec in recorders.items()}
         fig = plots.energy(t, energies, float(next(iter(energies.values()))[0]))
         paths.append(out / f"{scene_name}-energy.png")
         plots.save(fig, paths[-1])
-    else:
-        for rec in summary["methods"].values():
-            rec.pop("_energy")
     summary["npz"] = str(npz)
     summary["figures"] = [str(p) for p in paths]
     return summary
