@@ -15,6 +15,7 @@ centre of mass of a free piece.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from functools import cached_property
 
 import numpy as np
 
@@ -84,8 +85,40 @@ class ModalSolution:
         -------
         x, v : ndarray, shape (N, ...) for scalar t, or (S, N, ...) for an array of times
         """
+        if self.q0.ndim == 1 and np.ndim(t) == 1:
+            return self._trajectory(np.asarray(t, dtype=float))
         t, q, p, _ = self._modal(t)
         return self._physical(t, q), self._physical(t, p)
+
+    @cached_property
+    def _maps(self) -> np.ndarray:
+        """``G`` (2N, 2N) with ``[x v] = [cos(ωt) | t·sinc(ωt)] G`` for one initial state.
+
+        Rows 0..N-1 multiply cos(ω_j t): ``q0_j e_jᵀ/√m`` into x and ``p0_j e_jᵀ/√m`` into v;
+        rows N..2N-1 multiply t·sinc(ω_j t): ``p0_j e_jᵀ/√m`` into x and ``-ω_j² q0_j e_jᵀ/√m`` into v.
+        """
+        Et = self.spectrum.vectors.T / np.sqrt(self.spectrum.masses)[None, :]
+        q0, p0, w2 = self.q0[:, None], self.p0[:, None], self.spectrum.omega2[:, None]
+        return np.block([[q0 * Et, p0 * Et], [p0 * Et, -w2 * q0 * Et]])
+
+    def _trajectory(self, t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """x, v of shape (S, N) at times t (S,): one complex exponential and one matrix product.
+
+        t·sinc(ωt) = sin(ωt)/ω for ω > 0; rigid modes (ω = 0 exactly, by structure) get t.
+        """
+        w = self.spectrum.omega
+        n = w.shape[0]
+        phase = np.multiply.outer(t, w)
+        z = np.exp(1j * phase)
+        cs = np.empty((t.shape[0], 2 * n))
+        cs[:, :n] = z.real
+        elastic = w > 0.0
+        inv_w = np.divide(1.0, w, out=np.zeros_like(w), where=elastic)
+        np.multiply(z.imag, inv_w, out=cs[:, n:])
+        if not elastic.all():
+            cs[:, n:][:, ~elastic] = t[:, None]
+        xv = cs @ self._maps
+        return xv[:, :n], xv[:, n:]
 
     def acceleration_at(self, t) -> np.ndarray:
         """Accelerations ``ẍ = -M^-1/2 E Ω² q`` at times ``t`` (analytic, no differencing).

@@ -1,0 +1,70 @@
+"""The exact modal solution's cost beside the trigonometry it cannot avoid.
+
+Run ``python -m springchain.bench_exact [--json]``. On the reference scene (S = 1001 output
+times, N = 3) it times, interleaved, the exact solution as ``simulate`` computes it (modal
+coordinates from the initial state, then positions and velocities at every output time) and
+NumPy evaluating the S × N cosine/sine pairs alone (``np.cos`` and ``np.sin`` of the phase
+array). Target (issue 13): exact ≤ 3 × trigonometry.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import statistics
+import timeit
+
+import numpy as np
+
+TARGET = 3.0
+
+
+def measure(scene: str = "seed", rounds: int = 7, number: int = 200) -> dict:
+    from . import _api
+    from ._modules import load_module
+    from .numeric.modal import ModalSolution
+    from .numeric.simulate import system_spectrum
+    from .numeric.system import System
+
+    sc = _api.load(scene)
+    system = System.from_module(load_module(sc)[0])
+    spec = system_spectrum(system)
+    t = np.arange(sc.steps // sc.record_every + 1) * sc.dt * sc.record_every
+    phase = np.multiply.outer(t, spec.omega)
+
+    def exact():
+        return ModalSolution.from_initial(spec, sc.x0, sc.v0).at(t)
+
+    def trig():
+        return np.cos(phase), np.sin(phase)
+
+    samples = {"exact": [], "trig": []}
+    for _ in range(rounds):
+        for name, f in (("exact", exact), ("trig", trig)):
+            samples[name].append(timeit.timeit(f, number=number) / number)
+    ratios = [e / g for e, g in zip(samples["exact"], samples["trig"])]
+    return {"scene": sc.name, "S": int(t.shape[0]), "N": int(system.n),
+            "seconds": {k: {"median": statistics.median(v), "min": min(v)} for k, v in samples.items()},
+            "ratio_median": statistics.median(ratios), "limit": TARGET,
+            "met": statistics.median(ratios) <= TARGET}
+
+
+def main(argv: list[str] | None = None) -> int:
+    p = argparse.ArgumentParser(prog="python -m springchain.bench_exact", description=__doc__.split("\n\n")[0])
+    p.add_argument("--json", action="store_true", help="print JSON")
+    args = p.parse_args(argv)
+    r = measure()
+    if args.json:
+        print(json.dumps(r, indent=1))
+    else:
+        s = r["seconds"]
+        print(f"{r['scene']}: S = {r['S']} times, N = {r['N']} masses\n"
+              f"  exact solution   {s['exact']['median'] * 1e6:8.1f} µs (min {s['exact']['min'] * 1e6:.1f})\n"
+              f"  cos + sin alone  {s['trig']['median'] * 1e6:8.1f} µs (min {s['trig']['min'] * 1e6:.1f})\n"
+              f"  ratio {r['ratio_median']:.2f}× (median of per-round ratios), target ≤ {TARGET:g}× — "
+              + ("met" if r["met"] else "MISSED"))
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
