@@ -21,7 +21,7 @@ from dataclasses import dataclass
 
 import sympy as sp
 
-from .codegen import _p, header, regenerate_command
+from .codegen import _p, header, privatize, regenerate_command
 from .model import parameter_symbols
 from .scene import Scene
 
@@ -157,8 +157,8 @@ def render_chain_module(model: ChainModel, *, bundled: bool = True) -> str:
     w("stiffness_matrix()/mass_matrix(), which refuse large n.")
     w('"""')
     w("")
-    w("import numpy")
-    w("import scipy.linalg")
+    w("import numpy as _np")
+    w("import scipy.linalg as _linalg")
     w("")
     w(f"SCENE = {sc.name!r}")
     w(f"SCENE_SHA256 = {sc.sha256!r}")
@@ -237,69 +237,69 @@ def render_chain_module(model: ChainModel, *, bundled: bool = True) -> str:
     w("    i = numpy.arange(n - 1, dtype=float)")
     w(f"    _inv_m = 1.0 / masses({kw}, n=n)")
     if ch.uniform:
-        w("    _inv_m = float(_inv_m[0])")
-        w(f"    _ks = float(_spring_k(0.0, {kw}))")
+        w("    _inv_m = _float(_inv_m[0])")
+        w(f"    _ks = _float(_spring_k(0.0, {kw}))")
         if cubic:
-            w(f"    _k3s = float(_spring_k3(0.0, {kw}))")
+            w(f"    _k3s = _float(_spring_k3(0.0, {kw}))")
     else:
         w(f"    _ks1 = numpy.broadcast_to(_spring_k(i, {kw}), (n - 1,))")
         if cubic:
             w(f"    _k3s1 = numpy.broadcast_to(_spring_k3(i, {kw}), (n - 1,))")
         w("    _inv_m1 = _inv_m")
     if ch.left == "wall":
-        w(f"    _k_left = float(_spring_k(numpy.array(-1.0), {kw}))")
+        w(f"    _k_left = _float(_spring_k(numpy.array(-1.0), {kw}))")
         if cubic:
-            w(f"    _k3_left = float(_spring_k3(numpy.array(-1.0), {kw}))")
+            w(f"    _k3_left = _float(_spring_k3(numpy.array(-1.0), {kw}))")
     if ch.right in ("wall", "ring"):
-        w(f"    _k_right = float(_spring_k(numpy.array(n - 1.0), {kw}))")
+        w(f"    _k_right = _float(_spring_k(numpy.array(n - 1.0), {kw}))")
         if cubic:
-            w(f"    _k3_right = float(_spring_k3(numpy.array(n - 1.0), {kw}))")
+            w(f"    _k3_right = _float(_spring_k3(numpy.array(n - 1.0), {kw}))")
     w("")
-    w("    def acceleration(x):")
+    w("    def _stencil(_y):")
     if not ch.uniform:  # per-mass coefficients broadcast against (n,) or (n, ...)
-        w("        _shape = (-1,) + (1,) * (numpy.ndim(x) - 1)")
+        w("        _shape = (-1,) + (1,) * (numpy.ndim(_y) - 1)")
         w("        _ks, _inv_m = _ks1.reshape(_shape), _inv_m1.reshape(_shape)")
         if cubic:
             w("        _k3s = _k3s1.reshape(_shape)")
-    w("        _f = numpy.empty(numpy.shape(x))")
-    w("        _d = x[1:] - x[:-1]")
+    w("        _f = numpy.empty(numpy.shape(_y))")
+    w("        _d = _y[1:] - _y[:-1]")
     w("        _s = _ks * _d" + (" + _k3s * _d**3" if cubic else ""))
     w("        _f[:-1] = _s")
     w("        _f[-1] = 0.0")
     w("        _f[1:] -= _s")
     if ch.left == "wall":
-        w("        _f[0] -= _k_left * x[0]" + (" + _k3_left * x[0]**3" if cubic else ""))
+        w("        _f[0] -= _k_left * _y[0]" + (" + _k3_left * _y[0]**3" if cubic else ""))
     if ch.right == "wall":
-        w("        _f[-1] -= _k_right * x[-1]" + (" + _k3_right * x[-1]**3" if cubic else ""))
+        w("        _f[-1] -= _k_right * _y[-1]" + (" + _k3_right * _y[-1]**3" if cubic else ""))
     if ch.left == "ring":
-        w("        _dr = x[0] - x[-1]")
+        w("        _dr = _y[0] - _y[-1]")
         w("        _sr = _k_right * _dr" + (" + _k3_right * _dr**3" if cubic else ""))
         w("        _f[-1] += _sr")
         w("        _f[0] -= _sr")
     w("        _f *= _inv_m")
     w("        return _f")
     w("")
-    w("    return acceleration")
+    w("    return _stencil")
     w("")
     w("")
-    w(f"def acceleration(x, {sig}):")
+    w(f"def acceleration(_x, {sig}):")
     w('    """Acceleration of the chain; x shape (n, ...) (n taken from x)."""')
-    w(f"    return make_acceleration({kw}, n=numpy.shape(x)[0])(x)")
+    w(f"    return make_acceleration({kw}, n=numpy.shape(_x)[0])(_x)")
     w("")
     w("")
-    w(f"def energy(x, v, {sig}):")
+    w(f"def energy(_x, _v, {sig}):")
     w('    """Total energy; x, v shape (n, ...) -> (...)."""')
-    w("    n = numpy.shape(x)[0]")
-    w("    _extra = (1,) * (numpy.ndim(x) - 1)")
+    w("    n = numpy.shape(_x)[0]")
+    w("    _extra = (1,) * (numpy.ndim(_x) - 1)")
     w(f"    _m = masses({kw}, n=n).reshape((n,) + _extra)")
     w(f"    _kk = spring_constants({kw}, n=n)")
     w("    _ends = spring_ends(n)")
-    w("    _xa = numpy.where((_ends[:, 0] >= 0).reshape((-1,) + _extra), x[_ends[:, 0]], 0.0)")
-    w("    _xb = numpy.where((_ends[:, 1] >= 0).reshape((-1,) + _extra), x[_ends[:, 1]], 0.0)")
+    w("    _xa = numpy.where((_ends[:, 0] >= 0).reshape((-1,) + _extra), _x[_ends[:, 0]], 0.0)")
+    w("    _xb = numpy.where((_ends[:, 1] >= 0).reshape((-1,) + _extra), _x[_ends[:, 1]], 0.0)")
     w("    _d = _xb - _xa")
-    w("    _e = 0.5 * numpy.sum(_m * v**2, axis=0) + 0.5 * numpy.sum(_kk.reshape((-1,) + _extra) * _d**2, axis=0)")
+    w("    _e = 0.5 * numpy.sum(_m * _v**2, axis=0) + 0.5 * numpy.sum(_kk.reshape((-1,) + _extra) * _d**2, axis=0)")
     if cubic:
-        w("    i = numpy.arange(len(_kk), dtype=float) - (1.0 if LEFT == 'wall' else 0.0)")
+        w("    i = numpy.arange(_kk.shape[0], dtype=float) - (1.0 if _LEFT == 'wall' else 0.0)")
         w(f"    _k3s = numpy.broadcast_to(_spring_k3(i, {kw}), _kk.shape)")
         w("    _e = _e + 0.25 * numpy.sum(_k3s.reshape((-1,) + _extra) * _d**4, axis=0)")
     w("    return _e")
@@ -321,8 +321,8 @@ def render_chain_module(model: ChainModel, *, bundled: bool = True) -> str:
     w("")
     w(f"def stiffness_matrix({sig}, n=N):")
     w('    """Dense K, shape (n, n); only for n <= MAX_DENSE."""')
-    w("    if n > MAX_DENSE:")
-    w("        raise ValueError(f'stiffness_matrix: n = {n} > MAX_DENSE = {MAX_DENSE}; use stiffness_bands()')")
+    w("    if n > _MAX_DENSE:")
+    w("        raise ValueError(f'stiffness_matrix: n = {n} > MAX_DENSE = {_MAX_DENSE}; use stiffness_bands()')")
     w(f"    _diag, _off = stiffness_bands({kw}, n=n)")
     w("    _K = numpy.diag(_diag) + numpy.diag(_off, 1) + numpy.diag(_off, -1)")
     if ch.left == "ring":
@@ -334,8 +334,8 @@ def render_chain_module(model: ChainModel, *, bundled: bool = True) -> str:
     w("")
     w(f"def mass_matrix({sig}, n=N):")
     w('    """Dense M, shape (n, n); only for n <= MAX_DENSE."""')
-    w("    if n > MAX_DENSE:")
-    w("        raise ValueError(f'mass_matrix: n = {n} > MAX_DENSE = {MAX_DENSE}')")
+    w("    if n > _MAX_DENSE:")
+    w("        raise ValueError(f'mass_matrix: n = {n} > MAX_DENSE = {_MAX_DENSE}')")
     w(f"    return numpy.diag(masses({kw}, n=n))")
     w("")
     w("")
@@ -350,7 +350,7 @@ def render_chain_module(model: ChainModel, *, bundled: bool = True) -> str:
     elif ch.left == "ring":
         w('    """Squared angular frequencies (non-uniform ring: dense, n <= MAX_DENSE), shape (n,)."""')
         w(f"    _w = scipy.linalg.eigh(stiffness_matrix({kw}, n=n), mass_matrix({kw}, n=n), eigvals_only=True)")
-        w("    _w[:RIGID_MODES] = 0.0")
+        w("    _w[:_RIGID_MODES] = 0.0")
         w("    return numpy.maximum(_w, 0.0)")
     else:
         w('    """Squared angular frequencies from the tridiagonal D (no closed form), shape (n,)."""')
@@ -358,6 +358,6 @@ def render_chain_module(model: ChainModel, *, bundled: bool = True) -> str:
         w(f"    _diag, _off = stiffness_bands({kw}, n=n)")
         w("    _r = 1.0 / numpy.sqrt(_m)")
         w("    _w = scipy.linalg.eigh_tridiagonal(_diag * _r * _r, _off * _r[:-1] * _r[1:], eigvals_only=True)")
-        w("    _w[:RIGID_MODES] = 0.0")
+        w("    _w[:_RIGID_MODES] = 0.0")
         w("    return numpy.maximum(_w, 0.0)")
-    return "\n".join(w_lines) + "\n"
+    return privatize("\n".join(w_lines) + "\n")
