@@ -105,8 +105,73 @@ def chain_modes(model: ChainModel) -> ChainModes:
                       f"{left}-{right}", note)
 
 
-def chain_report(model: ChainModel, modes: ChainModes) -> tuple[str, dict]:
-    """Text and JSON description of a chain's derivation and spectrum."""
+#: Chains of at most this many masses list every mode in ``modes --json``; longer ones list the
+#: first and last MODES_LISTED_EACH_END (with a note).
+MAX_MODES_LISTED = 40
+MODES_LISTED_EACH_END = 10
+
+
+def chain_mode_records(model: ChainModel, modes: ChainModes, omega2_values=None) -> tuple[list[dict], str]:
+    """Mode records in the schema of non-chain scenes (``omega2``, ``omega2_value``,
+    ``multiplicity``, ``shape``), ascending; for long chains only both ends of the spectrum.
+
+    ``omega2_values`` are the n values of the generated module's ``omega2()`` (needed for a
+    non-uniform chain; a uniform one evaluates its closed form). ``shape`` is the closed-form
+    shape as a function of the mass index ``i`` (None without a closed form); ``shape_value``
+    lists its values only for chains of at most MAX_MODES_LISTED masses.
+    """
+    import numpy as np
+
+    n = model.chain.n
+    values = None if omega2_values is None else np.asarray(omega2_values, dtype=float)
+    order = None
+    sub = {model.params[p]: sp.Float(v, 17) if v != int(v) else sp.Integer(int(v))
+           for p, v in model.scene.parameters.items()}
+    if modes.omega2 is not None:
+        lo = modes.j_range[0]
+        fam = sp.lambdify(model.j, modes.omega2.subs(sub).subs(model.n, n), "numpy")
+        js = np.arange(lo, n + lo, dtype=float)
+        fam_values = np.broadcast_to(np.asarray(fam(js), dtype=float), js.shape)
+        order = np.argsort(fam_values, kind="stable")
+        if values is None:
+            values = fam_values[order]
+    if values is None:
+        return [], "modes not listed (the eigen-problem is too large to solve densely here)"
+    values = np.maximum(np.sort(values), 0.0)
+    if n <= MAX_MODES_LISTED:
+        picked, note = list(range(n)), ""
+    else:
+        e = MODES_LISTED_EACH_END
+        picked = list(range(e)) + list(range(n - e, n))
+        note = (f"modes lists the {e} lowest and {e} highest of the {n} modes; the family "
+                "omega2(j), shape(i, j) gives every one")
+    scale = float(np.max(np.abs(values))) if values.size else 0.0
+    records = []
+    for p in picked:
+        mult = int(np.count_nonzero(np.abs(values - values[p]) <= 1e-12 * max(scale, 1e-300)))
+        rec = {"omega2": sp.sstr(sp.Float(values[p], 17)), "omega2_value": float(values[p]),
+               "multiplicity": mult, "shape": None}
+        if order is not None:
+            j = int(order[p]) + modes.j_range[0]
+            rec["j"] = j
+            rec["omega2"] = sp.sstr(modes.omega2.subs({model.j: j, model.n: n}))
+            shape = modes.shape.subs({model.j: j, model.n: n})
+            rec["shape"] = sp.sstr(shape)
+            if n <= MAX_MODES_LISTED:
+                f = sp.lambdify(model.i, shape, "numpy")
+                idx = np.arange(n, dtype=float)
+                rec["shape_value"] = [float(v) for v in np.broadcast_to(np.asarray(f(idx), dtype=float), (n,))]
+        records.append(rec)
+    return records, note
+
+
+def chain_report(model: ChainModel, modes: ChainModes, omega2_values=None) -> tuple[str, dict]:
+    """Text and JSON description of a chain's derivation and spectrum.
+
+    The JSON has the top-level shape of non-chain scenes (``scene, parameters, masses, modes,
+    closed_form, notes``; ``masses`` is empty: chain masses are indices 0 … n−1) plus the
+    chain's ``n, left, right, uniform, j_range`` and its symbolic ``family`` (omega2, shape).
+    """
     sc, ch = model.scene, model.chain
     force = sp.factor_terms(model.interior_equation())
     lines = [f"Scene {sc.name!r} ({sc.file}): {sc.description}".rstrip(": "),
@@ -126,12 +191,16 @@ def chain_report(model: ChainModel, modes: ChainModes) -> tuple[str, dict]:
     lines += [f"    note: {note}" for note in modes.notes]
     if model.k3 is not None:
         lines.append("    note: cubic springs: modes of the linearization; no exact solution")
+    notes = list(modes.notes) + (["cubic springs: modes of the linearization; no exact solution"]
+                                 if model.k3 is not None else [])
+    records, listed_note = chain_mode_records(model, modes, omega2_values)
     data = {"scene": sc.name, "parameters": {k: sc.parameters[k] for k in sorted(sc.parameters)},
+            "masses": [], "modes": records, "closed_form": modes.closed_form,
+            "notes": notes + ([listed_note] if listed_note else []),
             "n": ch.n, "left": ch.left, "right": ch.right, "uniform": ch.uniform,
-            "omega2": None if modes.omega2 is None else sp.sstr(modes.omega2),
-            "shape": None if modes.shape is None else sp.sstr(modes.shape),
             "j_range": None if modes.j_range is None else list(modes.j_range),
-            "notes": list(modes.notes)}
+            "family": {"omega2": None if modes.omega2 is None else sp.sstr(modes.omega2),
+                       "shape": None if modes.shape is None else sp.sstr(modes.shape)}}
     return "\n".join(lines) + "\n", data
 
 

@@ -19,6 +19,8 @@ import difflib
 import hashlib
 import keyword
 import math
+import os
+import stat
 import tomllib
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -364,6 +366,17 @@ def load_scene(path: str | Path, text: str | None = None) -> Scene:
     """
     file = str(path)
     if text is None:
+        try:  # a FIFO, a device or a folder would block or fail inside open()/read(): refuse first
+            mode = os.stat(path).st_mode
+        except OSError as exc:
+            raise SceneError(file, None, f"cannot read the scene file ({exc.strerror or exc}); "
+                                         "accepted: a readable TOML file") from None
+        if not stat.S_ISREG(mode):
+            kind = ("a folder" if stat.S_ISDIR(mode) else "a FIFO (named pipe)" if stat.S_ISFIFO(mode)
+                    else "a socket" if stat.S_ISSOCK(mode) else "a device" if stat.S_ISCHR(mode)
+                    or stat.S_ISBLK(mode) else "not a regular file")
+            raise SceneError(file, None, f"cannot read the scene file ({kind}, not a regular file); "
+                                         "accepted: a regular TOML file")
         try:
             with open(path, "rb") as fh:
                 raw = fh.read(MAX_FILE_BYTES + 1)
@@ -376,7 +389,9 @@ def load_scene(path: str | Path, text: str | None = None) -> Scene:
         raise SceneError(file, None, f"larger than {MAX_FILE_BYTES // 2**20} MiB; accepted: smaller "
                                      "files (a long chain's initial state can be an expression of i)")
     try:
-        data = tomllib.loads(raw.decode("utf-8"))
+        decoded = raw.decode("utf-8")
+        # a UTF-8 byte order mark (written by some Windows editors) is not TOML: accept and skip it
+        data = tomllib.loads(decoded[1:] if decoded.startswith("\ufeff") else decoded)
     except UnicodeDecodeError as exc:
         raise SceneError(file, None, f"byte {exc.start} is not UTF-8; accepted: a UTF-8 TOML file") from None
     except tomllib.TOMLDecodeError as exc:

@@ -10,6 +10,7 @@ import numpy as np
 
 from . import plots
 from .driver import Progress, integrate
+from .progress import phase
 from .effects import EffectSplitting
 from .linear_exact import AugmentedLinear
 from .errors import RunRefused
@@ -253,7 +254,7 @@ def write_figures(out: Path, scene_name: str, names, system: System, runs: dict[
 
 def stream_methods(system: System, x0: np.ndarray, v0: np.ndarray, h: float, steps: int,
                    methods: list[str], record_every: int, out: Path, scene_name: str,
-                   snapshots: int = 5, figures: bool = True) -> dict:
+                   snapshots: int = 5, figures: bool = True, progress: bool | None = None) -> dict:
     """Run long simulations writing frames straight to ``out/<name>.npz`` (bounded memory).
 
     Keeps only the energy per frame and a few profile snapshots in memory.
@@ -270,7 +271,7 @@ def stream_methods(system: System, x0: np.ndarray, v0: np.ndarray, h: float, ste
     summary: dict = {"methods": {}}
     snaps: dict[str, dict[float, np.ndarray]] = {}
     npz = out / f"{scene_name}.npz"
-    with ChunkedNPZ(npz, t, system.n, methods) as writer:
+    with ChunkedNPZ(npz, t, system.n, methods, progress=progress) as writer:
         for name in methods:
             energies = np.empty(len(idx))
             snaps[name] = {}
@@ -288,10 +289,13 @@ def stream_methods(system: System, x0: np.ndarray, v0: np.ndarray, h: float, ste
                 from .chain_modal import ChainModal
 
                 # uniform chains: sine/cosine/Fourier transforms, O(N log N) per frame, no N x N
-                sol = ChainModal.from_module(system.module, system.params, x0, v0)
+                with phase("exact solution: set-up", enabled=progress):
+                    sol = ChainModal.from_module(system.module, system.params, x0, v0)
+                bar = Progress(len(t), "exact solution", enabled=progress)
                 for r, ti in enumerate(t):
                     x, v = sol.at(float(ti))
                     on_frame(idx[r], np.reshape(x, (system.n, -1)), np.reshape(v, (system.n, -1)))
+                    bar.update(r + 1)
                 evals = 0
             else:
                 integrator = INTEGRATORS[name]()
@@ -299,9 +303,9 @@ def stream_methods(system: System, x0: np.ndarray, v0: np.ndarray, h: float, ste
                     integrator = FusedChainVerlet(system)
                 if system.chain:
                     # ω_max ≤ 2·sqrt(max k / min m) per Gershgorin on D: a proven bound, no eigen-solve
-                    bound = 2.0 * np.sqrt(2.0 * np.max(system.stiffness) / np.min(system.masses))
+                    bound = 2.0 * np.sqrt(2.0 * np.max(system.stiffness, initial=0.0) / np.min(system.masses))
                     check_stable(bound, h, name, getattr(integrator, "stability_limit", 2.0))
-                bar = Progress(steps, name)
+                bar = Progress(steps, name, enabled=progress)
                 traj = integrate(integrator, problem_for(system), x0, v0, h, steps, record_every,
                                  on_frame=on_frame, progress=bar)
                 evals = traj.force_evals
@@ -314,6 +318,7 @@ def stream_methods(system: System, x0: np.ndarray, v0: np.ndarray, h: float, ste
             }
             summary["methods"][name]["_energy"] = energies
         if EXACT in methods:  # differences from exact, one frame at a time (bounded memory)
+            compare_bar = Progress(len(idx) * (len(methods) - 1), "differences from exact", enabled=progress)
             for name in methods:
                 if name == EXACT:
                     continue
@@ -321,6 +326,7 @@ def stream_methods(system: System, x0: np.ndarray, v0: np.ndarray, h: float, ste
                 for r in range(len(idx)):
                     dx = max(dx, float(np.max(np.abs(writer.arrays[f"x_{name}"][r] - writer.arrays[f"x_{EXACT}"][r]))))
                     dv = max(dv, float(np.max(np.abs(writer.arrays[f"v_{name}"][r] - writer.arrays[f"v_{EXACT}"][r]))))
+                    compare_bar.update(compare_bar.done + 1)
                 summary["methods"][name]["max_position_difference"] = dx
                 summary["methods"][name]["max_velocity_difference"] = dv
     paths = []
