@@ -21,7 +21,7 @@ from dataclasses import dataclass
 
 import sympy as sp
 
-from .codegen import _p, header, regenerate_command
+from .codegen import _p, header, privatize, regenerate_command
 from .model import parameter_symbols
 from .scene import Scene
 
@@ -105,8 +105,73 @@ def chain_modes(model: ChainModel) -> ChainModes:
                       f"{left}-{right}", note)
 
 
-def chain_report(model: ChainModel, modes: ChainModes) -> tuple[str, dict]:
-    """Text and JSON description of a chain's derivation and spectrum."""
+#: Chains of at most this many masses list every mode in ``modes --json``; longer ones list the
+#: first and last MODES_LISTED_EACH_END (with a note).
+MAX_MODES_LISTED = 40
+MODES_LISTED_EACH_END = 10
+
+
+def chain_mode_records(model: ChainModel, modes: ChainModes, omega2_values=None) -> tuple[list[dict], str]:
+    """Mode records in the schema of non-chain scenes (``omega2``, ``omega2_value``,
+    ``multiplicity``, ``shape``), ascending; for long chains only both ends of the spectrum.
+
+    ``omega2_values`` are the n values of the generated module's ``omega2()`` (needed for a
+    non-uniform chain; a uniform one evaluates its closed form). ``shape`` is the closed-form
+    shape as a function of the mass index ``i`` (None without a closed form); ``shape_value``
+    lists its values only for chains of at most MAX_MODES_LISTED masses.
+    """
+    import numpy as np
+
+    n = model.chain.n
+    values = None if omega2_values is None else np.asarray(omega2_values, dtype=float)
+    order = None
+    sub = {model.params[p]: sp.Float(v, 17) if v != int(v) else sp.Integer(int(v))
+           for p, v in model.scene.parameters.items()}
+    if modes.omega2 is not None:
+        lo = modes.j_range[0]
+        fam = sp.lambdify(model.j, modes.omega2.subs(sub).subs(model.n, n), "numpy")
+        js = np.arange(lo, n + lo, dtype=float)
+        fam_values = np.broadcast_to(np.asarray(fam(js), dtype=float), js.shape)
+        order = np.argsort(fam_values, kind="stable")
+        if values is None:
+            values = fam_values[order]
+    if values is None:
+        return [], "modes not listed (the eigen-problem is too large to solve densely here)"
+    values = np.maximum(np.sort(values), 0.0)
+    if n <= MAX_MODES_LISTED:
+        picked, note = list(range(n)), ""
+    else:
+        e = MODES_LISTED_EACH_END
+        picked = list(range(e)) + list(range(n - e, n))
+        note = (f"modes lists the {e} lowest and {e} highest of the {n} modes; the family "
+                "omega2(j), shape(i, j) gives every one")
+    scale = float(np.max(np.abs(values))) if values.size else 0.0
+    records = []
+    for p in picked:
+        mult = int(np.count_nonzero(np.abs(values - values[p]) <= 1e-12 * max(scale, 1e-300)))
+        rec = {"omega2": sp.sstr(sp.Float(values[p], 17)), "omega2_value": float(values[p]),
+               "multiplicity": mult, "shape": None}
+        if order is not None:
+            j = int(order[p]) + modes.j_range[0]
+            rec["j"] = j
+            rec["omega2"] = sp.sstr(modes.omega2.subs({model.j: j, model.n: n}))
+            shape = modes.shape.subs({model.j: j, model.n: n})
+            rec["shape"] = sp.sstr(shape)
+            if n <= MAX_MODES_LISTED:
+                f = sp.lambdify(model.i, shape, "numpy")
+                idx = np.arange(n, dtype=float)
+                rec["shape_value"] = [float(v) for v in np.broadcast_to(np.asarray(f(idx), dtype=float), (n,))]
+        records.append(rec)
+    return records, note
+
+
+def chain_report(model: ChainModel, modes: ChainModes, omega2_values=None) -> tuple[str, dict]:
+    """Text and JSON description of a chain's derivation and spectrum.
+
+    The JSON has the top-level shape of non-chain scenes (``scene, parameters, masses, modes,
+    closed_form, notes``; ``masses`` is empty: chain masses are indices 0 … n−1) plus the
+    chain's ``n, left, right, uniform, j_range`` and its symbolic ``family`` (omega2, shape).
+    """
     sc, ch = model.scene, model.chain
     force = sp.factor_terms(model.interior_equation())
     lines = [f"Scene {sc.name!r} ({sc.file}): {sc.description}".rstrip(": "),
@@ -126,12 +191,16 @@ def chain_report(model: ChainModel, modes: ChainModes) -> tuple[str, dict]:
     lines += [f"    note: {note}" for note in modes.notes]
     if model.k3 is not None:
         lines.append("    note: cubic springs: modes of the linearization; no exact solution")
+    notes = list(modes.notes) + (["cubic springs: modes of the linearization; no exact solution"]
+                                 if model.k3 is not None else [])
+    records, listed_note = chain_mode_records(model, modes, omega2_values)
     data = {"scene": sc.name, "parameters": {k: sc.parameters[k] for k in sorted(sc.parameters)},
+            "masses": [], "modes": records, "closed_form": modes.closed_form,
+            "notes": notes + ([listed_note] if listed_note else []),
             "n": ch.n, "left": ch.left, "right": ch.right, "uniform": ch.uniform,
-            "omega2": None if modes.omega2 is None else sp.sstr(modes.omega2),
-            "shape": None if modes.shape is None else sp.sstr(modes.shape),
             "j_range": None if modes.j_range is None else list(modes.j_range),
-            "notes": list(modes.notes)}
+            "family": {"omega2": None if modes.omega2 is None else sp.sstr(modes.omega2),
+                       "shape": None if modes.shape is None else sp.sstr(modes.shape)}}
     return "\n".join(lines) + "\n", data
 
 
@@ -157,8 +226,8 @@ def render_chain_module(model: ChainModel, *, bundled: bool = True) -> str:
     w("stiffness_matrix()/mass_matrix(), which refuse large n.")
     w('"""')
     w("")
-    w("import numpy")
-    w("import scipy.linalg")
+    w("import numpy as _np")
+    w("import scipy.linalg as _linalg")
     w("")
     w(f"SCENE = {sc.name!r}")
     w(f"SCENE_SHA256 = {sc.sha256!r}")
@@ -237,69 +306,69 @@ def render_chain_module(model: ChainModel, *, bundled: bool = True) -> str:
     w("    i = numpy.arange(n - 1, dtype=float)")
     w(f"    _inv_m = 1.0 / masses({kw}, n=n)")
     if ch.uniform:
-        w("    _inv_m = float(_inv_m[0])")
-        w(f"    _ks = float(_spring_k(0.0, {kw}))")
+        w("    _inv_m = _float(_inv_m[0])")
+        w(f"    _ks = _float(_spring_k(0.0, {kw}))")
         if cubic:
-            w(f"    _k3s = float(_spring_k3(0.0, {kw}))")
+            w(f"    _k3s = _float(_spring_k3(0.0, {kw}))")
     else:
         w(f"    _ks1 = numpy.broadcast_to(_spring_k(i, {kw}), (n - 1,))")
         if cubic:
             w(f"    _k3s1 = numpy.broadcast_to(_spring_k3(i, {kw}), (n - 1,))")
         w("    _inv_m1 = _inv_m")
     if ch.left == "wall":
-        w(f"    _k_left = float(_spring_k(numpy.array(-1.0), {kw}))")
+        w(f"    _k_left = _float(_spring_k(numpy.array(-1.0), {kw}))")
         if cubic:
-            w(f"    _k3_left = float(_spring_k3(numpy.array(-1.0), {kw}))")
+            w(f"    _k3_left = _float(_spring_k3(numpy.array(-1.0), {kw}))")
     if ch.right in ("wall", "ring"):
-        w(f"    _k_right = float(_spring_k(numpy.array(n - 1.0), {kw}))")
+        w(f"    _k_right = _float(_spring_k(numpy.array(n - 1.0), {kw}))")
         if cubic:
-            w(f"    _k3_right = float(_spring_k3(numpy.array(n - 1.0), {kw}))")
+            w(f"    _k3_right = _float(_spring_k3(numpy.array(n - 1.0), {kw}))")
     w("")
-    w("    def acceleration(x):")
+    w("    def _stencil(_y):")
     if not ch.uniform:  # per-mass coefficients broadcast against (n,) or (n, ...)
-        w("        _shape = (-1,) + (1,) * (numpy.ndim(x) - 1)")
+        w("        _shape = (-1,) + (1,) * (numpy.ndim(_y) - 1)")
         w("        _ks, _inv_m = _ks1.reshape(_shape), _inv_m1.reshape(_shape)")
         if cubic:
             w("        _k3s = _k3s1.reshape(_shape)")
-    w("        _f = numpy.empty(numpy.shape(x))")
-    w("        _d = x[1:] - x[:-1]")
+    w("        _f = numpy.empty(numpy.shape(_y))")
+    w("        _d = _y[1:] - _y[:-1]")
     w("        _s = _ks * _d" + (" + _k3s * _d**3" if cubic else ""))
     w("        _f[:-1] = _s")
     w("        _f[-1] = 0.0")
     w("        _f[1:] -= _s")
     if ch.left == "wall":
-        w("        _f[0] -= _k_left * x[0]" + (" + _k3_left * x[0]**3" if cubic else ""))
+        w("        _f[0] -= _k_left * _y[0]" + (" + _k3_left * _y[0]**3" if cubic else ""))
     if ch.right == "wall":
-        w("        _f[-1] -= _k_right * x[-1]" + (" + _k3_right * x[-1]**3" if cubic else ""))
+        w("        _f[-1] -= _k_right * _y[-1]" + (" + _k3_right * _y[-1]**3" if cubic else ""))
     if ch.left == "ring":
-        w("        _dr = x[0] - x[-1]")
+        w("        _dr = _y[0] - _y[-1]")
         w("        _sr = _k_right * _dr" + (" + _k3_right * _dr**3" if cubic else ""))
         w("        _f[-1] += _sr")
         w("        _f[0] -= _sr")
     w("        _f *= _inv_m")
     w("        return _f")
     w("")
-    w("    return acceleration")
+    w("    return _stencil")
     w("")
     w("")
-    w(f"def acceleration(x, {sig}):")
+    w(f"def acceleration(_x, {sig}):")
     w('    """Acceleration of the chain; x shape (n, ...) (n taken from x)."""')
-    w(f"    return make_acceleration({kw}, n=numpy.shape(x)[0])(x)")
+    w(f"    return make_acceleration({kw}, n=numpy.shape(_x)[0])(_x)")
     w("")
     w("")
-    w(f"def energy(x, v, {sig}):")
+    w(f"def energy(_x, _v, {sig}):")
     w('    """Total energy; x, v shape (n, ...) -> (...)."""')
-    w("    n = numpy.shape(x)[0]")
-    w("    _extra = (1,) * (numpy.ndim(x) - 1)")
+    w("    n = numpy.shape(_x)[0]")
+    w("    _extra = (1,) * (numpy.ndim(_x) - 1)")
     w(f"    _m = masses({kw}, n=n).reshape((n,) + _extra)")
     w(f"    _kk = spring_constants({kw}, n=n)")
     w("    _ends = spring_ends(n)")
-    w("    _xa = numpy.where((_ends[:, 0] >= 0).reshape((-1,) + _extra), x[_ends[:, 0]], 0.0)")
-    w("    _xb = numpy.where((_ends[:, 1] >= 0).reshape((-1,) + _extra), x[_ends[:, 1]], 0.0)")
+    w("    _xa = numpy.where((_ends[:, 0] >= 0).reshape((-1,) + _extra), _x[_ends[:, 0]], 0.0)")
+    w("    _xb = numpy.where((_ends[:, 1] >= 0).reshape((-1,) + _extra), _x[_ends[:, 1]], 0.0)")
     w("    _d = _xb - _xa")
-    w("    _e = 0.5 * numpy.sum(_m * v**2, axis=0) + 0.5 * numpy.sum(_kk.reshape((-1,) + _extra) * _d**2, axis=0)")
+    w("    _e = 0.5 * numpy.sum(_m * _v**2, axis=0) + 0.5 * numpy.sum(_kk.reshape((-1,) + _extra) * _d**2, axis=0)")
     if cubic:
-        w("    i = numpy.arange(len(_kk), dtype=float) - (1.0 if LEFT == 'wall' else 0.0)")
+        w("    i = numpy.arange(_kk.shape[0], dtype=float) - (1.0 if _LEFT == 'wall' else 0.0)")
         w(f"    _k3s = numpy.broadcast_to(_spring_k3(i, {kw}), _kk.shape)")
         w("    _e = _e + 0.25 * numpy.sum(_k3s.reshape((-1,) + _extra) * _d**4, axis=0)")
     w("    return _e")
@@ -321,8 +390,8 @@ def render_chain_module(model: ChainModel, *, bundled: bool = True) -> str:
     w("")
     w(f"def stiffness_matrix({sig}, n=N):")
     w('    """Dense K, shape (n, n); only for n <= MAX_DENSE."""')
-    w("    if n > MAX_DENSE:")
-    w("        raise ValueError(f'stiffness_matrix: n = {n} > MAX_DENSE = {MAX_DENSE}; use stiffness_bands()')")
+    w("    if n > _MAX_DENSE:")
+    w("        raise ValueError(f'stiffness_matrix: n = {n} > MAX_DENSE = {_MAX_DENSE}; use stiffness_bands()')")
     w(f"    _diag, _off = stiffness_bands({kw}, n=n)")
     w("    _K = numpy.diag(_diag) + numpy.diag(_off, 1) + numpy.diag(_off, -1)")
     if ch.left == "ring":
@@ -334,8 +403,8 @@ def render_chain_module(model: ChainModel, *, bundled: bool = True) -> str:
     w("")
     w(f"def mass_matrix({sig}, n=N):")
     w('    """Dense M, shape (n, n); only for n <= MAX_DENSE."""')
-    w("    if n > MAX_DENSE:")
-    w("        raise ValueError(f'mass_matrix: n = {n} > MAX_DENSE = {MAX_DENSE}')")
+    w("    if n > _MAX_DENSE:")
+    w("        raise ValueError(f'mass_matrix: n = {n} > MAX_DENSE = {_MAX_DENSE}')")
     w(f"    return numpy.diag(masses({kw}, n=n))")
     w("")
     w("")
@@ -350,7 +419,7 @@ def render_chain_module(model: ChainModel, *, bundled: bool = True) -> str:
     elif ch.left == "ring":
         w('    """Squared angular frequencies (non-uniform ring: dense, n <= MAX_DENSE), shape (n,)."""')
         w(f"    _w = scipy.linalg.eigh(stiffness_matrix({kw}, n=n), mass_matrix({kw}, n=n), eigvals_only=True)")
-        w("    _w[:RIGID_MODES] = 0.0")
+        w("    _w[:_RIGID_MODES] = 0.0")
         w("    return numpy.maximum(_w, 0.0)")
     else:
         w('    """Squared angular frequencies from the tridiagonal D (no closed form), shape (n,)."""')
@@ -358,6 +427,6 @@ def render_chain_module(model: ChainModel, *, bundled: bool = True) -> str:
         w(f"    _diag, _off = stiffness_bands({kw}, n=n)")
         w("    _r = 1.0 / numpy.sqrt(_m)")
         w("    _w = scipy.linalg.eigh_tridiagonal(_diag * _r * _r, _off * _r[:-1] * _r[1:], eigvals_only=True)")
-        w("    _w[:RIGID_MODES] = 0.0")
+        w("    _w[:_RIGID_MODES] = 0.0")
         w("    return numpy.maximum(_w, 0.0)")
-    return "\n".join(w_lines) + "\n"
+    return privatize("\n".join(w_lines) + "\n")

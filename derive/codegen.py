@@ -23,13 +23,61 @@ MAX_PRINTED_MATRIX = 12
 _SAFE_FILE = re.compile(r"^[A-Za-z0-9_.\-]{1,100}$")
 
 
+class _Printer(NumPyPrinter):
+    """NumPy printer that names symbols as they are (scene names are never keywords) and
+    never prints a Python builtin (``abs``), so that a parameter may take any such name."""
+
+    def _print_Symbol(self, expr):
+        return expr.name
+
+    def _print_Abs(self, expr):
+        return f"numpy.abs({self._print(expr.args[0])})"
+
+
 def _printer() -> NumPyPrinter:
-    return NumPyPrinter({"fully_qualified_modules": True, "allow_unknown_functions": False})
+    return _Printer({"fully_qualified_modules": True, "allow_unknown_functions": False})
+
+
+_PRIVATE_MODULES = ((re.compile(r"\bnumpy\."), "_np."), (re.compile(r"\bscipy\.linalg\."), "_linalg."))
+
+
+def private_modules(text: str) -> str:
+    """Refer to NumPy and scipy.linalg by private names (``_np``, ``_linalg``)."""
+    for pattern, repl in _PRIVATE_MODULES:
+        text = pattern.sub(repl, text)
+    return text
 
 
 def _p(expr) -> str:
     """Print a SymPy expression (or a Python int, e.g. 0) as NumPy code."""
     return _printer().doprint(sp.Integer(expr) if isinstance(expr, int) else expr)
+
+
+#: Module constants that function bodies read; bodies use private aliases (``_N``) so that a
+#: parameter (a keyword argument) of the same name cannot shadow them.
+_BODY_CONSTANTS = ("N", "SPRING_ENDS", "DAMPER_ENDS", "RIGID_MODES", "MAX_DENSE", "LEFT")
+_DEF = re.compile(r"^def ([A-Za-z]\w*)\(", re.M)
+
+
+def privatize(source: str) -> str:
+    """Make a generated module's function bodies independent of the user's names.
+
+    Module imports become ``_np``/``_linalg``; calls between the module's public functions
+    go through private aliases (``_masses = masses``, appended at the end); body reads of
+    module constants go through ``_N`` and the like. Parameters are keyword arguments of
+    the public functions, so after this no parameter name can shadow what a body uses.
+    """
+    source = private_modules(source)
+    source = re.sub(r"\bdtype=float\b", "dtype=_np.float64", source).replace(".astype(float)", ".astype(_np.float64)")
+    source = source.replace("raise ValueError(", "raise _ValueError(")
+    public = _DEF.findall(source)
+    for name in public:
+        source = re.sub(rf"(?<!def )(?<![\w.]){name}\((?!\))", f"_{name}(", source)
+    aliases = [f"_{name} = {name}" for name in public]
+    consts = [f"_{c} = {c}" for c in _BODY_CONSTANTS if re.search(rf"^{c} = ", source, re.M)]
+    head, sep, rest = source.partition("\n\n\ndef ")
+    source = head.rstrip("\n") + "\n" + "\n".join(consts) + "\n_float, _ValueError = float, ValueError\n" + sep.lstrip("\n").join(["\n\n", ""]) + rest
+    return source + "\n\n# Private aliases used by the function bodies above.\n" + "\n".join(aliases) + "\n"
 
 
 def regenerate_command(scene_file: str, bundled: bool) -> str:
@@ -83,6 +131,9 @@ def forcing_harmonics(model: Model):
     return const, freqs, [table[f][0] for f in freqs], [table[f][1] for f in freqs]
 
 
+_p_public = _p
+
+
 def render_module(model: Model, modes: ModeSet, *, bundled: bool = True) -> str:
     """The generated module's source for a ``[masses]``/``[[springs]]`` scene.
 
@@ -105,8 +156,14 @@ def render_module(model: Model, modes: ModeSet, *, bundled: bool = True) -> str:
     sig = ", ".join(params)
     kw = (", " + sig) if params else ""
     n = sc.n
-    xs = ", ".join(str(s) for s in model.x) + ("," if n == 1 else "")
-    vs = ", ".join(str(s) for s in model.v) + ("," if n == 1 else "")
+    # coordinates print under private names (_x_m1), so no parameter can shadow them
+    private = {s: sp.Symbol("_" + s.name, **s.assumptions0) for s in (*model.x, *model.v)}
+
+    def _p(expr) -> str:
+        return _p_public(expr.xreplace(private) if isinstance(expr, sp.Basic) else expr)
+
+    xs = ", ".join("_" + str(s) for s in model.x) + ("," if n == 1 else "")
+    vs = ", ".join("_" + str(s) for s in model.v) + ("," if n == 1 else "")
     effects = sorted(e.value for e in model.effects)
     lines: list[str] = []
     w = lines.append
@@ -118,9 +175,9 @@ def render_module(model: Model, modes: ModeSet, *, bundled: bool = True) -> str:
     w("Every function takes the parameters PARAMETERS as keyword arguments.")
     w('"""')
     w("")
-    w("import numpy")
+    w("import numpy as _np")
     if not modes.closed_form:
-        w("import scipy.linalg")
+        w("import scipy.linalg as _linalg")
     w("")
     w(f"SCENE = {sc.name!r}")
     w(f"SCENE_SHA256 = {sc.sha256!r}")
@@ -173,7 +230,7 @@ def render_module(model: Model, modes: ModeSet, *, bundled: bool = True) -> str:
     if dense:
         w(f"    return {_matrix(model.K)}")
     else:
-        w(f"    return _assemble(SPRING_ENDS, spring_constants({kwcall}))")
+        w(f"    return _assemble(_SPRING_ENDS, spring_constants({kwcall}))")
     if model.C is not None:
         w("")
         w("")
@@ -182,7 +239,7 @@ def render_module(model: Model, modes: ModeSet, *, bundled: bool = True) -> str:
         if dense:
             w(f"    return {_matrix(model.C)}")
         else:
-            w(f"    return _assemble(DAMPER_ENDS, damper_constants({kwcall}))")
+            w(f"    return _assemble(_DAMPER_ENDS, damper_constants({kwcall}))")
     w("")
     w("")
     w(f"def dynamical_matrix({sig}):")
@@ -198,7 +255,7 @@ def render_module(model: Model, modes: ModeSet, *, bundled: bool = True) -> str:
         w("def _assemble(ends, values):")
         w('    """Σ_e c_e b_e b_eᵀ over elements with ends (a, b) (-1 = wall): an (N, N) matrix."""')
         w("    _ends = numpy.asarray(ends, dtype=numpy.intp).reshape(-1, 2)")
-        w("    _out = numpy.zeros((N, N))")
+        w("    _out = numpy.zeros((_N, _N))")
         w("    for _ci, _si in ((0, 1.0), (1, -1.0)):")
         w("        for _cj, _sj in ((0, 1.0), (1, -1.0)):")
         w("            _ok = (_ends[:, _ci] >= 0) & (_ends[:, _cj] >= 0)")
@@ -217,7 +274,7 @@ def render_module(model: Model, modes: ModeSet, *, bundled: bool = True) -> str:
     else:
         w('    """Squared angular frequencies, shape (N,) (no closed form: computed numerically)."""')
         w(f"    _w = scipy.linalg.eigh(stiffness_matrix({sig}), mass_matrix({sig}), eigvals_only=True)")
-        w("    _w[:RIGID_MODES] = 0.0")
+        w("    _w[:_RIGID_MODES] = 0.0")
         w("    return _w")
     w("")
     w("")
@@ -234,7 +291,7 @@ def render_module(model: Model, modes: ModeSet, *, bundled: bool = True) -> str:
     w("")
     w("")
     cons = model.force_expressions(Effect.SPRING, Effect.CUBIC, Effect.GRAVITY)
-    w(f"def acceleration(x{kw}):")
+    w(f"def acceleration(_x{kw}):")
     w('    """Acceleration from springs' + (" and gravity" if model.g is not None else "") + ".")
     w("")
     w("    Parameters")
@@ -246,8 +303,8 @@ def render_module(model: Model, modes: ModeSet, *, bundled: bool = True) -> str:
     w("    -------")
     w("    ndarray, shape (N, ...)")
     w('    """')
-    w(f"    {xs} = x")
-    w("    _out = numpy.empty(numpy.shape(x))")
+    w(f"    {xs} = _x")
+    w("    _out = numpy.empty(numpy.shape(_x))")
     for i in range(n):
         w(f"    _out[{i}] = {_p(cons[i] / model.masses[i])}")
     w("    return _out")
@@ -259,15 +316,15 @@ def render_module(model: Model, modes: ModeSet, *, bundled: bool = True) -> str:
           + ' formed once; x shape (N,) or (N, B)."""')
         w(f"    _inv_m = 1.0 / masses({kwcall})")
         if not dense:  # incidence form: no N x N matrix
-            w("    _ends = numpy.asarray(SPRING_ENDS, dtype=numpy.intp).reshape(-1, 2)")
+            w("    _ends = numpy.asarray(_SPRING_ENDS, dtype=numpy.intp).reshape(-1, 2)")
             w("    _a, _b = _ends[:, 0], _ends[:, 1]")
             w(f"    _k = spring_constants({kwcall})")
             w("    _ia, _ib = numpy.flatnonzero(_a >= 0), numpy.flatnonzero(_b >= 0)")
             if model.g is not None:
                 w(f"    _g = _inv_m * gravity_forces({kwcall})")
             w("")
-            w("    def _bound(x):")
-            w("        _x = numpy.asarray(x, dtype=float)")
+            w("    def _bound(_y):")
+            w("        _x = numpy.asarray(_y, dtype=float)")
             w("        _xe = numpy.concatenate([_x, numpy.zeros((1,) + _x.shape[1:])])  # row -1 = wall")
             w("        _s = _k.reshape((-1,) + (1,) * (_x.ndim - 1)) * (_xe[_a] - _xe[_b])")
             w("        _f = numpy.zeros_like(_x)")
@@ -282,27 +339,27 @@ def render_module(model: Model, modes: ModeSet, *, bundled: bool = True) -> str:
             if model.g is not None:
                 w(f"    _g = (_inv_m * gravity_forces({kwcall}))[:, None]")
                 w("")
-                w("    def _bound(x):")
-                w("        return _A @ x + (_g if numpy.ndim(x) == 2 else _g[:, 0])")
+                w("    def _bound(_y):")
+                w("        return _A @ _y + (_g if numpy.ndim(_y) == 2 else _g[:, 0])")
             else:
                 w("")
-                w("    def _bound(x):")
-                w("        return _A @ x")
+                w("    def _bound(_y):")
+                w("        return _A @ _y")
     else:
         w('    """acceleration() with the parameters bound (nonlinear springs: the expressions above)."""')
         w("")
-        w("    def _bound(x):")
-        w(f"        return acceleration(x{', ' + kwcall if kwcall else ''})")
+        w("    def _bound(_y):")
+        w(f"        return acceleration(_y{', ' + kwcall if kwcall else ''})")
     w("")
     w("    return _bound")
     if model.dampers:
         damp = model.force_expressions(Effect.DAMPER)
         w("")
         w("")
-        w(f"def damping_acceleration(v{kw}):")
+        w(f"def damping_acceleration(_v{kw}):")
         w('    """Acceleration -M^-1 C v from the dampers; v and result have shape (N, ...)."""')
-        w(f"    {vs} = v")
-        w("    _out = numpy.empty(numpy.shape(v))")
+        w(f"    {vs} = _v")
+        w("    _out = numpy.empty(numpy.shape(_v))")
         for i in range(n):
             w(f"    _out[{i}] = {_p(damp[i] / model.masses[i])}")
         w("    return _out")
@@ -313,7 +370,7 @@ def render_module(model: Model, modes: ModeSet, *, bundled: bool = True) -> str:
         w(f"def external_acceleration(t{kw}):")
         w('    """Acceleration M^-1 F(t) from the external forces; t scalar or array, result (N, *t.shape)."""')
         w("    t = numpy.asarray(t, dtype=float)")
-        w("    _out = numpy.zeros((N,) + t.shape)")
+        w("    _out = numpy.zeros((_N,) + t.shape)")
         for i in range(n):
             if ext[i] != 0:
                 w(f"    _out[{i}] = {_p(ext[i] / model.masses[i])}")
@@ -343,17 +400,17 @@ def render_module(model: Model, modes: ModeSet, *, bundled: bool = True) -> str:
             w('    """')
             w(f"    _omega = {_array([_p(f) for f in freqs])}")
             w("    _cos = numpy.array([" + ", ".join(_array([_p(c) for c in row]) for row in cos_amp)
-              + "]).reshape(len(_omega), N)")
+              + "]).reshape(_omega.shape[0], _N)")
             w("    _sin = numpy.array([" + ", ".join(_array([_p(c) for c in row]) for row in sin_amp)
-              + "]).reshape(len(_omega), N)")
+              + "]).reshape(_omega.shape[0], _N)")
             w(f"    _const = {_array([_p(c) for c in const])}")
             w("    return _omega, _cos, _sin, _const")
     w("")
     w("")
-    w(f"def energy(x, v{kw}):")
+    w(f"def energy(_x, _v{kw}):")
     w('    """Total energy T + V' + (" (V includes gravity's potential)" if model.g is not None else "")
       + '; x, v shape (N, ...), result shape (...)."""')
-    w(f"    {xs} = x")
-    w(f"    {vs} = v")
+    w(f"    {xs} = _x")
+    w(f"    {vs} = _v")
     w(f"    return {_p(model.energy)}")
-    return "\n".join(lines) + "\n"
+    return privatize("\n".join(lines) + "\n")

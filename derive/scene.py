@@ -15,11 +15,12 @@ point, exactly 0) is refused. SymPy is not imported here.
 
 from __future__ import annotations
 
-import builtins
 import difflib
 import hashlib
 import keyword
 import math
+import os
+import stat
 import tomllib
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -31,38 +32,18 @@ from .expr import CONSTANTS, FUNCTIONS, Expr, Num, accepted_form, parse_expressi
 
 WALL = -1
 
-#: Free variables of expressions and the state vectors of generated code.
-FREE_NAMES = frozenset({"t", "i", "n", "x", "v", "a"})
-#: Module names the generated code (or a reader of it) uses.
-MODULE_NAMES = frozenset({"numpy", "np", "scipy", "math", "sympy", "sp"})
-#: Names the generated modules bind or read besides the scene's own names
-#: (module constants, functions, locals). A parameter becomes a keyword
-#: argument of those functions, so it must not shadow any of them. Helpers in
-#: generated code whose name starts with "_" need no entry: scene names never
-#: start with "_". ``tests/test_scene_validation.py`` checks this list
-#: against the checked-in generated modules.
-GENERATED_NAMES = frozenset({
-    "SCENE", "SCENE_SHA256", "PARAMETERS", "DEFAULTS", "MASS_NAMES", "N", "EFFECTS", "LINEAR",
-    "SPRING_ENDS", "DAMPER_ENDS", "CLOSED_FORM", "RIGID_MODES", "FORCING_HARMONIC", "CHAIN", "LEFT",
-    "RIGHT", "UNIFORM", "MAX_DENSE", "K",
-    "masses", "spring_constants", "cubic_constants", "damper_constants", "mass_matrix",
-    "stiffness_matrix", "damping_matrix", "dynamical_matrix", "omega2", "mode_shapes",
-    "acceleration", "damping_acceleration", "external_acceleration", "gravity_forces",
-    "forcing_harmonics", "energy", "spring_ends", "stiffness_bands", "make_acceleration",
-    "out", "w", "vec", "omega", "cos_amp", "sin_amp", "const", "col", "d", "e", "f", "s", "j",
-    "idx", "inner", "inv_m", "extra", "diag", "off", "xa", "xb", "kk", "parts", "ends",
-})
-#: Python's builtins (the generated code may call any of them, e.g. float, len).
-BUILTIN_NAMES = frozenset(n for n in dir(builtins) if not n.startswith("_"))
-#: Names a parameter may not take.
-RESERVED = FREE_NAMES | MODULE_NAMES | GENERATED_NAMES | BUILTIN_NAMES | {"wall", *FUNCTIONS, *CONSTANTS}
-#: Prefixes of coordinate names (x_m1, v_m1, a_m1); no parameter may start with them.
+#: Names with a meaning in the scene language (expression variables, functions, constants).
+VOCABULARY = frozenset({"t", "i", "n", *FUNCTIONS, *CONSTANTS})
+#: Names a parameter may not take. Everything generated code binds for itself is private
+#: (starts with "_", which scene names never do), so any other identifier is safe: a parameter
+#: only has to stay clear of the scene language and of "wall".
+RESERVED = VOCABULARY | {"wall"}
+#: Prefixes of coordinate names (x_m1, v_m1, a_m1): a parameter ``x_m1`` is refused only
+#: when a mass ``m1`` exists (reports print coordinates by these names).
 RESERVED_PREFIXES = ("x_", "v_", "a_")
-#: Names a mass may not take (a mass name appears only inside x_<name>, v_<name>).
-MASS_RESERVED = FREE_NAMES | {"wall", "np", "numpy", *FUNCTIONS, *CONSTANTS}
+#: Names a mass may not take (masses appear only as strings in ``between``/``on``).
+MASS_RESERVED = frozenset({"wall"})
 MAX_NAME = 64
-#: Soft keywords of any supported Python (``type`` is one from 3.12 on).
-SOFT_KEYWORDS = frozenset({"_", "case", "match", "type", *keyword.softkwlist})
 
 #: Largest number of bytes all recorded trajectories of one run may hold.
 #: Largest scene file read.
@@ -267,7 +248,7 @@ class _Loader:
             raise self.bad(key, value, f"not an identifier", accepted)
         if len(value) > MAX_NAME:
             raise self.bad(key, value, f"longer than {MAX_NAME} characters", accepted)
-        if keyword.iskeyword(value) or value in SOFT_KEYWORDS:
+        if keyword.iskeyword(value):
             raise self.bad(key, value, "a Python keyword", f"another {what}, e.g. {value}_1")
         if value.startswith("_"):
             raise self.bad(key, value, "starts with '_' (kept for generated code)", accepted)
@@ -385,6 +366,17 @@ def load_scene(path: str | Path, text: str | None = None) -> Scene:
     """
     file = str(path)
     if text is None:
+        try:  # a FIFO, a device or a folder would block or fail inside open()/read(): refuse first
+            mode = os.stat(path).st_mode
+        except OSError as exc:
+            raise SceneError(file, None, f"cannot read the scene file ({exc.strerror or exc}); "
+                                         "accepted: a readable TOML file") from None
+        if not stat.S_ISREG(mode):
+            kind = ("a folder" if stat.S_ISDIR(mode) else "a FIFO (named pipe)" if stat.S_ISFIFO(mode)
+                    else "a socket" if stat.S_ISSOCK(mode) else "a device" if stat.S_ISCHR(mode)
+                    or stat.S_ISBLK(mode) else "not a regular file")
+            raise SceneError(file, None, f"cannot read the scene file ({kind}, not a regular file); "
+                                         "accepted: a regular TOML file")
         try:
             with open(path, "rb") as fh:
                 raw = fh.read(MAX_FILE_BYTES + 1)
@@ -397,7 +389,9 @@ def load_scene(path: str | Path, text: str | None = None) -> Scene:
         raise SceneError(file, None, f"larger than {MAX_FILE_BYTES // 2**20} MiB; accepted: smaller "
                                      "files (a long chain's initial state can be an expression of i)")
     try:
-        data = tomllib.loads(raw.decode("utf-8"))
+        decoded = raw.decode("utf-8")
+        # a UTF-8 byte order mark (written by some Windows editors) is not TOML: accept and skip it
+        data = tomllib.loads(decoded[1:] if decoded.startswith("\ufeff") else decoded)
     except UnicodeDecodeError as exc:
         raise SceneError(file, None, f"byte {exc.start} is not UTF-8; accepted: a UTF-8 TOML file") from None
     except tomllib.TOMLDecodeError as exc:
@@ -436,12 +430,11 @@ def _build(ld: _Loader, sha: str) -> Scene:
     for pname in sorted(params_raw):
         key = f"parameters.{pname}"
         ld.identifier(key, pname, "parameter name")
-        if pname in RESERVED or pname.startswith(RESERVED_PREFIXES):
-            why = ("the name of a variable or function of expressions" if pname in FREE_NAMES | set(FUNCTIONS)
-                   | set(CONSTANTS) else "a Python builtin" if pname in BUILTIN_NAMES
-                   else "a coordinate name" if pname.startswith(RESERVED_PREFIXES)
-                   else "a name the generated code uses")
-            raise ld.bad(key, pname, f"reserved ({why})", f"another name, e.g. {pname}0")
+        if pname in RESERVED:
+            why = ("the end 'wall' of springs" if pname == "wall"
+                   else "a variable, function or constant of expressions")
+            raise ld.bad(key, pname, f"reserved ({why})",
+                         f"any other identifier (not {', '.join(sorted(RESERVED))}), e.g. {pname}0")
         parameters[pname] = float(ld.number(key, params_raw[pname]))
     pnames = frozenset(parameters)
     env = dict(parameters)
@@ -477,8 +470,15 @@ def _build(ld: _Loader, sha: str) -> Scene:
             key = f"masses.{mname}"
             ld.identifier(key, mname, "mass name")
             if mname in MASS_RESERVED:
-                raise ld.bad(key, mname, "reserved (a variable, function or 'wall')",
+                raise ld.bad(key, mname, "reserved (the fixed end of springs)",
                              f"another mass name, e.g. {mname}1")
+            if mname in pnames:
+                raise ld.bad(key, mname, "also the name of a parameter",
+                             "a mass name different from every parameter name")
+            clash = next((p for p in (f"x_{mname}", f"v_{mname}", f"a_{mname}") if p in pnames), None)
+            if clash:
+                raise ld.bad(f"parameters.{clash}", clash, f"the name of mass {mname!r}'s coordinate",
+                             "a parameter name other than x_<mass>, v_<mass>, a_<mass>")
             names.append(mname)
             exprs.append(ld.expression(key, mexpr, pnames, positive=True, bounded=True, env=env))
         mass_names, mass_exprs = tuple(names), tuple(exprs)
@@ -601,4 +601,4 @@ def _initial(ld: _Loader, key: str, value, n: int, chain: bool, pnames, env) -> 
     raise ld.bad(key, value, "not a list of numbers", accepted)
 
 
-__all__ = ["Scene", "Spring", "Damper", "Force", "Chain", "WALL", "load_scene", "Num", "RESERVED", "did_you_mean"]
+__all__ = ["Scene", "Spring", "Damper", "Force", "Chain", "WALL", "load_scene", "Num", "RESERVED", "VOCABULARY", "did_you_mean"]

@@ -7,7 +7,7 @@ of MASS_NAMES; arrays of states have shape (N, ...) (a batch in trailing axes).
 Every function takes the parameters PARAMETERS as keyword arguments.
 """
 
-import numpy
+import numpy as _np
 
 SCENE = 'building'
 SCENE_SHA256 = 'd7e7cfc5b49167d5ab9ff4ddeacb50dc59359edfa9fed1547844a0a92312ab97'
@@ -23,57 +23,62 @@ SPRING_ENDS = ((-1, 0), (0, 1), (1, 2))
 DAMPER_ENDS = ((0, -1),)
 CLOSED_FORM = True
 RIGID_MODES = 0
+_N = N
+_SPRING_ENDS = SPRING_ENDS
+_DAMPER_ENDS = DAMPER_ENDS
+_RIGID_MODES = RIGID_MODES
+_float, _ValueError = float, ValueError
 
 
 def masses(F0, c, k, m):
     """Masses, shape (N,)."""
-    return numpy.array([m, m, m], dtype=float)
+    return _np.array([m, m, m], dtype=_np.float64)
 
 
 def spring_constants(F0, c, k, m):
     """Linear stiffness of each spring in SPRING_ENDS order, shape (S,)."""
-    return numpy.array([k, k, k], dtype=float)
+    return _np.array([k, k, k], dtype=_np.float64)
 
 
 def damper_constants(F0, c, k, m):
     """Damping coefficient of each damper in DAMPER_ENDS order, shape (D,)."""
-    return numpy.array([c], dtype=float)
+    return _np.array([c], dtype=_np.float64)
 
 
 def mass_matrix(F0, c, k, m):
     """M = d²T/dv², shape (N, N)."""
-    return numpy.array([
+    return _np.array([
         [m, 0, 0],
         [0, m, 0],
         [0, 0, m],
-    ], dtype=float)
+    ], dtype=_np.float64)
 
 
 def stiffness_matrix(F0, c, k, m):
     """K = d²V/dx² at x = 0, shape (N, N)."""
-    return numpy.array([
+    return _np.array([
         [2*k, -k, 0],
         [-k, 2*k, -k],
         [0, -k, k],
-    ], dtype=float)
+    ], dtype=_np.float64)
 
 
 def damping_matrix(F0, c, k, m):
     """C = d²R/dv² (Rayleigh dissipation), shape (N, N)."""
-    return numpy.array([
+    return _np.array([
         [c, 0, 0],
         [0, 0, 0],
         [0, 0, 0],
-    ], dtype=float)
+    ], dtype=_np.float64)
 
 
 def dynamical_matrix(F0, c, k, m):
     """D = M^-1/2 K M^-1/2, shape (N, N)."""
-    return numpy.array([
+    return _np.array([
         [2*k/m, -k/m, 0],
         [-k/m, 2*k/m, -k/m],
         [0, -k/m, k/m],
-    ], dtype=float)
+    ], dtype=_np.float64)
 
 
 def omega2(F0, c, k, m):
@@ -81,19 +86,19 @@ def omega2(F0, c, k, m):
 
     Ordered by value at DEFAULTS; repeated values appear once per shape.
     """
-    return numpy.array([-2/3*numpy.sqrt(7)*k*numpy.cos(-1/3*numpy.arccos((1/14)*numpy.sqrt(7)) + (1/3)*numpy.pi)/m + (5/3)*k/m, -2/3*numpy.sqrt(7)*k*numpy.sin(-1/3*numpy.arccos((1/14)*numpy.sqrt(7)) + (1/6)*numpy.pi)/m + (5/3)*k/m, (2/3)*numpy.sqrt(7)*k*numpy.cos((1/3)*numpy.arccos((1/14)*numpy.sqrt(7)))/m + (5/3)*k/m], dtype=float)
+    return _np.array([-2/3*_np.sqrt(7)*k*_np.cos(-1/3*_np.arccos((1/14)*_np.sqrt(7)) + (1/3)*_np.pi)/m + (5/3)*k/m, -2/3*_np.sqrt(7)*k*_np.sin(-1/3*_np.arccos((1/14)*_np.sqrt(7)) + (1/6)*_np.pi)/m + (5/3)*k/m, (2/3)*_np.sqrt(7)*k*_np.cos((1/3)*_np.arccos((1/14)*_np.sqrt(7)))/m + (5/3)*k/m], dtype=_np.float64)
 
 
 def mode_shapes(F0, c, k, m):
     """Closed-form physical mode shapes as columns, in omega2() order, shape (N, N); any scale."""
-    return numpy.array([
+    return _np.array([
         [1, 1, 1],
-        [1/3 + (2/3)*numpy.sqrt(7)*numpy.cos(-1/3*numpy.arccos((1/14)*numpy.sqrt(7)) + (1/3)*numpy.pi), (2/3)*numpy.sqrt(7)*numpy.sin(-1/3*numpy.arccos((1/14)*numpy.sqrt(7)) + (1/6)*numpy.pi) + 1/3, -2/3*numpy.sqrt(7)*numpy.cos((1/3)*numpy.arccos((1/14)*numpy.sqrt(7))) + 1/3],
-        [-8/9 + (4/9)*numpy.sqrt(7)*numpy.cos(-1/3*numpy.arccos((1/14)*numpy.sqrt(7)) + (1/3)*numpy.pi) + (28/9)*numpy.cos(-1/3*numpy.arccos((1/14)*numpy.sqrt(7)) + (1/3)*numpy.pi)**2, -8/9 + (28/9)*numpy.sin(-1/3*numpy.arccos((1/14)*numpy.sqrt(7)) + (1/6)*numpy.pi)**2 + (4/9)*numpy.sqrt(7)*numpy.sin(-1/3*numpy.arccos((1/14)*numpy.sqrt(7)) + (1/6)*numpy.pi), -4/9*numpy.sqrt(7)*numpy.cos((1/3)*numpy.arccos((1/14)*numpy.sqrt(7))) - 8/9 + (28/9)*numpy.cos((1/3)*numpy.arccos((1/14)*numpy.sqrt(7)))**2],
-    ], dtype=float)
+        [1/3 + (2/3)*_np.sqrt(7)*_np.cos(-1/3*_np.arccos((1/14)*_np.sqrt(7)) + (1/3)*_np.pi), (2/3)*_np.sqrt(7)*_np.sin(-1/3*_np.arccos((1/14)*_np.sqrt(7)) + (1/6)*_np.pi) + 1/3, -2/3*_np.sqrt(7)*_np.cos((1/3)*_np.arccos((1/14)*_np.sqrt(7))) + 1/3],
+        [-8/9 + (4/9)*_np.sqrt(7)*_np.cos(-1/3*_np.arccos((1/14)*_np.sqrt(7)) + (1/3)*_np.pi) + (28/9)*_np.cos(-1/3*_np.arccos((1/14)*_np.sqrt(7)) + (1/3)*_np.pi)**2, -8/9 + (28/9)*_np.sin(-1/3*_np.arccos((1/14)*_np.sqrt(7)) + (1/6)*_np.pi)**2 + (4/9)*_np.sqrt(7)*_np.sin(-1/3*_np.arccos((1/14)*_np.sqrt(7)) + (1/6)*_np.pi), -4/9*_np.sqrt(7)*_np.cos((1/3)*_np.arccos((1/14)*_np.sqrt(7))) - 8/9 + (28/9)*_np.cos((1/3)*_np.arccos((1/14)*_np.sqrt(7)))**2],
+    ], dtype=_np.float64)
 
 
-def acceleration(x, F0, c, k, m):
+def acceleration(_x, F0, c, k, m):
     """Acceleration from springs.
 
     Parameters
@@ -105,30 +110,30 @@ def acceleration(x, F0, c, k, m):
     -------
     ndarray, shape (N, ...)
     """
-    x_floor1, x_floor2, x_floor3 = x
-    _out = numpy.empty(numpy.shape(x))
-    _out[0] = (-k*x_floor1 - k*(x_floor1 - x_floor2))/m
-    _out[1] = (k*(x_floor1 - x_floor2) - k*(x_floor2 - x_floor3))/m
-    _out[2] = k*(x_floor2 - x_floor3)/m
+    _x_floor1, _x_floor2, _x_floor3 = _x
+    _out = _np.empty(_np.shape(_x))
+    _out[0] = (-_x_floor1*k - k*(_x_floor1 - _x_floor2))/m
+    _out[1] = (k*(_x_floor1 - _x_floor2) - k*(_x_floor2 - _x_floor3))/m
+    _out[2] = k*(_x_floor2 - _x_floor3)/m
     return _out
 
 
 def make_acceleration(F0, c, k, m):
     """acceleration() with the parameters bound: -M⁻¹K formed once; x shape (N,) or (N, B)."""
-    _inv_m = 1.0 / masses(F0=F0, c=c, k=k, m=m)
-    _A = -_inv_m[:, None] * stiffness_matrix(F0=F0, c=c, k=k, m=m)
+    _inv_m = 1.0 / _masses(F0=F0, c=c, k=k, m=m)
+    _A = -_inv_m[:, None] * _stiffness_matrix(F0=F0, c=c, k=k, m=m)
 
-    def _bound(x):
-        return _A @ x
+    def _bound(_y):
+        return _A @ _y
 
     return _bound
 
 
-def damping_acceleration(v, F0, c, k, m):
+def damping_acceleration(_v, F0, c, k, m):
     """Acceleration -M^-1 C v from the dampers; v and result have shape (N, ...)."""
-    v_floor1, v_floor2, v_floor3 = v
-    _out = numpy.empty(numpy.shape(v))
-    _out[0] = -c*v_floor1/m
+    _v_floor1, _v_floor2, _v_floor3 = _v
+    _out = _np.empty(_np.shape(_v))
+    _out[0] = -_v_floor1*c/m
     _out[1] = 0
     _out[2] = 0
     return _out
@@ -136,9 +141,9 @@ def damping_acceleration(v, F0, c, k, m):
 
 def external_acceleration(t, F0, c, k, m):
     """Acceleration M^-1 F(t) from the external forces; t scalar or array, result (N, *t.shape)."""
-    t = numpy.asarray(t, dtype=float)
-    _out = numpy.zeros((N,) + t.shape)
-    _out[2] = F0*numpy.cos(2*numpy.sqrt(k)*t*numpy.sin((1/14)*numpy.pi)/numpy.sqrt(m))/m
+    t = _np.asarray(t, dtype=_np.float64)
+    _out = _np.zeros((_N,) + t.shape)
+    _out[2] = F0*_np.cos(2*_np.sqrt(k)*t*_np.sin((1/14)*_np.pi)/_np.sqrt(m))/m
     return _out
 
 FORCING_HARMONIC = True
@@ -153,15 +158,33 @@ def forcing_harmonics(F0, c, k, m):
     cos_amp, sin_amp : ndarray, shape (H, N)
     const : ndarray, shape (N,)
     """
-    _omega = numpy.array([2*numpy.sqrt(k)*numpy.sin((1/14)*numpy.pi)/numpy.sqrt(m)], dtype=float)
-    _cos = numpy.array([numpy.array([0, 0, F0], dtype=float)]).reshape(len(_omega), N)
-    _sin = numpy.array([numpy.array([0, 0, 0], dtype=float)]).reshape(len(_omega), N)
-    _const = numpy.array([0, 0, 0], dtype=float)
+    _omega = _np.array([2*_np.sqrt(k)*_np.sin((1/14)*_np.pi)/_np.sqrt(m)], dtype=_np.float64)
+    _cos = _np.array([_np.array([0, 0, F0], dtype=_np.float64)]).reshape(_omega.shape[0], _N)
+    _sin = _np.array([_np.array([0, 0, 0], dtype=_np.float64)]).reshape(_omega.shape[0], _N)
+    _const = _np.array([0, 0, 0], dtype=_np.float64)
     return _omega, _cos, _sin, _const
 
 
-def energy(x, v, F0, c, k, m):
+def energy(_x, _v, F0, c, k, m):
     """Total energy T + V; x, v shape (N, ...), result shape (...)."""
-    x_floor1, x_floor2, x_floor3 = x
-    v_floor1, v_floor2, v_floor3 = v
-    return (1/2)*k*x_floor1**2 + (1/2)*k*(x_floor1 - x_floor2)**2 + (1/2)*k*(x_floor2 - x_floor3)**2 + (1/2)*m*v_floor1**2 + (1/2)*m*v_floor2**2 + (1/2)*m*v_floor3**2
+    _x_floor1, _x_floor2, _x_floor3 = _x
+    _v_floor1, _v_floor2, _v_floor3 = _v
+    return (1/2)*_v_floor1**2*m + (1/2)*_v_floor2**2*m + (1/2)*_v_floor3**2*m + (1/2)*_x_floor1**2*k + (1/2)*k*(_x_floor1 - _x_floor2)**2 + (1/2)*k*(_x_floor2 - _x_floor3)**2
+
+
+# Private aliases used by the function bodies above.
+_masses = masses
+_spring_constants = spring_constants
+_damper_constants = damper_constants
+_mass_matrix = mass_matrix
+_stiffness_matrix = stiffness_matrix
+_damping_matrix = damping_matrix
+_dynamical_matrix = dynamical_matrix
+_omega2 = omega2
+_mode_shapes = mode_shapes
+_acceleration = acceleration
+_make_acceleration = make_acceleration
+_damping_acceleration = damping_acceleration
+_external_acceleration = external_acceleration
+_forcing_harmonics = forcing_harmonics
+_energy = energy

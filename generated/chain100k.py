@@ -8,8 +8,8 @@ keyword arguments and works for any n (default N). Nothing here is n×n except
 stiffness_matrix()/mass_matrix(), which refuse large n.
 """
 
-import numpy
-import scipy.linalg
+import numpy as _np
+import scipy.linalg as _linalg
 
 SCENE = 'chain100k'
 SCENE_SHA256 = '7eb6da005123808cdee604b036e9ad057dcfa832287e6cde53da8c2e31cdf75b'
@@ -24,31 +24,36 @@ EFFECTS = ('spring',)
 LINEAR = True
 RIGID_MODES = 1
 MAX_DENSE = 4000
+_N = N
+_RIGID_MODES = RIGID_MODES
+_MAX_DENSE = MAX_DENSE
+_LEFT = LEFT
+_float, _ValueError = float, ValueError
 
 
 def masses(k, m, n=N):
     """Masses m(i), shape (n,)."""
-    i = numpy.arange(n, dtype=float)
-    return numpy.broadcast_to(numpy.asarray(m, dtype=float), (n,)).copy()
+    i = _np.arange(n, dtype=_np.float64)
+    return _np.broadcast_to(_np.asarray(m, dtype=_np.float64), (n,)).copy()
 
 
 def _spring_k(i, k, m):
     """Stiffness k(i) of the spring between masses i and i+1 (i = -1: left wall)."""
-    return numpy.asarray(k, dtype=float)
+    return _np.asarray(k, dtype=_np.float64)
 
 
 def spring_ends(n=N):
     """Spring ends (mass indices, -1 = wall) in spring_constants() order, shape (S, 2)."""
-    i = numpy.arange(n - 1)
-    _parts = [numpy.stack([i, i + 1], axis=1)]
-    return numpy.concatenate(_parts).astype(numpy.intp)
+    i = _np.arange(n - 1)
+    _parts = [_np.stack([i, i + 1], axis=1)]
+    return _np.concatenate(_parts).astype(_np.intp)
 
 
 def spring_constants(k, m, n=N):
     """Stiffness of each spring in spring_ends() order, shape (S,)."""
-    i = numpy.arange(n - 1, dtype=float)
-    _parts = [numpy.broadcast_to(_spring_k(i, k=k, m=m), (n - 1,))]
-    return numpy.concatenate(_parts).astype(float)
+    i = _np.arange(n - 1, dtype=_np.float64)
+    _parts = [_np.broadcast_to(_spring_k(i, k=k, m=m), (n - 1,))]
+    return _np.concatenate(_parts).astype(_np.float64)
 
 
 def make_acceleration(k, m, n=N):
@@ -56,14 +61,14 @@ def make_acceleration(k, m, n=N):
 
     The stencil: the spring between i and i+1 pulls with s_i = k_i d_i [+ k3_i d_i³],
     d_i = x_{i+1} − x_i; mass i feels s_i − s_{i−1}; walls and the ring closure act at the ends."""
-    i = numpy.arange(n - 1, dtype=float)
-    _inv_m = 1.0 / masses(k=k, m=m, n=n)
-    _inv_m = float(_inv_m[0])
-    _ks = float(_spring_k(0.0, k=k, m=m))
+    i = _np.arange(n - 1, dtype=_np.float64)
+    _inv_m = 1.0 / _masses(k=k, m=m, n=n)
+    _inv_m = _float(_inv_m[0])
+    _ks = _float(_spring_k(0.0, k=k, m=m))
 
-    def acceleration(x):
-        _f = numpy.empty(numpy.shape(x))
-        _d = x[1:] - x[:-1]
+    def _stencil(_y):
+        _f = _np.empty(_np.shape(_y))
+        _d = _y[1:] - _y[:-1]
         _s = _ks * _d
         _f[:-1] = _s
         _f[-1] = 0.0
@@ -71,59 +76,72 @@ def make_acceleration(k, m, n=N):
         _f *= _inv_m
         return _f
 
-    return acceleration
+    return _stencil
 
 
-def acceleration(x, k, m):
+def acceleration(_x, k, m):
     """Acceleration of the chain; x shape (n, ...) (n taken from x)."""
-    return make_acceleration(k=k, m=m, n=numpy.shape(x)[0])(x)
+    return _make_acceleration(k=k, m=m, n=_np.shape(_x)[0])(_x)
 
 
-def energy(x, v, k, m):
+def energy(_x, _v, k, m):
     """Total energy; x, v shape (n, ...) -> (...)."""
-    n = numpy.shape(x)[0]
-    _extra = (1,) * (numpy.ndim(x) - 1)
-    _m = masses(k=k, m=m, n=n).reshape((n,) + _extra)
-    _kk = spring_constants(k=k, m=m, n=n)
-    _ends = spring_ends(n)
-    _xa = numpy.where((_ends[:, 0] >= 0).reshape((-1,) + _extra), x[_ends[:, 0]], 0.0)
-    _xb = numpy.where((_ends[:, 1] >= 0).reshape((-1,) + _extra), x[_ends[:, 1]], 0.0)
+    n = _np.shape(_x)[0]
+    _extra = (1,) * (_np.ndim(_x) - 1)
+    _m = _masses(k=k, m=m, n=n).reshape((n,) + _extra)
+    _kk = _spring_constants(k=k, m=m, n=n)
+    _ends = _spring_ends(n)
+    _xa = _np.where((_ends[:, 0] >= 0).reshape((-1,) + _extra), _x[_ends[:, 0]], 0.0)
+    _xb = _np.where((_ends[:, 1] >= 0).reshape((-1,) + _extra), _x[_ends[:, 1]], 0.0)
     _d = _xb - _xa
-    _e = 0.5 * numpy.sum(_m * v**2, axis=0) + 0.5 * numpy.sum(_kk.reshape((-1,) + _extra) * _d**2, axis=0)
+    _e = 0.5 * _np.sum(_m * _v**2, axis=0) + 0.5 * _np.sum(_kk.reshape((-1,) + _extra) * _d**2, axis=0)
     return _e
 
 
 def stiffness_bands(k, m, n=N):
     """Diagonal (n,) and first off-diagonal (n-1,) of K (ring closure not included)."""
-    _kk = spring_constants(k=k, m=m, n=n)
-    _ends = spring_ends(n)
-    _diag = numpy.zeros(n)
+    _kk = _spring_constants(k=k, m=m, n=n)
+    _ends = _spring_ends(n)
+    _diag = _np.zeros(n)
     for _col in (0, 1):
         _idx = _ends[:, _col]
-        numpy.add.at(_diag, _idx[_idx >= 0], _kk[_idx >= 0])
-    _inner = (_ends[:, 0] >= 0) & (_ends[:, 1] >= 0) & (numpy.abs(_ends[:, 0] - _ends[:, 1]) == 1)
-    _off = numpy.zeros(n - 1)
-    _off[numpy.minimum(_ends[_inner, 0], _ends[_inner, 1])] = -_kk[_inner]
+        _np.add.at(_diag, _idx[_idx >= 0], _kk[_idx >= 0])
+    _inner = (_ends[:, 0] >= 0) & (_ends[:, 1] >= 0) & (_np.abs(_ends[:, 0] - _ends[:, 1]) == 1)
+    _off = _np.zeros(n - 1)
+    _off[_np.minimum(_ends[_inner, 0], _ends[_inner, 1])] = -_kk[_inner]
     return _diag, _off
 
 
 def stiffness_matrix(k, m, n=N):
     """Dense K, shape (n, n); only for n <= MAX_DENSE."""
-    if n > MAX_DENSE:
-        raise ValueError(f'stiffness_matrix: n = {n} > MAX_DENSE = {MAX_DENSE}; use stiffness_bands()')
-    _diag, _off = stiffness_bands(k=k, m=m, n=n)
-    _K = numpy.diag(_diag) + numpy.diag(_off, 1) + numpy.diag(_off, -1)
+    if n > _MAX_DENSE:
+        raise _ValueError(f'stiffness_matrix: n = {n} > MAX_DENSE = {_MAX_DENSE}; use stiffness_bands()')
+    _diag, _off = _stiffness_bands(k=k, m=m, n=n)
+    _K = _np.diag(_diag) + _np.diag(_off, 1) + _np.diag(_off, -1)
     return _K
 
 
 def mass_matrix(k, m, n=N):
     """Dense M, shape (n, n); only for n <= MAX_DENSE."""
-    if n > MAX_DENSE:
-        raise ValueError(f'mass_matrix: n = {n} > MAX_DENSE = {MAX_DENSE}')
-    return numpy.diag(masses(k=k, m=m, n=n))
+    if n > _MAX_DENSE:
+        raise _ValueError(f'mass_matrix: n = {n} > MAX_DENSE = {_MAX_DENSE}')
+    return _np.diag(_masses(k=k, m=m, n=n))
 
 
 def omega2(k, m, n=N):
     """Closed-form squared angular frequencies, ascending, shape (n,)."""
-    _j = numpy.arange(0, n + 0, dtype=float)
-    return numpy.sort(numpy.broadcast_to(4*k*numpy.sin((1/2)*numpy.pi*_j/n)**2/m, (n,)))
+    _j = _np.arange(0, n + 0, dtype=_np.float64)
+    return _np.sort(_np.broadcast_to(4*k*_np.sin((1/2)*_np.pi*_j/n)**2/m, (n,)))
+
+
+# Private aliases used by the function bodies above.
+_masses = masses
+_spring_ends = spring_ends
+_spring_constants = spring_constants
+_make_acceleration = make_acceleration
+_acceleration = acceleration
+_energy = energy
+_stiffness_bands = stiffness_bands
+_stiffness_matrix = stiffness_matrix
+_mass_matrix = mass_matrix
+_omega2 = omega2

@@ -7,7 +7,7 @@ of MASS_NAMES; arrays of states have shape (N, ...) (a batch in trailing axes).
 Every function takes the parameters PARAMETERS as keyword arguments.
 """
 
-import numpy
+import numpy as _np
 
 SCENE = 'duffing'
 SCENE_SHA256 = 'ded30e37de277965af395a9e5588f13441361b97fcc8d6fee9b269229d0a2403'
@@ -21,48 +21,52 @@ LINEAR = False
 SPRING_ENDS = ((-1, 0), (0, 1), (1, 2), (2, -1))
 CLOSED_FORM = True
 RIGID_MODES = 0
+_N = N
+_SPRING_ENDS = SPRING_ENDS
+_RIGID_MODES = RIGID_MODES
+_float, _ValueError = float, ValueError
 
 
 def masses(k, kappa, m):
     """Masses, shape (N,)."""
-    return numpy.array([m, m, m], dtype=float)
+    return _np.array([m, m, m], dtype=_np.float64)
 
 
 def spring_constants(k, kappa, m):
     """Linear stiffness of each spring in SPRING_ENDS order, shape (S,)."""
-    return numpy.array([k, k, k, k], dtype=float)
+    return _np.array([k, k, k, k], dtype=_np.float64)
 
 
 def cubic_constants(k, kappa, m):
     """Cubic coefficient k3 of each spring (0 where linear), shape (S,)."""
-    return numpy.array([kappa, kappa, kappa, kappa], dtype=float)
+    return _np.array([kappa, kappa, kappa, kappa], dtype=_np.float64)
 
 
 def mass_matrix(k, kappa, m):
     """M = d²T/dv², shape (N, N)."""
-    return numpy.array([
+    return _np.array([
         [m, 0, 0],
         [0, m, 0],
         [0, 0, m],
-    ], dtype=float)
+    ], dtype=_np.float64)
 
 
 def stiffness_matrix(k, kappa, m):
     """K = d²V/dx² at x = 0, shape (N, N)."""
-    return numpy.array([
+    return _np.array([
         [2*k, -k, 0],
         [-k, 2*k, -k],
         [0, -k, 2*k],
-    ], dtype=float)
+    ], dtype=_np.float64)
 
 
 def dynamical_matrix(k, kappa, m):
     """D = M^-1/2 K M^-1/2, shape (N, N)."""
-    return numpy.array([
+    return _np.array([
         [2*k/m, -k/m, 0],
         [-k/m, 2*k/m, -k/m],
         [0, -k/m, 2*k/m],
-    ], dtype=float)
+    ], dtype=_np.float64)
 
 
 def omega2(k, kappa, m):
@@ -70,19 +74,19 @@ def omega2(k, kappa, m):
 
     Ordered by value at DEFAULTS; repeated values appear once per shape.
     """
-    return numpy.array([k*(2 - numpy.sqrt(2))/m, 2*k/m, k*(numpy.sqrt(2) + 2)/m], dtype=float)
+    return _np.array([k*(2 - _np.sqrt(2))/m, 2*k/m, k*(_np.sqrt(2) + 2)/m], dtype=_np.float64)
 
 
 def mode_shapes(k, kappa, m):
     """Closed-form physical mode shapes as columns, in omega2() order, shape (N, N); any scale."""
-    return numpy.array([
+    return _np.array([
         [1, 1, 1],
-        [numpy.sqrt(2), 0, -numpy.sqrt(2)],
+        [_np.sqrt(2), 0, -_np.sqrt(2)],
         [1, -1, 1],
-    ], dtype=float)
+    ], dtype=_np.float64)
 
 
-def acceleration(x, k, kappa, m):
+def acceleration(_x, k, kappa, m):
     """Acceleration from springs.
 
     Parameters
@@ -94,25 +98,39 @@ def acceleration(x, k, kappa, m):
     -------
     ndarray, shape (N, ...)
     """
-    x_m1, x_m2, x_m3 = x
-    _out = numpy.empty(numpy.shape(x))
-    _out[0] = (-k*x_m1 - k*(x_m1 - x_m2) - kappa*x_m1**3 - kappa*(x_m1 - x_m2)**3)/m
-    _out[1] = (k*(x_m1 - x_m2) - k*(x_m2 - x_m3) + kappa*(x_m1 - x_m2)**3 - kappa*(x_m2 - x_m3)**3)/m
-    _out[2] = (-k*x_m3 + k*(x_m2 - x_m3) - kappa*x_m3**3 + kappa*(x_m2 - x_m3)**3)/m
+    _x_m1, _x_m2, _x_m3 = _x
+    _out = _np.empty(_np.shape(_x))
+    _out[0] = (-_x_m1**3*kappa - _x_m1*k - k*(_x_m1 - _x_m2) - kappa*(_x_m1 - _x_m2)**3)/m
+    _out[1] = (k*(_x_m1 - _x_m2) - k*(_x_m2 - _x_m3) + kappa*(_x_m1 - _x_m2)**3 - kappa*(_x_m2 - _x_m3)**3)/m
+    _out[2] = (-_x_m3**3*kappa - _x_m3*k + k*(_x_m2 - _x_m3) + kappa*(_x_m2 - _x_m3)**3)/m
     return _out
 
 
 def make_acceleration(k, kappa, m):
     """acceleration() with the parameters bound (nonlinear springs: the expressions above)."""
 
-    def _bound(x):
-        return acceleration(x, k=k, kappa=kappa, m=m)
+    def _bound(_y):
+        return _acceleration(_y, k=k, kappa=kappa, m=m)
 
     return _bound
 
 
-def energy(x, v, k, kappa, m):
+def energy(_x, _v, k, kappa, m):
     """Total energy T + V; x, v shape (N, ...), result shape (...)."""
-    x_m1, x_m2, x_m3 = x
-    v_m1, v_m2, v_m3 = v
-    return (1/2)*k*x_m1**2 + (1/2)*k*x_m3**2 + (1/2)*k*(x_m1 - x_m2)**2 + (1/2)*k*(x_m2 - x_m3)**2 + (1/4)*kappa*x_m1**4 + (1/4)*kappa*x_m3**4 + (1/4)*kappa*(x_m1 - x_m2)**4 + (1/4)*kappa*(x_m2 - x_m3)**4 + (1/2)*m*v_m1**2 + (1/2)*m*v_m2**2 + (1/2)*m*v_m3**2
+    _x_m1, _x_m2, _x_m3 = _x
+    _v_m1, _v_m2, _v_m3 = _v
+    return (1/2)*_v_m1**2*m + (1/2)*_v_m2**2*m + (1/2)*_v_m3**2*m + (1/4)*_x_m1**4*kappa + (1/2)*_x_m1**2*k + (1/4)*_x_m3**4*kappa + (1/2)*_x_m3**2*k + (1/2)*k*(_x_m1 - _x_m2)**2 + (1/2)*k*(_x_m2 - _x_m3)**2 + (1/4)*kappa*(_x_m1 - _x_m2)**4 + (1/4)*kappa*(_x_m2 - _x_m3)**4
+
+
+# Private aliases used by the function bodies above.
+_masses = masses
+_spring_constants = spring_constants
+_cubic_constants = cubic_constants
+_mass_matrix = mass_matrix
+_stiffness_matrix = stiffness_matrix
+_dynamical_matrix = dynamical_matrix
+_omega2 = omega2
+_mode_shapes = mode_shapes
+_acceleration = acceleration
+_make_acceleration = make_acceleration
+_energy = energy

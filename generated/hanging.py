@@ -7,7 +7,7 @@ of MASS_NAMES; arrays of states have shape (N, ...) (a batch in trailing axes).
 Every function takes the parameters PARAMETERS as keyword arguments.
 """
 
-import numpy
+import numpy as _np
 
 SCENE = 'hanging'
 SCENE_SHA256 = 'e0b0a6a674ecee259917d28d859dd11d6c449a7212302d556c2c0bcf6a57dac6'
@@ -21,43 +21,47 @@ LINEAR = True
 SPRING_ENDS = ((-1, 0), (0, 1), (1, 2))
 CLOSED_FORM = True
 RIGID_MODES = 0
+_N = N
+_SPRING_ENDS = SPRING_ENDS
+_RIGID_MODES = RIGID_MODES
+_float, _ValueError = float, ValueError
 
 
 def masses(g, k, m):
     """Masses, shape (N,)."""
-    return numpy.array([m, m, 2*m], dtype=float)
+    return _np.array([m, m, 2*m], dtype=_np.float64)
 
 
 def spring_constants(g, k, m):
     """Linear stiffness of each spring in SPRING_ENDS order, shape (S,)."""
-    return numpy.array([k, k, k], dtype=float)
+    return _np.array([k, k, k], dtype=_np.float64)
 
 
 def mass_matrix(g, k, m):
     """M = d²T/dv², shape (N, N)."""
-    return numpy.array([
+    return _np.array([
         [m, 0, 0],
         [0, m, 0],
         [0, 0, 2*m],
-    ], dtype=float)
+    ], dtype=_np.float64)
 
 
 def stiffness_matrix(g, k, m):
     """K = d²V/dx² at x = 0, shape (N, N)."""
-    return numpy.array([
+    return _np.array([
         [2*k, -k, 0],
         [-k, 2*k, -k],
         [0, -k, k],
-    ], dtype=float)
+    ], dtype=_np.float64)
 
 
 def dynamical_matrix(g, k, m):
     """D = M^-1/2 K M^-1/2, shape (N, N)."""
-    return numpy.array([
+    return _np.array([
         [2*k/m, -k/m, 0],
-        [-k/m, 2*k/m, -1/2*numpy.sqrt(2)*k/m],
-        [0, -1/2*numpy.sqrt(2)*k/m, (1/2)*k/m],
-    ], dtype=float)
+        [-k/m, 2*k/m, -1/2*_np.sqrt(2)*k/m],
+        [0, -1/2*_np.sqrt(2)*k/m, (1/2)*k/m],
+    ], dtype=_np.float64)
 
 
 def omega2(g, k, m):
@@ -65,19 +69,19 @@ def omega2(g, k, m):
 
     Ordered by value at DEFAULTS; repeated values appear once per shape.
     """
-    return numpy.array([-numpy.sqrt(3)*k*numpy.cos(-1/3*numpy.arccos((2/9)*numpy.sqrt(3)) + (1/3)*numpy.pi)/m + (3/2)*k/m, -numpy.sqrt(3)*k*numpy.sin(-1/3*numpy.arccos((2/9)*numpy.sqrt(3)) + (1/6)*numpy.pi)/m + (3/2)*k/m, (3/2)*k/m + numpy.sqrt(3)*k*numpy.cos((1/3)*numpy.arccos((2/9)*numpy.sqrt(3)))/m], dtype=float)
+    return _np.array([-_np.sqrt(3)*k*_np.cos(-1/3*_np.arccos((2/9)*_np.sqrt(3)) + (1/3)*_np.pi)/m + (3/2)*k/m, -_np.sqrt(3)*k*_np.sin(-1/3*_np.arccos((2/9)*_np.sqrt(3)) + (1/6)*_np.pi)/m + (3/2)*k/m, (3/2)*k/m + _np.sqrt(3)*k*_np.cos((1/3)*_np.arccos((2/9)*_np.sqrt(3)))/m], dtype=_np.float64)
 
 
 def mode_shapes(g, k, m):
     """Closed-form physical mode shapes as columns, in omega2() order, shape (N, N); any scale."""
-    return numpy.array([
+    return _np.array([
         [1, 1, 1],
-        [1/2 + numpy.sqrt(3)*numpy.cos(-1/3*numpy.arccos((2/9)*numpy.sqrt(3)) + (1/3)*numpy.pi), numpy.sqrt(3)*numpy.sin(-1/3*numpy.arccos((2/9)*numpy.sqrt(3)) + (1/6)*numpy.pi) + 1/2, -numpy.sqrt(3)*numpy.cos((1/3)*numpy.arccos((2/9)*numpy.sqrt(3))) + 1/2],
-        [-3/4 + numpy.sqrt(3)*numpy.cos(-1/3*numpy.arccos((2/9)*numpy.sqrt(3)) + (1/3)*numpy.pi) + 3*numpy.cos(-1/3*numpy.arccos((2/9)*numpy.sqrt(3)) + (1/3)*numpy.pi)**2, -3/4 + 3*numpy.sin(-1/3*numpy.arccos((2/9)*numpy.sqrt(3)) + (1/6)*numpy.pi)**2 + numpy.sqrt(3)*numpy.sin(-1/3*numpy.arccos((2/9)*numpy.sqrt(3)) + (1/6)*numpy.pi), -numpy.sqrt(3)*numpy.cos((1/3)*numpy.arccos((2/9)*numpy.sqrt(3))) - 3/4 + 3*numpy.cos((1/3)*numpy.arccos((2/9)*numpy.sqrt(3)))**2],
-    ], dtype=float)
+        [1/2 + _np.sqrt(3)*_np.cos(-1/3*_np.arccos((2/9)*_np.sqrt(3)) + (1/3)*_np.pi), _np.sqrt(3)*_np.sin(-1/3*_np.arccos((2/9)*_np.sqrt(3)) + (1/6)*_np.pi) + 1/2, -_np.sqrt(3)*_np.cos((1/3)*_np.arccos((2/9)*_np.sqrt(3))) + 1/2],
+        [-3/4 + _np.sqrt(3)*_np.cos(-1/3*_np.arccos((2/9)*_np.sqrt(3)) + (1/3)*_np.pi) + 3*_np.cos(-1/3*_np.arccos((2/9)*_np.sqrt(3)) + (1/3)*_np.pi)**2, -3/4 + 3*_np.sin(-1/3*_np.arccos((2/9)*_np.sqrt(3)) + (1/6)*_np.pi)**2 + _np.sqrt(3)*_np.sin(-1/3*_np.arccos((2/9)*_np.sqrt(3)) + (1/6)*_np.pi), -_np.sqrt(3)*_np.cos((1/3)*_np.arccos((2/9)*_np.sqrt(3))) - 3/4 + 3*_np.cos((1/3)*_np.arccos((2/9)*_np.sqrt(3)))**2],
+    ], dtype=_np.float64)
 
 
-def acceleration(x, g, k, m):
+def acceleration(_x, g, k, m):
     """Acceleration from springs and gravity.
 
     Parameters
@@ -89,33 +93,47 @@ def acceleration(x, g, k, m):
     -------
     ndarray, shape (N, ...)
     """
-    x_m1, x_m2, x_m3 = x
-    _out = numpy.empty(numpy.shape(x))
-    _out[0] = (g*m - k*x_m1 - k*(x_m1 - x_m2))/m
-    _out[1] = (g*m + k*(x_m1 - x_m2) - k*(x_m2 - x_m3))/m
-    _out[2] = (1/2)*(2*g*m + k*(x_m2 - x_m3))/m
+    _x_m1, _x_m2, _x_m3 = _x
+    _out = _np.empty(_np.shape(_x))
+    _out[0] = (-_x_m1*k + g*m - k*(_x_m1 - _x_m2))/m
+    _out[1] = (g*m + k*(_x_m1 - _x_m2) - k*(_x_m2 - _x_m3))/m
+    _out[2] = (1/2)*(2*g*m + k*(_x_m2 - _x_m3))/m
     return _out
 
 
 def make_acceleration(g, k, m):
     """acceleration() with the parameters bound: -M⁻¹K and g formed once; x shape (N,) or (N, B)."""
-    _inv_m = 1.0 / masses(g=g, k=k, m=m)
-    _A = -_inv_m[:, None] * stiffness_matrix(g=g, k=k, m=m)
-    _g = (_inv_m * gravity_forces(g=g, k=k, m=m))[:, None]
+    _inv_m = 1.0 / _masses(g=g, k=k, m=m)
+    _A = -_inv_m[:, None] * _stiffness_matrix(g=g, k=k, m=m)
+    _g = (_inv_m * _gravity_forces(g=g, k=k, m=m))[:, None]
 
-    def _bound(x):
-        return _A @ x + (_g if numpy.ndim(x) == 2 else _g[:, 0])
+    def _bound(_y):
+        return _A @ _y + (_g if _np.ndim(_y) == 2 else _g[:, 0])
 
     return _bound
 
 
 def gravity_forces(g, k, m):
     """Constant gravity force m_i*g on each mass (+x direction), shape (N,)."""
-    return numpy.array([g*m, g*m, 2*g*m], dtype=float)
+    return _np.array([g*m, g*m, 2*g*m], dtype=_np.float64)
 
 
-def energy(x, v, g, k, m):
+def energy(_x, _v, g, k, m):
     """Total energy T + V (V includes gravity's potential); x, v shape (N, ...), result shape (...)."""
-    x_m1, x_m2, x_m3 = x
-    v_m1, v_m2, v_m3 = v
-    return -g*m*x_m1 - g*m*x_m2 - 2*g*m*x_m3 + (1/2)*k*x_m1**2 + (1/2)*k*(x_m1 - x_m2)**2 + (1/2)*k*(x_m2 - x_m3)**2 + (1/2)*m*v_m1**2 + (1/2)*m*v_m2**2 + m*v_m3**2
+    _x_m1, _x_m2, _x_m3 = _x
+    _v_m1, _v_m2, _v_m3 = _v
+    return (1/2)*_v_m1**2*m + (1/2)*_v_m2**2*m + _v_m3**2*m + (1/2)*_x_m1**2*k - _x_m1*g*m - _x_m2*g*m - 2*_x_m3*g*m + (1/2)*k*(_x_m1 - _x_m2)**2 + (1/2)*k*(_x_m2 - _x_m3)**2
+
+
+# Private aliases used by the function bodies above.
+_masses = masses
+_spring_constants = spring_constants
+_mass_matrix = mass_matrix
+_stiffness_matrix = stiffness_matrix
+_dynamical_matrix = dynamical_matrix
+_omega2 = omega2
+_mode_shapes = mode_shapes
+_acceleration = acceleration
+_make_acceleration = make_acceleration
+_gravity_forces = gravity_forces
+_energy = energy

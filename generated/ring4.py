@@ -7,7 +7,7 @@ of MASS_NAMES; arrays of states have shape (N, ...) (a batch in trailing axes).
 Every function takes the parameters PARAMETERS as keyword arguments.
 """
 
-import numpy
+import numpy as _np
 
 SCENE = 'ring4'
 SCENE_SHA256 = '147ad7595400238a1ef8659bd604bd05ee8d740da9fe9cb66a23ee3c05484d94'
@@ -21,46 +21,50 @@ LINEAR = True
 SPRING_ENDS = ((0, 1), (1, 2), (2, 3), (3, 0))
 CLOSED_FORM = True
 RIGID_MODES = 1
+_N = N
+_SPRING_ENDS = SPRING_ENDS
+_RIGID_MODES = RIGID_MODES
+_float, _ValueError = float, ValueError
 
 
 def masses(k, m):
     """Masses, shape (N,)."""
-    return numpy.array([m, m, m, m], dtype=float)
+    return _np.array([m, m, m, m], dtype=_np.float64)
 
 
 def spring_constants(k, m):
     """Linear stiffness of each spring in SPRING_ENDS order, shape (S,)."""
-    return numpy.array([k, k, k, k], dtype=float)
+    return _np.array([k, k, k, k], dtype=_np.float64)
 
 
 def mass_matrix(k, m):
     """M = d²T/dv², shape (N, N)."""
-    return numpy.array([
+    return _np.array([
         [m, 0, 0, 0],
         [0, m, 0, 0],
         [0, 0, m, 0],
         [0, 0, 0, m],
-    ], dtype=float)
+    ], dtype=_np.float64)
 
 
 def stiffness_matrix(k, m):
     """K = d²V/dx² at x = 0, shape (N, N)."""
-    return numpy.array([
+    return _np.array([
         [2*k, -k, 0, -k],
         [-k, 2*k, -k, 0],
         [0, -k, 2*k, -k],
         [-k, 0, -k, 2*k],
-    ], dtype=float)
+    ], dtype=_np.float64)
 
 
 def dynamical_matrix(k, m):
     """D = M^-1/2 K M^-1/2, shape (N, N)."""
-    return numpy.array([
+    return _np.array([
         [2*k/m, -k/m, 0, -k/m],
         [-k/m, 2*k/m, -k/m, 0],
         [0, -k/m, 2*k/m, -k/m],
         [-k/m, 0, -k/m, 2*k/m],
-    ], dtype=float)
+    ], dtype=_np.float64)
 
 
 def omega2(k, m):
@@ -68,20 +72,20 @@ def omega2(k, m):
 
     Ordered by value at DEFAULTS; repeated values appear once per shape.
     """
-    return numpy.array([0, 2*k/m, 2*k/m, 4*k/m], dtype=float)
+    return _np.array([0, 2*k/m, 2*k/m, 4*k/m], dtype=_np.float64)
 
 
 def mode_shapes(k, m):
     """Closed-form physical mode shapes as columns, in omega2() order, shape (N, N); any scale."""
-    return numpy.array([
+    return _np.array([
         [1, 1, 1, 1],
         [1, -1, 1, -1],
         [1, -1, -1, 1],
         [1, 1, -1, -1],
-    ], dtype=float)
+    ], dtype=_np.float64)
 
 
-def acceleration(x, k, m):
+def acceleration(_x, k, m):
     """Acceleration from springs.
 
     Parameters
@@ -93,28 +97,41 @@ def acceleration(x, k, m):
     -------
     ndarray, shape (N, ...)
     """
-    x_m1, x_m2, x_m3, x_m4 = x
-    _out = numpy.empty(numpy.shape(x))
-    _out[0] = (k*(-x_m1 + x_m4) - k*(x_m1 - x_m2))/m
-    _out[1] = (k*(x_m1 - x_m2) - k*(x_m2 - x_m3))/m
-    _out[2] = (k*(x_m2 - x_m3) - k*(x_m3 - x_m4))/m
-    _out[3] = (-k*(-x_m1 + x_m4) + k*(x_m3 - x_m4))/m
+    _x_m1, _x_m2, _x_m3, _x_m4 = _x
+    _out = _np.empty(_np.shape(_x))
+    _out[0] = (k*(-_x_m1 + _x_m4) - k*(_x_m1 - _x_m2))/m
+    _out[1] = (k*(_x_m1 - _x_m2) - k*(_x_m2 - _x_m3))/m
+    _out[2] = (k*(_x_m2 - _x_m3) - k*(_x_m3 - _x_m4))/m
+    _out[3] = (-k*(-_x_m1 + _x_m4) + k*(_x_m3 - _x_m4))/m
     return _out
 
 
 def make_acceleration(k, m):
     """acceleration() with the parameters bound: -M⁻¹K formed once; x shape (N,) or (N, B)."""
-    _inv_m = 1.0 / masses(k=k, m=m)
-    _A = -_inv_m[:, None] * stiffness_matrix(k=k, m=m)
+    _inv_m = 1.0 / _masses(k=k, m=m)
+    _A = -_inv_m[:, None] * _stiffness_matrix(k=k, m=m)
 
-    def _bound(x):
-        return _A @ x
+    def _bound(_y):
+        return _A @ _y
 
     return _bound
 
 
-def energy(x, v, k, m):
+def energy(_x, _v, k, m):
     """Total energy T + V; x, v shape (N, ...), result shape (...)."""
-    x_m1, x_m2, x_m3, x_m4 = x
-    v_m1, v_m2, v_m3, v_m4 = v
-    return (1/2)*k*(-x_m1 + x_m4)**2 + (1/2)*k*(x_m1 - x_m2)**2 + (1/2)*k*(x_m2 - x_m3)**2 + (1/2)*k*(x_m3 - x_m4)**2 + (1/2)*m*v_m1**2 + (1/2)*m*v_m2**2 + (1/2)*m*v_m3**2 + (1/2)*m*v_m4**2
+    _x_m1, _x_m2, _x_m3, _x_m4 = _x
+    _v_m1, _v_m2, _v_m3, _v_m4 = _v
+    return (1/2)*_v_m1**2*m + (1/2)*_v_m2**2*m + (1/2)*_v_m3**2*m + (1/2)*_v_m4**2*m + (1/2)*k*(-_x_m1 + _x_m4)**2 + (1/2)*k*(_x_m1 - _x_m2)**2 + (1/2)*k*(_x_m2 - _x_m3)**2 + (1/2)*k*(_x_m3 - _x_m4)**2
+
+
+# Private aliases used by the function bodies above.
+_masses = masses
+_spring_constants = spring_constants
+_mass_matrix = mass_matrix
+_stiffness_matrix = stiffness_matrix
+_dynamical_matrix = dynamical_matrix
+_omega2 = omega2
+_mode_shapes = mode_shapes
+_acceleration = acceleration
+_make_acceleration = make_acceleration
+_energy = energy

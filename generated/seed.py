@@ -7,7 +7,7 @@ of MASS_NAMES; arrays of states have shape (N, ...) (a batch in trailing axes).
 Every function takes the parameters PARAMETERS as keyword arguments.
 """
 
-import numpy
+import numpy as _np
 
 SCENE = 'seed'
 SCENE_SHA256 = '448967162d326d88096c4173b8047b0f0a65b497ba14c5851dce556f56429d3e'
@@ -21,43 +21,47 @@ LINEAR = True
 SPRING_ENDS = ((0, 1), (1, 2))
 CLOSED_FORM = True
 RIGID_MODES = 1
+_N = N
+_SPRING_ENDS = SPRING_ENDS
+_RIGID_MODES = RIGID_MODES
+_float, _ValueError = float, ValueError
 
 
 def masses(k, m):
     """Masses, shape (N,)."""
-    return numpy.array([m, 3*m, m], dtype=float)
+    return _np.array([m, 3*m, m], dtype=_np.float64)
 
 
 def spring_constants(k, m):
     """Linear stiffness of each spring in SPRING_ENDS order, shape (S,)."""
-    return numpy.array([k, k], dtype=float)
+    return _np.array([k, k], dtype=_np.float64)
 
 
 def mass_matrix(k, m):
     """M = d²T/dv², shape (N, N)."""
-    return numpy.array([
+    return _np.array([
         [m, 0, 0],
         [0, 3*m, 0],
         [0, 0, m],
-    ], dtype=float)
+    ], dtype=_np.float64)
 
 
 def stiffness_matrix(k, m):
     """K = d²V/dx² at x = 0, shape (N, N)."""
-    return numpy.array([
+    return _np.array([
         [k, -k, 0],
         [-k, 2*k, -k],
         [0, -k, k],
-    ], dtype=float)
+    ], dtype=_np.float64)
 
 
 def dynamical_matrix(k, m):
     """D = M^-1/2 K M^-1/2, shape (N, N)."""
-    return numpy.array([
-        [k/m, -1/3*numpy.sqrt(3)*k/m, 0],
-        [-1/3*numpy.sqrt(3)*k/m, (2/3)*k/m, -1/3*numpy.sqrt(3)*k/m],
-        [0, -1/3*numpy.sqrt(3)*k/m, k/m],
-    ], dtype=float)
+    return _np.array([
+        [k/m, -1/3*_np.sqrt(3)*k/m, 0],
+        [-1/3*_np.sqrt(3)*k/m, (2/3)*k/m, -1/3*_np.sqrt(3)*k/m],
+        [0, -1/3*_np.sqrt(3)*k/m, k/m],
+    ], dtype=_np.float64)
 
 
 def omega2(k, m):
@@ -65,19 +69,19 @@ def omega2(k, m):
 
     Ordered by value at DEFAULTS; repeated values appear once per shape.
     """
-    return numpy.array([0, k/m, (5/3)*k/m], dtype=float)
+    return _np.array([0, k/m, (5/3)*k/m], dtype=_np.float64)
 
 
 def mode_shapes(k, m):
     """Closed-form physical mode shapes as columns, in omega2() order, shape (N, N); any scale."""
-    return numpy.array([
+    return _np.array([
         [1, 1, 1],
         [1, 0, -2/3],
         [1, -1, 1],
-    ], dtype=float)
+    ], dtype=_np.float64)
 
 
-def acceleration(x, k, m):
+def acceleration(_x, k, m):
     """Acceleration from springs.
 
     Parameters
@@ -89,27 +93,40 @@ def acceleration(x, k, m):
     -------
     ndarray, shape (N, ...)
     """
-    x_m1, x_m2, x_m3 = x
-    _out = numpy.empty(numpy.shape(x))
-    _out[0] = -k*(x_m1 - x_m2)/m
-    _out[1] = (1/3)*(k*(x_m1 - x_m2) - k*(x_m2 - x_m3))/m
-    _out[2] = k*(x_m2 - x_m3)/m
+    _x_m1, _x_m2, _x_m3 = _x
+    _out = _np.empty(_np.shape(_x))
+    _out[0] = -k*(_x_m1 - _x_m2)/m
+    _out[1] = (1/3)*(k*(_x_m1 - _x_m2) - k*(_x_m2 - _x_m3))/m
+    _out[2] = k*(_x_m2 - _x_m3)/m
     return _out
 
 
 def make_acceleration(k, m):
     """acceleration() with the parameters bound: -M⁻¹K formed once; x shape (N,) or (N, B)."""
-    _inv_m = 1.0 / masses(k=k, m=m)
-    _A = -_inv_m[:, None] * stiffness_matrix(k=k, m=m)
+    _inv_m = 1.0 / _masses(k=k, m=m)
+    _A = -_inv_m[:, None] * _stiffness_matrix(k=k, m=m)
 
-    def _bound(x):
-        return _A @ x
+    def _bound(_y):
+        return _A @ _y
 
     return _bound
 
 
-def energy(x, v, k, m):
+def energy(_x, _v, k, m):
     """Total energy T + V; x, v shape (N, ...), result shape (...)."""
-    x_m1, x_m2, x_m3 = x
-    v_m1, v_m2, v_m3 = v
-    return (1/2)*k*(x_m1 - x_m2)**2 + (1/2)*k*(x_m2 - x_m3)**2 + (1/2)*m*v_m1**2 + (3/2)*m*v_m2**2 + (1/2)*m*v_m3**2
+    _x_m1, _x_m2, _x_m3 = _x
+    _v_m1, _v_m2, _v_m3 = _v
+    return (1/2)*_v_m1**2*m + (3/2)*_v_m2**2*m + (1/2)*_v_m3**2*m + (1/2)*k*(_x_m1 - _x_m2)**2 + (1/2)*k*(_x_m2 - _x_m3)**2
+
+
+# Private aliases used by the function bodies above.
+_masses = masses
+_spring_constants = spring_constants
+_mass_matrix = mass_matrix
+_stiffness_matrix = stiffness_matrix
+_dynamical_matrix = dynamical_matrix
+_omega2 = omega2
+_mode_shapes = mode_shapes
+_acceleration = acceleration
+_make_acceleration = make_acceleration
+_energy = energy

@@ -31,13 +31,13 @@ What is measured
 from __future__ import annotations
 
 import math
-import sys
 import time
 from dataclasses import dataclass, field, replace
 from typing import Callable
 
 import numpy as np
 
+from . import progress
 from .driver import integrate, step_grid
 from .integrators import ADAPTIVE, INTEGRATORS
 from .integrators.base import Integrator, Problem
@@ -329,16 +329,14 @@ class _Progress:
 
     def note(self, text: str) -> None:
         if self.enabled:
-            sys.stderr.write(f"bench: {text}\n")
-            sys.stderr.flush()
+            progress.line(text, prefix="bench")
 
     def run(self, label: str, rec: BenchRecord | None = None) -> None:
         self.done += 1
         if self.enabled and rec is not None:
-            sys.stderr.write(f"bench [{self.done:3d}/{self.total}] {time.perf_counter() - self.t0:6.1f}s  "
-                             f"{label:<28} error {rec.error:9.2e}  {rec.seconds * 1e3:9.2f} ms  "
-                             f"{rec.force_evals:>9} evals\n")
-            sys.stderr.flush()
+            progress.line(f"[{self.done:3d}/{self.total}] {time.perf_counter() - self.t0:6.1f}s  "
+                          f"{label:<28} error {rec.error:9.2e}  {rec.seconds * 1e3:9.2f} ms  "
+                          f"{rec.force_evals:>9} evals", prefix="bench")
 
 
 @dataclass

@@ -24,8 +24,10 @@ class ChunkedNPZ:
     Use as a context manager; :meth:`frame` writes one recorded state.
     """
 
-    def __init__(self, path: str | Path, t: np.ndarray, n: int, methods: list[str]):
+    def __init__(self, path: str | Path, t: np.ndarray, n: int, methods: list[str],
+                 progress: bool | None = None):
         self.path = Path(path)
+        self.progress = progress
         self.path.parent.mkdir(parents=True, exist_ok=True)
         self.t = np.asarray(t, dtype=float)
         self.tmpdir = Path(tempfile.mkdtemp(prefix=f".{self.path.name}.", dir=self.path.parent))
@@ -42,6 +44,12 @@ class ChunkedNPZ:
         self.arrays[f"v_{method}"][row] = np.reshape(v, -1)
 
     def close(self) -> None:
+        from .progress import phase
+
+        with phase(f"writing {self.path.name}", enabled=self.progress):
+            self._close()
+
+    def _close(self) -> None:
         np.save(self.tmpdir / "t.npy", self.t)
         for arr in self.arrays.values():
             arr.flush()

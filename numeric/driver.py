@@ -2,12 +2,12 @@
 
 from __future__ import annotations
 
-import sys
-import time
 from dataclasses import dataclass, field
 from typing import Callable
 
 import numpy as np
+
+from .progress import Reporter
 
 from .integrators.base import Integrator, Problem
 
@@ -26,28 +26,12 @@ class Trajectory:
     force_evals: int = 0
 
 
-class Progress:
-    """A minimal progress bar on stderr, shown only for long runs on a terminal."""
+class Progress(Reporter):
+    """Progress of a run of ``total`` steps (:class:`numeric.progress.Reporter`): a bar on a
+    terminal, a plain line every few seconds otherwise, nothing for runs under a second."""
 
     def __init__(self, total: int, label: str, enabled: bool | None = None):
-        self.total = max(total, 1)
-        self.label = label
-        self.enabled = sys.stderr.isatty() if enabled is None else enabled
-        self.last = 0.0
-
-    def update(self, done: int) -> None:
-        if not self.enabled:
-            return
-        now = time.monotonic()
-        if now - self.last < 0.2 and done < self.total:
-            return
-        self.last = now
-        frac = done / self.total
-        bar = "#" * int(30 * frac)
-        sys.stderr.write(f"\r{self.label} [{bar:<30}] {100 * frac:5.1f}%")
-        if done >= self.total:
-            sys.stderr.write("\n")
-        sys.stderr.flush()
+        super().__init__(label, total, enabled=enabled)
 
 
 def step_grid(t_end: float, h_target: float) -> tuple[float, int]:

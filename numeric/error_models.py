@@ -433,5 +433,9 @@ class PowerLaw:
         return self.c * s ** self.alpha * (t / self.t_ref)
 
     def solve(self, y: float, t: float) -> float:
-        """The ``s`` with ``law(s, t) = y``."""
-        return (y * self.t_ref / (t * self.c)) ** (1.0 / self.alpha)
+        """The ``s`` with ``law(s, t) = y`` (inf when it lies beyond floating point, e.g. a
+        method exact on the scene, such as a single free mass)."""
+        try:
+            return (y * self.t_ref / (t * self.c)) ** (1.0 / self.alpha)
+        except (OverflowError, ZeroDivisionError):
+            return math.inf

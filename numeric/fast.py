@@ -473,13 +473,38 @@ def _stream_impl(x, v, c):
 _spring = _kick_end = _kick_flat = _kick_row_batch = _kick_rows = _drift_rows = _leapfrog_pair = None
 
 
+def _numba_cache_present() -> bool:
+    """Whether numba's on-disk cache already holds this module's kernels (index files)."""
+    import os
+    from pathlib import Path
+
+    here = Path(__file__).resolve()
+    base = os.environ.get("NUMBA_CACHE_DIR")
+    folder = Path(base) if base else here.parent / "__pycache__"
+    try:
+        return any(folder.rglob(f"{here.stem}.*.nbi"))
+    except OSError:
+        return False
+
+
+#: Said once, before numba compiles the kernels (the first run on a machine; several seconds).
+COMPILE_NOTE = ("compiling numba kernels (first run only, several seconds; later runs load them "
+                "from numba's cache)")
+
+
 @functools.lru_cache(maxsize=1)
 def _compiled():
     """Register the numba overloads and compile (or load from numba's cache) the kernels.
 
+    Says so on stderr (one line) when nothing is cached yet: compiling takes seconds.
     Returns a namespace with ``force``, ``sweep``, ``half_kick`` and ``stream``.
     """
     import types as pytypes
+
+    if not _numba_cache_present():
+        from .progress import note
+
+        note(COMPILE_NOTE)
 
     import numba
     from numba import types

@@ -134,11 +134,17 @@ class ExactMethod(Method):
         system, t = ctx.system, grid.t
         if system.chain:
             from .chain_modal import ChainModal
+            from .driver import Progress
+            from .progress import phase
 
-            sol = ChainModal.from_module(system.module, system.params, x0, v0)
+            # uniform chains: sine/cosine/Fourier transforms, O(N log N) per frame, no N x N
+            with phase("exact solution: set-up", enabled=ctx.progress):
+                sol = ChainModal.from_module(system.module, system.params, x0, v0)
+            bar = Progress(t.shape[0], "exact solution", enabled=ctx.progress)
             for row, ti in enumerate(t):
                 x, v = sol.at(float(ti))
                 recorder.frame(row, x, v)
+                bar.update(row + 1)
             return 0
         if system.conservative:
             from .modal import ModalSolution

@@ -33,7 +33,6 @@ N are extrapolated (∝ N³, tridiagonal ∝ N²) and marked so.
 from __future__ import annotations
 
 import math
-import sys
 import time
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
@@ -660,9 +659,10 @@ def _jsonable(obj):
 
 
 def print_progress(line: str) -> None:
-    """Progress on stderr."""
-    sys.stderr.write(f"scaling: {line}\n")
-    sys.stderr.flush()
+    """Progress on stderr (:func:`numeric.progress.line`)."""
+    from . import progress
+
+    progress.line(line, prefix="scaling")
 
 
 __all__ = ["ScalingConfig", "ScalingResult", "ChainCase", "run", "markdown", "figure", "write", "best_seconds",

@@ -9,6 +9,7 @@ from pathlib import Path
 import numpy as np
 
 from . import plots
+from .driver import Progress
 from .errors import RunRefused
 from .files import atomic_path
 from .integrators.base import Problem
@@ -243,7 +244,7 @@ def stream_methods(system: System, x0: np.ndarray, v0: np.ndarray, h: float, ste
     summary: dict = {"methods": {}}
     recorders: dict[str, _StreamRecorder] = {}
     npz = out / f"{scene_name}.npz"
-    with ChunkedNPZ(npz, t, system.n, methods) as writer:
+    with ChunkedNPZ(npz, t, system.n, methods, progress=progress) as writer:
         for m in chosen:
             rec = recorders[m.name] = _StreamRecorder(writer, system, m.name, t, keep)
             t0 = time.perf_counter()
@@ -255,6 +256,7 @@ def stream_methods(system: System, x0: np.ndarray, v0: np.ndarray, h: float, ste
                 "energy_drift_relative": float(np.max(np.abs(e - e[0])) / max(np.max(np.abs(e)), 1e-300)),
             }
         if EXACT in methods:  # differences from exact, one frame at a time (bounded memory)
+            compare_bar = Progress(len(t) * (len(methods) - 1), "differences from exact", enabled=progress)
             for name in methods:
                 if name == EXACT:
                     continue
@@ -262,6 +264,7 @@ def stream_methods(system: System, x0: np.ndarray, v0: np.ndarray, h: float, ste
                 for r in range(len(t)):
                     dx = max(dx, float(np.max(np.abs(writer.arrays[f"x_{name}"][r] - writer.arrays[f"x_{EXACT}"][r]))))
                     dv = max(dv, float(np.max(np.abs(writer.arrays[f"v_{name}"][r] - writer.arrays[f"v_{EXACT}"][r]))))
+                    compare_bar.update(compare_bar.done + 1)
                 summary["methods"][name]["max_position_difference"] = dx
                 summary["methods"][name]["max_velocity_difference"] = dv
     paths = []

@@ -58,6 +58,19 @@ def _system(scene: Scene):
 
 
 # -- modes ------------------------------------------------------------------------------------------
+def _chain_omega2(scene: Scene, chain_modes):
+    """ω² of a chain without closed form from its generated module (None when too large)."""
+    if chain_modes.omega2 is not None:
+        return None
+    from ._modules import load_module
+
+    module, _ = load_module(scene)
+    try:
+        return module.omega2(**scene.parameters)
+    except ValueError:  # a non-uniform ring longer than the module's MAX_DENSE
+        return None
+
+
 @dataclass(frozen=True)
 class Modes:
     """A scene's equations of motion and normal modes.
@@ -82,7 +95,7 @@ class Modes:
         if self.chain:
             from .derive.chain import chain_report
 
-            return chain_report(self.model, self.modes)[1]
+            return chain_report(self.model, self.modes, _chain_omega2(self.scene, self.modes))[1]
         from .derive.report import modes_json
 
         return modes_json(self.model, self.modes)
@@ -138,8 +151,11 @@ def modes(scene: str | Path | Scene) -> Modes:
     """
     from ._modules import derive
 
+    from .numeric.progress import phase
+
     sc = load(scene)
-    d = derive(sc)
+    with phase(f"deriving {sc.name!r}"):
+        d = derive(sc)
     return Modes(sc, d.model, d.modes)
 
 
@@ -258,7 +274,8 @@ def simulate(scene: str | Path | Scene, methods: list[str] | None = None, dt: fl
     figures : bool
         Write PNG figures into ``out``.
     progress : bool, optional
-        Progress on stderr (default: only on a terminal, for long runs).
+        Progress on stderr of every phase longer than about a second (default: on; a bar on a
+        terminal, a plain line every few seconds otherwise). ``False`` silences it.
 
     Returns
     -------
@@ -282,7 +299,10 @@ def simulate(scene: str | Path | Scene, methods: list[str] | None = None, dt: fl
             raise RunRefused(f"{what} {value!r}: accepted: a whole number > 0", quantity=what)
     if sc.chain is None:  # refuse before any derivation when even one method would not fit
         _check_memory(sc, steps, record_every, len(methods) if methods else 1, "steps")
-    system, origin = _system(sc)
+    from .numeric.progress import phase
+
+    with phase("loading the generated module (deriving it if not cached)", enabled=progress):
+        system, origin = _system(sc)
     names = methods or sim.default_methods(system)
     unknown = [m for m in names if m not in method_names()]
     if unknown:
@@ -296,7 +316,7 @@ def simulate(scene: str | Path | Scene, methods: list[str] | None = None, dt: fl
         _check_disk(sc, steps, record_every, len(names), out, "steps")
         out.mkdir(parents=True, exist_ok=True)
         summary = sim.stream_methods(system, sc.x0, sc.v0, dt, steps, names, record_every, out, sc.name,
-                                     figures=figures)
+                                     figures=figures, progress=progress)
         npz = Path(summary["npz"])
         figs = tuple(Path(p) for p in summary["figures"])
         data = np.load(npz)
@@ -316,7 +336,8 @@ def simulate(scene: str | Path | Scene, methods: list[str] | None = None, dt: fl
             out = Path(out)
             out.mkdir(parents=True, exist_ok=True)
             npz = out / f"{sc.name}.npz"
-            sim.save_npz(npz, t, x, v)
+            with phase(f"writing {npz.name}", enabled=progress):
+                sim.save_npz(npz, t, x, v)
             if figures:
                 figs = tuple(sim.write_figures(out, sc.name, sc.mass_names, system, runs))
     summary.update({"scene": sc.name, "module": origin, "dt": dt, "steps": steps, "t_end": steps * dt,

@@ -57,7 +57,8 @@ def cmd_derive(args) -> int:
 
     sources = args.scene or bundled_scenes()
     if not sources:
-        raise SceneError(None, "SCENE", "no scene given and no bundled scenes found; accepted: scene files")
+        raise SceneError(None, "SCENE", "nothing to derive: no scene given and no bundled scenes found; "
+                                        "accepted: scene files, e.g. `springchain derive my_scene.toml`")
     scenes = [load(p) for p in sources]  # validate everything before writing anything
     out = Path(args.out) if args.out else (None if args.check else Path.cwd() / "generated")
     status = 0
@@ -68,7 +69,10 @@ def cmd_derive(args) -> int:
             print(("ok     " if ok else "STALE  ") + msg)
             status |= 0 if ok else 1
         else:
-            d = _modules.derive(scene)
+            from .numeric.progress import phase
+
+            with phase(f"deriving {scene.name!r}"):
+                d = _modules.derive(scene)
             path = _modules.write(d, out)
             print(f"wrote {path} ({len(d.source.splitlines())} lines, {time.perf_counter() - t0:.2f} s)")
     return status
@@ -345,8 +349,13 @@ def _flag_for(args, quantity: str | None) -> str | None:
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = build_parser()
-    args = parser.parse_args(argv)
+    """Run one command; Ctrl-C anywhere (parsing, imports, work) ends with one line and 130."""
+    try:
+        parser = build_parser()
+        args = parser.parse_args(argv)
+    except KeyboardInterrupt:
+        sys.stderr.write("springchain: interrupted\n")
+        return 130
     try:
         return args.func(args)
     except SceneError as exc:

@@ -156,7 +156,7 @@ def test_adding_a_damper_adds_only_damping_code():
     added = [line for line in b if line not in a]
     removed = [line for line in a if line not in b]
     # only the header/hash, the parameter lists and the damping code change
-    assert any("def damping_acceleration(v, c, k, m)" in line for line in added)
+    assert any("def damping_acceleration(_v, c, k, m)" in line for line in added)
     assert not any("external" in line or "gravity" in line or "cubic" in line for line in added)
     for line in removed:  # lines that list the parameters change because c is a new parameter
         assert "SCENE_SHA256" in line or "GENERATED" in line or "def " in line or "PARAMETERS" in line \

@@ -10,7 +10,6 @@ folder, and must leave that folder and the output folder empty.
 from __future__ import annotations
 
 import ast
-import builtins
 import re
 from pathlib import Path
 
@@ -21,7 +20,7 @@ from hypothesis import strategies as st
 from springchain.cli import main
 from springchain.derive.errors import SceneError, one_line
 from springchain._scenes import bundled_scenes
-from springchain.derive.scene import GENERATED_NAMES, RESERVED, RESERVED_PREFIXES, load_scene
+from springchain.derive.scene import RESERVED, load_scene
 
 HOSTILE = Path(__file__).resolve().parent / "hostile"
 CASES = sorted(HOSTILE.glob("*.toml"))
@@ -287,44 +286,49 @@ def test_bundled_scenes_load():
     assert "seed" in names
 
 
-def _generated_names(path: Path) -> tuple[set[str], set[str]]:
-    """(names bound or read in a generated module, its scene's parameter names)."""
-    tree = ast.parse(path.read_text(encoding="utf-8"))
-    params: set[str] = set()
-    names: set[str] = set()
-    for node in ast.walk(tree):
-        if isinstance(node, ast.Assign) and any(isinstance(t, ast.Name) and t.id == "PARAMETERS"
-                                                for t in node.targets):
-            params = set(ast.literal_eval(node.value))
-        if isinstance(node, ast.Name):
-            names.add(node.id)
-        elif isinstance(node, ast.arg):
-            names.add(node.arg)
-        elif isinstance(node, (ast.FunctionDef, ast.ClassDef)):
-            names.add(node.name)
-        elif isinstance(node, ast.alias):
-            names.add((node.asname or node.name).split(".")[0])
-    return names, params
+def body_names_not_private(source: str) -> set[tuple[str, str]]:
+    """(function, name) for every name a public function's body reads that is neither one of
+    its own arguments, a local it binds, ``i``/``n``/``t``, nor private (``_...``)."""
+    tree = ast.parse(source)
+    bad = set()
+    for fn in tree.body:
+        if not isinstance(fn, ast.FunctionDef) or fn.name.startswith("_"):
+            continue
+        own = {a.arg for a in fn.args.args + fn.args.kwonlyargs}
+        for node in (m for st in fn.body for m in ast.walk(st)):
+            if isinstance(node, ast.Name) and isinstance(node.ctx, ast.Load):
+                if not (node.id in own or node.id.startswith("_") or node.id in ("i", "n", "t")):
+                    bad.add((fn.name, node.id))
+    return bad
 
 
 @pytest.mark.parametrize("path", sorted((Path(__file__).resolve().parent.parent / "generated").glob("[!_]*.py")),
                          ids=lambda p: p.stem)
 def test_no_parameter_can_shadow_a_name_of_generated_code(path):
-    """Parameters become keyword arguments of the generated functions: any other name the
-    generated code uses must be reserved (or start with '_', which scene names never do)."""
-    names, params = _generated_names(path)
-    free = {n for n in names - params if not n.startswith(("_", *RESERVED_PREFIXES))}
-    assert free <= RESERVED, f"add to derive.scene.GENERATED_NAMES: {sorted(free - RESERVED)}"
+    """Parameters become keyword arguments of the generated functions: every other name a
+    function body reads must be private (start with '_', which scene names never do)."""
+    assert body_names_not_private(path.read_text(encoding="utf-8")) == set()
 
 
-def test_reserved_names_are_refused_as_parameters():
-    for name in ("t", "i", "n", "x", "sqrt", "pi", "numpy", "out", "N", "float", "len", "x_m1", "a_p"):
+def test_only_the_scene_language_is_reserved_for_parameters():
+    for name in ("t", "i", "n", "sqrt", "pi", "sin", "cos", "exp", "wall"):
         err = refused(SEED_TEXT.replace("k = 1.0", f"k = 1.0\n{name} = 2.0"))
         assert err.key == f"parameters.{name}" and "reserved" in str(err)
-    assert "float" in RESERVED and set(dir(builtins)) & RESERVED and "masses" in GENERATED_NAMES
+    assert RESERVED == {"t", "i", "n", "sqrt", "pi", "sin", "cos", "exp", "wall"}
+    for name in ("x", "numpy", "out", "N", "K", "float", "len", "x_m9", "a_p", "match", "type", "case",
+                 "masses", "energy", "omega2", "SCENE", "np"):
+        scene = load_scene("s.toml", SEED_TEXT.replace("k = 1.0", f"k = 1.0\n{name} = 2.0"))
+        assert name in scene.parameters
 
 
-@pytest.mark.parametrize("name", ["match", "case", "type", "_", "lambda", "None", "True", "é", "m\u0430",
+def test_mass_and_parameter_may_not_share_a_name():
+    err = refused(SEED_TEXT.replace("k = 1.0", "k = 1.0\nm1 = 2.0"))
+    assert err.key == "masses.m1" and "parameter" in str(err)
+    err = refused(SEED_TEXT.replace("k = 1.0", "k = 1.0\nx_m1 = 2.0"))
+    assert err.key == "parameters.x_m1" and "coordinate" in str(err)
+
+
+@pytest.mark.parametrize("name", ["_", "lambda", "None", "True", "é", "m\u0430",
                                   "1m", "m 1", "m.1", "", "a" * 65])
 def test_bad_names_are_refused_everywhere(name):
     quoted = '"' + name.replace('"', '\\"') + '"'

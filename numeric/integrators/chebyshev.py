@@ -69,7 +69,7 @@ class ChebyshevCoefficients:
             "sin(h√λ)/√λ at λ=0": (alt @ self.sinc, self.h, self.h),
             "−√λ sin(h√λ) at λ=0": (alt @ self.wsin, 0.0, R),
             "cos at λ=R²": (self.cos.sum(), math.cos(self.h * R), 1.0),
-            "sin(h√λ)/√λ at λ=R²": (self.sinc.sum(), math.sin(self.h * R) / R, self.h),
+            "sin(h√λ)/√λ at λ=R²": (self.sinc.sum(), math.sin(self.h * R) / R if R > 0 else self.h, self.h),
             "−√λ sin(h√λ) at λ=R²": (self.wsin.sum(), -R * math.sin(self.h * R), R),
         }
         k = self.cos.shape[0]

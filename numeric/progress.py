@@ -1,0 +1,151 @@
+"""One progress reporter for every long phase (runs, derivation, loading, exact solutions, writes).
+
+On a terminal a phase shows a bar (known total) or an elapsed-time line redrawn in place; when
+stderr is not a terminal it prints a plain line every few seconds instead, so logs of long runs
+still say what is going on. Nothing is printed for phases shorter than about a second.
+
+    bar = Reporter("verlet", total=steps)      # bar.update(done) as work proceeds; bar.close()
+    with phase("deriving the model"):          # elapsed time after 1 s, then every few seconds
+        ...
+    note("compiling numba kernels")            # one line
+"""
+
+from __future__ import annotations
+
+import sys
+import threading
+import time
+from contextlib import contextmanager
+
+#: Nothing is shown for the first QUIET_SECONDS of a phase.
+QUIET_SECONDS = 1.0
+#: Redraw interval on a terminal, and the interval of plain lines otherwise (seconds).
+TTY_INTERVAL, PLAIN_INTERVAL = 0.2, 5.0
+PREFIX = "springchain"
+
+
+def _isatty(stream) -> bool:
+    try:
+        return bool(stream.isatty())
+    except (AttributeError, ValueError, OSError):
+        return False
+
+
+def line(text: str, prefix: str = PREFIX, stream=None) -> None:
+    """One line ``<prefix>: <text>`` on stderr (flushed); silent if stderr is closed."""
+    stream = stream or sys.stderr
+    try:
+        stream.write(f"{prefix}: {text}\n" if prefix else f"{text}\n")
+        stream.flush()
+    except (OSError, ValueError):
+        pass
+
+
+note = line
+
+
+class Reporter:
+    """Progress of one phase with an optional known ``total`` of work units.
+
+    Parameters
+    ----------
+    label : str
+        What is being done (``"verlet"``, ``"exact solution"``).
+    total : int, optional
+        Units of work; without it only the elapsed time is shown.
+    enabled : bool, optional
+        Default: on. ``False`` silences it.
+    quiet_seconds : float
+        Nothing is shown before this much time has passed.
+    """
+
+    def __init__(self, label: str, total: int | None = None, *, enabled: bool | None = None,
+                 stream=None, quiet_seconds: float = QUIET_SECONDS, prefix: str = PREFIX):
+        self.label = label
+        self.total = None if total is None else max(int(total), 1)
+        self.enabled = True if enabled is None else bool(enabled)
+        self.stream = stream or sys.stderr
+        self.tty = _isatty(self.stream)
+        self.quiet = quiet_seconds
+        self.prefix = prefix
+        self.t0 = time.monotonic()
+        self.last = -1e300
+        self.shown = False  # something was printed
+        self.open_line = False  # a terminal line awaits its newline
+        self.done = 0
+
+    def _text(self, done: int | None) -> str:
+        elapsed = time.monotonic() - self.t0
+        if self.total is None or done is None:
+            return f"{self.label} ... {elapsed:.0f} s"
+        frac = min(done / self.total, 1.0)
+        if self.tty:
+            return f"{self.label} [{'#' * int(30 * frac):<30}] {100 * frac:5.1f}% {elapsed:6.1f} s"
+        return f"{self.label}: {done}/{self.total} ({100 * frac:.0f}%), {elapsed:.0f} s"
+
+    def update(self, done: int | None = None) -> None:
+        """Report ``done`` units (or just that time passes); throttled."""
+        if done is not None:
+            self.done = done
+        if not self.enabled:
+            return
+        now = time.monotonic()
+        finished = self.total is not None and done is not None and done >= self.total
+        if now - self.t0 < self.quiet and not (finished and self.shown):
+            return
+        if now - self.last < (TTY_INTERVAL if self.tty else PLAIN_INTERVAL) and not finished:
+            return
+        self.last = now
+        try:
+            if self.tty:
+                self.stream.write(f"\r{self.prefix}: {self._text(done)}")
+                self.open_line = True
+            else:
+                self.stream.write(f"{self.prefix}: {self._text(done)}\n")
+            self.shown = True
+            if finished:
+                self.close()
+            self.stream.flush()
+        except (OSError, ValueError):
+            self.enabled = False
+
+    def close(self, message: str | None = None) -> None:
+        """End the phase: finish the terminal line; say ``message`` (e.g. "done in 3.2 s") if
+        anything was shown."""
+        if not self.enabled:
+            return
+        try:
+            if self.open_line:
+                self.stream.write("\n")
+                self.open_line = False
+            if self.shown and message:
+                self.stream.write(f"{self.prefix}: {self.label}: {message}\n")
+            self.stream.flush()
+        except (OSError, ValueError):
+            pass
+
+
+@contextmanager
+def phase(label: str, *, enabled: bool | None = None, stream=None):
+    """Show the elapsed time of a phase of unknown length if it lasts over ~1 s (a thread wakes
+    up to report; the work itself is not touched), then ``done in T s``."""
+    rep = Reporter(label, enabled=enabled, stream=stream)
+    stop = threading.Event()
+
+    def tick():
+        while not stop.wait(TTY_INTERVAL if rep.tty else 1.0):
+            rep.update()
+
+    thread = threading.Thread(target=tick, name=f"progress: {label}", daemon=True)
+    if rep.enabled:
+        thread.start()
+    try:
+        yield rep
+    finally:
+        stop.set()
+        if rep.enabled:
+            thread.join()
+        rep.close(f"done in {time.monotonic() - rep.t0:.1f} s")
+
+
+__all__ = ["Reporter", "phase", "line", "note", "QUIET_SECONDS"]
