@@ -27,6 +27,7 @@ from dataclasses import dataclass, field
 
 import sympy as sp
 
+from .accurate import exact_values, numeric_modes, value
 from .model import Model
 
 DEFAULT_BUDGET = 20.0
@@ -277,13 +278,14 @@ def closed_form_modes(model: Model, budget: float | None = DEFAULT_BUDGET,
         why = (f"{model.scene.n} masses: symmetry blocks larger than {MAX_SYMBOLIC_BLOCK}" if hopeless else
                f"a factor of degree > 3, an unreadably long root, or over the {budget:g} s budget")
         notes.append(f"no closed form ({why}); "
-                     "eigenvalues below are numeric (symmetric generalized eigensolver) at the scene's parameter values")
+                     "eigenvalues below are numeric (mpmath eigensolver at increasing precision, correct to float64) "
+                     "at the scene's parameter values")
         modes = [m for m in modes if m.rigid] + _numeric_modes(model, lam, len(rigid))
         closed = False
-    values = model.scene.parameters
-    subs = {model.params[k]: v for k, v in values.items()}
+    subs = exact_values(model.params, model.scene.parameters)
     modes = _merge_equal(modes, subs)
-    modes.sort(key=lambda m: (float(sp.re(sp.N(m.omega2.subs(subs), 30))) if m.exact else float(m.omega2),
+    # rigid modes first (exact zeros by structure), then by the correctly rounded value
+    modes.sort(key=lambda m: (not m.rigid, value(m.omega2, subs) if m.exact else float(m.omega2),
                               str(m.omega2)))
     return ModeSet(tuple(modes), closed, tuple(notes))
 
@@ -294,49 +296,36 @@ def _merge_equal(modes: list[Mode], subs: dict) -> list[Mode]:
     Numeric fallback modes are kept one per shape; each value is evaluated once.
     """
     out: list[Mode] = []
-    values: list[complex] = []
+    values: list[float] = []
     for mode in modes:
-        value = complex(sp.N(mode.omega2.subs(subs), 30)) if mode.exact else complex(float(mode.omega2))
+        v = value(mode.omega2, subs) if mode.exact else float(mode.omega2)
         for j, other in enumerate(out):
             ov = values[j]
             if (mode.exact and other.exact and mode.rigid == other.rigid
-                    and abs(value - ov) <= 1e-12 * max(abs(value), abs(ov), 1e-300)
+                    and abs(v - ov) <= 1e-12 * max(abs(v), abs(ov), 1e-300)
                     and sp.cancel(mode.omega2 - other.omega2) == 0):
                 out[j] = Mode(other.omega2, other.multiplicity + mode.multiplicity,
                               other.shapes + mode.shapes, other.rigid, True)
                 break
         else:
             out.append(mode)
-            values.append(value)
+            values.append(v)
     return out
 
 
 def _numeric_modes(model: Model, lam: sp.Symbol, n_rigid: int) -> list[Mode]:
     """Numeric fallback at the scene's parameter values (rigid modes stay exact).
 
-    Uses the symmetric generalized solver ``scipy.linalg.eigh(K, M)``; the
-    rigid-body modes were already taken out by structure, so the lowest
-    ``n_rigid`` numeric eigenvalues (roundoff around 0) are dropped.
+    ``D = M^-1/2 K M^-1/2`` is assembled from the element list with the
+    parameter values as exact rationals and diagonalised by ``mpmath.eigsy``
+    at increasing precision until the spectrum is correct to float64
+    (:func:`accurate.numeric_modes`); the rigid-body modes were already taken
+    out by structure, so the lowest ``n_rigid`` eigenvalues are dropped.
     """
-    import numpy as np
-    import scipy.linalg
-
-    values = model.scene.parameters
-    subs = {model.params[k]: v for k, v in values.items()}
-    n = model.scene.n
-    # assembled from the element list: O(N + S) evaluations, not N² substitutions
-    M = np.diag([float(m.subs(subs)) for m in model.masses])
-    K = np.zeros((n, n))
-    for a, b, k, _, _ in model.springs:
-        kv = float(k.subs(subs))
-        for i, si in ((a, 1.0), (b, -1.0)):
-            for j, sj in ((a, 1.0), (b, -1.0)):
-                if i >= 0 and j >= 0:
-                    K[i, j] += si * sj * kv
-    w, V = scipy.linalg.eigh(K, M)
+    subs = exact_values(model.params, model.scene.parameters)
+    masses = [m.subs(subs) for m in model.masses]
+    springs = [(a, b, k.subs(subs)) for a, b, k, _, _ in model.springs]
     out = []
-    for j in range(n_rigid, len(w)):
-        v = V[:, j] / V[np.argmax(np.abs(V[:, j])), j]
-        out.append(Mode(sp.Float(float(max(w[j], 0.0)), 17), 1,
-                        (tuple(sp.Float(float(c), 17) for c in v),), exact=False))
+    for w, shape in numeric_modes(masses, springs, n_rigid):
+        out.append(Mode(sp.Float(w, 17), 1, (tuple(sp.Float(c, 17) for c in shape),), exact=False))
     return out

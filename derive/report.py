@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import sympy as sp
 
+from .accurate import exact_values, value
 from .model import Effect, Model
 from .modes import ModeSet
 
@@ -14,12 +15,14 @@ MAX_MATRIX = 8  # larger matrices are described, not printed
 
 
 def _values(model: Model) -> dict:
-    return {model.params[k]: v for k, v in model.scene.parameters.items()}
+    """Parameter symbols -> their values as exact rationals."""
+    return exact_values(model.params, model.scene.parameters)
 
 
 def _num(expr, model: Model) -> float:
+    """``expr`` at the scene's values, correctly rounded to float64 (:func:`accurate.value`)."""
     expr = sp.Integer(expr) if isinstance(expr, int) else expr
-    return float(sp.re(sp.N(expr.subs(_values(model)), 17)))
+    return value(expr, _values(model))
 
 
 def _pretty(mat: sp.Matrix) -> str:

@@ -8,6 +8,7 @@ Every function takes the parameters PARAMETERS as keyword arguments.
 """
 
 import numpy as _np
+import scipy.linalg as _linalg
 
 SCENE = 'hanging'
 SCENE_SHA256 = 'e0b0a6a674ecee259917d28d859dd11d6c449a7212302d556c2c0bcf6a57dac6'
@@ -21,6 +22,8 @@ LINEAR = True
 SPRING_ENDS = ((-1, 0), (0, 1), (1, 2))
 CLOSED_FORM = True
 RIGID_MODES = 0
+#: Mass indices of each free piece (no spring to a wall): one rigid-body mode each.
+RIGID_PIECES = ()
 _N = N
 _SPRING_ENDS = SPRING_ENDS
 _RIGID_MODES = RIGID_MODES
@@ -65,20 +68,85 @@ def dynamical_matrix(g, k, m):
 
 
 def omega2(g, k, m):
-    """Closed-form squared angular frequencies, one per independent mode, shape (N,).
+    """Squared angular frequencies, ascending, rigid modes exactly 0 first, shape (N,).
 
-    Ordered by value at DEFAULTS; repeated values appear once per shape.
+    Computed numerically (the closed forms cancel in float64 at some parameter values (radicals, trigonometric roots or sums of both signs)) by the accurate spring-factor route _accurate_modes():
+    correct to float64 in the relative sense at any positive parameter values.
     """
-    return _np.array([-_np.sqrt(3)*k*_np.cos(-1/3*_np.arccos((2/9)*_np.sqrt(3)) + (1/3)*_np.pi)/m + (3/2)*k/m, -_np.sqrt(3)*k*_np.sin(-1/3*_np.arccos((2/9)*_np.sqrt(3)) + (1/6)*_np.pi)/m + (3/2)*k/m, (3/2)*k/m + _np.sqrt(3)*k*_np.cos((1/3)*_np.arccos((2/9)*_np.sqrt(3)))/m], dtype=_np.float64)
+    return _accurate_modes(_masses(g=g, k=k, m=m), _spring_constants(g=g, k=k, m=m))[0]
 
 
 def mode_shapes(g, k, m):
-    """Closed-form physical mode shapes as columns, in omega2() order, shape (N, N); any scale."""
-    return _np.array([
-        [1, 1, 1],
-        [1/2 + _np.sqrt(3)*_np.cos(-1/3*_np.arccos((2/9)*_np.sqrt(3)) + (1/3)*_np.pi), _np.sqrt(3)*_np.sin(-1/3*_np.arccos((2/9)*_np.sqrt(3)) + (1/6)*_np.pi) + 1/2, -_np.sqrt(3)*_np.cos((1/3)*_np.arccos((2/9)*_np.sqrt(3))) + 1/2],
-        [-3/4 + _np.sqrt(3)*_np.cos(-1/3*_np.arccos((2/9)*_np.sqrt(3)) + (1/3)*_np.pi) + 3*_np.cos(-1/3*_np.arccos((2/9)*_np.sqrt(3)) + (1/3)*_np.pi)**2, -3/4 + 3*_np.sin(-1/3*_np.arccos((2/9)*_np.sqrt(3)) + (1/6)*_np.pi)**2 + _np.sqrt(3)*_np.sin(-1/3*_np.arccos((2/9)*_np.sqrt(3)) + (1/6)*_np.pi), -_np.sqrt(3)*_np.cos((1/3)*_np.arccos((2/9)*_np.sqrt(3))) - 3/4 + 3*_np.cos((1/3)*_np.arccos((2/9)*_np.sqrt(3)))**2],
-    ], dtype=_np.float64)
+    """Physical, M-orthonormal mode shapes as columns in omega2() order, shape (N, N).
+
+    Computed numerically (the closed forms cancel in float64 at some parameter values (radicals, trigonometric roots or sums of both signs)) by _accurate_modes().
+    """
+    return _accurate_modes(_masses(g=g, k=k, m=m), _spring_constants(g=g, k=k, m=m))[1]
+
+def _accurate_modes(m, k):
+    """ω² (ascending, rigid modes exactly 0 first) and M-orthonormal physical shapes (columns).
+
+    The spring-factor route, accurate to float64 in the relative sense at any
+    positive parameter values: a subtraction-free LDLᵀ of K = Bᵀ diag(k) B
+    (eliminating in the diagonally dominant parts, pivoting on D = M^-1/2 K M^-1/2),
+    then the one-sided Jacobi SVD (LAPACK dgejsv) of F = M^-1/2 L Λ^1/2 (F Fᵀ = D).
+    Rigid-body modes come from the structure (RIGID_PIECES), never from a threshold.
+    """
+    _m = _np.asarray(m, dtype=_np.float64)
+    _k = _np.asarray(k, dtype=_np.float64)
+    _ends = _np.asarray(SPRING_ENDS, dtype=_np.intp).reshape(-1, 2)
+    _a, _b = _ends[:, 0], _ends[:, 1]
+    _W = _np.zeros((N, N))
+    _in = (_a >= 0) & (_b >= 0) & (_a != _b)
+    _np.add.at(_W, (_a[_in], _b[_in]), _k[_in])
+    _np.add.at(_W, (_b[_in], _a[_in]), _k[_in])
+    _wall = _np.zeros(N)
+    _one = (_a >= 0) != (_b >= 0)
+    _np.add.at(_wall, _np.where(_a[_one] >= 0, _a[_one], _b[_one]), _k[_one])
+    _d = _wall + _W.sum(axis=1)
+    _alive = _np.ones(N, dtype=bool)
+    _rm = _np.sqrt(_m)
+    _F = _np.zeros((N, N), order="F")
+    _c = 0
+    for _ in range(N):
+        _score = _np.where(_alive, _d / _m, -1.0)
+        _p = int(_np.argmax(_score))
+        if not _score[_p] > 0.0:
+            break
+        _dp = _d[_p]
+        _alive[_p] = False
+        _nb = _np.flatnonzero(_W[_p])
+        _w = _W[_p, _nb]
+        _F[_p, _c] = _np.sqrt(_dp) / _rm[_p]
+        _F[_nb, _c] = -(_w / _np.sqrt(_dp)) / _rm[_nb]
+        _c += 1
+        _W[_p, :] = 0.0
+        _W[:, _p] = 0.0
+        if _nb.size:
+            _W[_np.ix_(_nb, _nb)] += _np.outer(_w, _w / _dp)
+            _W[_nb, _nb] = 0.0
+            _wall[_nb] += _w * (_wall[_p] / _dp)
+            _d[_nb] = _wall[_nb] + _W[_nb].sum(axis=1)
+    _R = _np.zeros((N, len(RIGID_PIECES)))
+    for _j, _idx in enumerate(RIGID_PIECES):
+        _R[list(_idx), _j] = _rm[list(_idx)] / _np.linalg.norm(_rm[list(_idx)])
+    if _c != N - len(RIGID_PIECES):
+        raise FloatingPointError("parameter values outside the float range of the accurate mode route")
+    if _c:
+        _sva, _u, _, _work, _, _info = _linalg.lapack.dgejsv(_np.asfortranarray(_F[:, :_c]),
+                                                                 joba=2, jobu=0, jobv=3, jobr=0, jobt=0, jobp=0)
+        if _info != 0:
+            raise _np.linalg.LinAlgError(f"dgejsv failed to converge (info = {_info})")
+        _s = _sva * (_work[0] / _work[1])
+        _o = _np.argsort(_s, kind="stable")
+        _s, _V = _s[_o], _u[:, :_c][:, _o]
+        if _R.shape[1]:
+            _V = _V - _R @ (_R.T @ _V)
+        _V = _V - 0.5 * (_V @ (_V.T @ _V - _np.eye(_c)))
+    else:
+        _s, _V = _np.zeros(0), _np.zeros((N, 0))
+    _w2 = _np.concatenate([_np.zeros(_R.shape[1]), _s * _s])
+    return _w2, _np.hstack([_R, _V]) / _rm[:, None]
 
 
 def acceleration(_x, g, k, m):

@@ -1,0 +1,156 @@
+"""Numbers people read, correctly rounded to float64 at any parameter values.
+
+Two routes, both independent of float64 cancellation:
+
+* **Closed forms** are evaluated with the parameter values substituted as
+  *exact rationals* (a float is a dyadic rational) and evaluated by SymPy's
+  ``evalf`` at increasing working precision (30, 60, 120, … digits) until
+  two successive results agree to 1e-18 relative (:func:`value`). A
+  casus-irreducibilis cubic or a quadratic root that cancels in float64 is
+  then correct to the last bit.
+* **No closed form**: the mass-weighted dynamical matrix ``D = M^-1/2 K M^-1/2``
+  is assembled *exactly* from the element list (rational spring constants and
+  masses, square roots at working precision) and diagonalised by
+  ``mpmath.eigsy`` at 40, 80, 160, … digits until two successive spectra
+  agree to 1e-18 relative (:func:`numeric_modes`). Rigid-body modes are
+  removed by structure (their count), never by a threshold on a value.
+
+SymPy and mpmath only (this is the derive side; it never imports ``numeric``).
+"""
+
+from __future__ import annotations
+
+import functools
+from fractions import Fraction
+
+import mpmath
+import sympy as sp
+
+#: Relative agreement of two successive precisions accepted as converged.
+AGREE = 1e-18
+#: Largest working precision (decimal digits) tried before giving up.
+MAX_DPS = 1280
+
+
+class NotAccurate(ArithmeticError):
+    """A value could not be evaluated to float64 accuracy within :data:`MAX_DPS` digits."""
+
+
+def exact_values(params: dict, values: dict) -> dict:
+    """``{Symbol: Rational}`` with each float parameter value converted exactly.
+
+    Parameters
+    ----------
+    params : dict
+        Parameter name -> SymPy symbol.
+    values : dict
+        Parameter name -> float value.
+    """
+    return {params[k]: sp.Rational(Fraction(float(v))) for k, v in values.items()}
+
+
+def _agree(a: float, b: float) -> bool:
+    return abs(a - b) <= AGREE * max(abs(a), abs(b))
+
+
+@functools.lru_cache(maxsize=4096)
+def _value(expr: sp.Expr, subs: tuple) -> float:
+    e = expr.subs(dict(subs)) if subs else expr
+    if e.is_zero:
+        return 0.0
+    prev = None
+    prev_dps = None
+    dps = 30
+    while dps <= MAX_DPS:
+        z = sp.N(e, dps, maxn=4 * dps)
+        re = sp.re(z)
+        cur = float(re) if re.is_number else float("nan")
+        if prev is not None:
+            if _agree(prev, cur):
+                return cur
+            # a quantity that is exactly zero but not recognised as such: noise shrinks with precision
+            if abs(cur) < 10.0 ** (-prev_dps / 2) and abs(cur) <= 1e-10 * abs(prev) or (cur == 0.0 == prev):
+                return 0.0
+        prev, prev_dps = cur, dps
+        dps *= 2
+    raise NotAccurate(f"{sp.sstr(expr)} does not converge to float64 accuracy within {MAX_DPS} digits")
+
+
+def value(expr, subs: dict) -> float:
+    """The real part of ``expr`` at ``subs`` (exact rationals), correctly rounded to float64.
+
+    Parameters
+    ----------
+    expr : sympy.Expr or int
+    subs : dict
+        ``{Symbol: Rational}`` from :func:`exact_values`.
+
+    Returns
+    -------
+    float
+
+    Raises
+    ------
+    NotAccurate
+        If successive precisions up to :data:`MAX_DPS` digits never agree.
+    """
+    expr = sp.sympify(expr) if isinstance(expr, (int, float)) else expr
+    return _value(expr, tuple(sorted(subs.items(), key=lambda kv: str(kv[0]))))
+
+
+def _mp(e: sp.Expr, dps: int):
+    """An exact SymPy number as an mpmath value at the current working precision."""
+    if isinstance(e, sp.Rational):
+        return mpmath.mpf(e.p) / e.q
+    return mpmath.mpf(sp.N(e, dps + 10)._mpf_)
+
+
+def _eig_dynamical(masses: list, springs: list, n: int, dps: int):
+    with mpmath.workdps(dps):
+        r = [1 / mpmath.sqrt(_mp(m, dps)) for m in masses]
+        D = mpmath.zeros(n, n)
+        for a, b, k in springs:
+            kv = _mp(k, dps)
+            for i, si in ((a, 1), (b, -1)):
+                for j, sj in ((a, 1), (b, -1)):
+                    if i >= 0 and j >= 0:
+                        D[i, j] += si * sj * kv * r[i] * r[j]
+        w, E = mpmath.eigsy(D)
+        order = sorted(range(n), key=lambda j: w[j])
+        return [w[j] for j in order], [[E[i, j] * r[i] for i in range(n)] for j in order]
+
+
+def numeric_modes(masses: list, springs: list, n_rigid: int) -> list[tuple[float, list[float]]]:
+    """Elastic modes ``(ω², physical shape)`` of ``K φ = ω² M φ`` to float64 accuracy.
+
+    Parameters
+    ----------
+    masses : list of sympy.Expr
+        Exact mass values (numbers, usually Rational), length N.
+    springs : list of (int, int, sympy.Expr)
+        Spring ends (mass indices, -1 = wall) and exact stiffness.
+    n_rigid : int
+        Number of rigid-body modes (free pieces); the lowest ``n_rigid``
+        eigenvalues are theirs and are dropped.
+
+    Returns
+    -------
+    list of (float, list of float)
+        Ascending ω² of the elastic modes and their physical shapes, scaled
+        so that the largest component is 1.
+    """
+    n = len(masses)
+    prev = None
+    dps = 40
+    while dps <= MAX_DPS:
+        w, shapes = _eig_dynamical(masses, springs, n, dps)
+        cur = [float(x) for x in w[n_rigid:]]
+        if prev is not None and all(_agree(a, b) for a, b in zip(prev, cur)):
+            out = []
+            for lam, s in zip(cur, shapes[n_rigid:]):
+                piv = max(s, key=abs)
+                out.append((lam, [float(c / piv) for c in s]))
+            return out
+        prev = cur
+        dps *= 2
+    raise NotAccurate(f"numeric modes did not converge to float64 accuracy within {MAX_DPS} digits")
