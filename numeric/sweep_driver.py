@@ -94,6 +94,9 @@ def check_manifest(out: Path, manifest: dict) -> bool:
         except (OSError, ValueError):
             raise RunRefused(f"--out {out}: {path} is unreadable; accepted: a sweep folder or a new --out") from None
         diff = [k for k in sorted(set(old) | set(manifest)) if old.get(k) != manifest.get(k)]
+        if diff and not any((Path(out) / PARTS).glob("part-*.parquet")):
+            diff = []  # nothing finished yet (e.g. a refused first run): start afresh
+            atomic_write_text(path, json.dumps(manifest, indent=1, sort_keys=True) + "\n")
         if diff:
             k = diff[0]
             raise RunRefused(f"--out {out}: holds a sweep made with different settings ({k}: {old.get(k)!r} "
@@ -136,11 +139,13 @@ class Progress:
 
 def local_cluster(workers: int):
     """An embedded LocalCluster: processes, one thread each, BLAS pinned to one thread."""
+    import logging
+
     from dask.distributed import LocalCluster
 
     env = {"OMP_NUM_THREADS": "1", "OPENBLAS_NUM_THREADS": "1", "MKL_NUM_THREADS": "1"}
     return LocalCluster(n_workers=workers, threads_per_worker=1, processes=True, dashboard_address=None,
-                        env=env)
+                        env=env, silence_logs=logging.CRITICAL)
 
 
 def run(spec: SweepSpec, out: Path, batch: int, client=None, progress: bool = True,
