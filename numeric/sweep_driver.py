@@ -144,7 +144,7 @@ def local_cluster(workers: int):
     from dask.distributed import LocalCluster
 
     env = {"OMP_NUM_THREADS": "1", "OPENBLAS_NUM_THREADS": "1", "MKL_NUM_THREADS": "1"}
-    return LocalCluster(n_workers=workers, threads_per_worker=1, processes=True, dashboard_address=None,
+    return LocalCluster(n_workers=workers, threads_per_worker=1, processes=True, dashboard_address=":0",
                         env=env, silence_logs=logging.CRITICAL)
 
 
