@@ -165,8 +165,9 @@ def run(spec: SweepSpec, out: Path, batch: int, client=None, progress: bool = Tr
     if todo:
         if client is None:
             raise RunRefused("sweep: batches left to compute but no Dask client")
-        [spec_future] = client.scatter([spec], broadcast=True)
-        futures = {client.submit(compute_batch, spec_future, s, e, pure=False): b for b, s, e in todo}
+        # the spec (a few kB: numbers and the module's source) travels inside each task rather than
+        # scattered: scattered data dies with the worker that holds it, a task's argument does not
+        futures = {client.submit(compute_batch, spec, s, e, pure=False): b for b, s, e in todo}
         for fut in as_completed(futures):
             b = futures.pop(fut)
             cols = fut.result()  # a refusal (e.g. a non-positive draw) re-raises here
