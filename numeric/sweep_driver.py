@@ -168,14 +168,18 @@ def run(spec: SweepSpec, out: Path, batch: int, client=None, progress: bool = Tr
         # the spec (a few kB: numbers and the module's source) travels inside each task rather than
         # scattered: scattered data dies with the worker that holds it, a task's argument does not
         futures = {client.submit(compute_batch, spec, s, e, pure=False): b for b, s, e in todo}
-        for fut in as_completed(futures):
-            b = futures.pop(fut)
-            cols = fut.result()  # a refusal (e.g. a non-positive draw) re-raises here
-            write_part(out, b, cols)
-            prog.add(len(cols["sample"]))
-            fut.release()
-            if on_batch is not None:
-                on_batch(b)
+        try:
+            for fut in as_completed(futures):
+                b = futures.pop(fut)
+                cols = fut.result()  # a refusal (e.g. a non-positive draw) re-raises here
+                write_part(out, b, cols)
+                prog.add(len(cols["sample"]))
+                fut.release()
+                if on_batch is not None:
+                    on_batch(b)
+        except BaseException:
+            client.cancel(list(futures))  # a shared client must not keep computing a failed sweep
+            raise
         prog.add(0, force=True)
     return {"batches": len(plan), "computed": len(todo), "skipped": len(plan) - len(todo),
             "seconds": time.perf_counter() - t0}

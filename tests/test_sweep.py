@@ -8,6 +8,7 @@ from __future__ import annotations
 import json
 import os
 import time
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -328,3 +329,55 @@ def test_progress_lines(capsys):
     prog.add(90, force=True)
     err = capsys.readouterr().err.splitlines()
     assert err and err[-1].startswith("sweep: 100/100 samples")
+
+
+def test_worker_side_needs_no_sympy(repo_root):
+    """What a worker runs (distributions, realisations, driver, summary) imports no SymPy."""
+    import subprocess
+    import sys
+
+    code = ("import sys; sys.modules['sympy'] = None\n"
+            "from pathlib import Path\n"
+            "import springchain.generated.seed as g\n"
+            "from springchain.numeric import sweep_driver, sweep_summary\n"
+            "from springchain.numeric.distributions import parse\n"
+            "from springchain.numeric.realisations import SweepSpec, compute_batch\n"
+            "spec = SweepSpec('seed', Path(g.__file__).read_text(), tuple(sorted(g.DEFAULTS.items())),\n"
+            "                 (('k', parse('uniform(1, 2)')),), (), 3, 0)\n"
+            "print(compute_batch(spec, 0, 3)['omega2'].shape)\n")
+    out = subprocess.run([sys.executable, "-c", code], cwd=repo_root, capture_output=True, text=True, timeout=120)
+    assert out.returncode == 0, out.stderr
+    assert out.stdout.strip() == "(3, 3)"
+
+
+def test_existing_cluster_via_scheduler_address(tmp_path, client1):
+    """`dask scheduler` + `dask worker` as separate processes (the README's two shells); same rows."""
+    import shutil
+    import subprocess
+    import sys
+
+    dask_cli = shutil.which("dask") or str(Path(sys.executable).parent / "dask")
+    sched_file = tmp_path / "scheduler.json"
+    procs = [subprocess.Popen([dask_cli, "scheduler", "--scheduler-file", str(sched_file), "--port", "0",
+                               "--dashboard-address", ":0"], stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)]
+    try:
+        for _ in range(300):
+            if sched_file.exists() and sched_file.stat().st_size:
+                break
+            time.sleep(0.1)
+        address = json.loads(sched_file.read_text())["address"]
+        procs.append(subprocess.Popen([dask_cli, "worker", address, "--nworkers", "1", "--nthreads", "1",
+                                       "--no-dashboard"], stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL))
+        scene = chain_scene(tmp_path, 30)
+        kw = dict(disorder=["mass=uniform(0.5, 1.5)"], samples=6, batch=4, seed=2, progress=False)
+        ext = springchain.sweep(scene, scheduler=address, out=tmp_path / "ext", **kw)
+        ref = springchain.sweep(scene, out=tmp_path / "ref", client=client1, **kw)
+        assert rows(ext) == rows(ref) and len(rows(ext)["sample"]) == 6
+    finally:
+        for p in reversed(procs):
+            p.terminate()
+        for p in reversed(procs):
+            try:
+                p.wait(timeout=20)
+            except subprocess.TimeoutExpired:
+                p.kill()
