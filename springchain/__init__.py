@@ -9,6 +9,7 @@ The public API (each name loads what it needs on first use, so ``import springch
     run = sc.simulate(scene)           # run.t (S,), run.x["modal"] (S, N), run.plot(), run.save(path)
     sc.plan(scene, tol=1e-6)           # the cheapest method and step for a tolerance
     sc.bench(scene, quick=True)        # work-precision benchmark
+    sc.sweep("chain100k", disorder=["mass=uniform(0.5, 1.5)"], samples=100)  # ensembles on Dask
 
 Subpackages: :mod:`springchain.derive` (SymPy), :mod:`springchain.numeric` (NumPy/SciPy),
 :mod:`springchain.generated` (generated modules of the bundled scenes).
@@ -23,7 +24,7 @@ _LAZY = {
     "load": "._api", "modes": "._api", "simulate": "._api", "plan": "._api", "bench": "._api",
     "method_names": "._api", "Modes": "._api", "Simulation": "._api",
     "SceneError": ".derive.errors", "RunRefused": ".numeric.errors", "Scene": ".derive.scene",
-    "bundled_scenes": "._scenes",
+    "bundled_scenes": "._scenes", "sweep": "._sweep", "SweepResult": "._sweep",
 }
 
 __all__ = ["__version__", *_LAZY]

@@ -418,5 +418,12 @@ def bench(scene: str | Path | Scene = "seed", t_end: float | None = None, *, qui
     return with_derive_seconds(result, derive_seconds)
 
 
-__all__ = ["load", "modes", "simulate", "plan", "bench", "method_names", "Modes", "Simulation",
+def sweep(*args, **kwargs):
+    """Ensembles and parameter studies on Dask: see :func:`springchain._sweep.sweep`."""
+    from ._sweep import sweep as _sweep
+
+    return _sweep(*args, **kwargs)
+
+
+__all__ = ["load", "modes", "simulate", "plan", "bench", "sweep", "method_names", "Modes", "Simulation",
            "MAX_RECORDED_BYTES"]

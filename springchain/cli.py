@@ -49,6 +49,18 @@ def _positive_int(flag):
     return conv
 
 
+def _whole(flag):
+    def conv(text):
+        try:
+            value = int(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"{flag} {text!r}: accepted: a whole number >= 0") from None
+        if value < 0:
+            raise argparse.ArgumentTypeError(f"{flag} {text!r}: accepted: a whole number >= 0")
+        return value
+    return conv
+
+
 # -- commands: parse, call the API, print -------------------------------------------------------
 def cmd_derive(args) -> int:
     from . import _modules
@@ -232,6 +244,25 @@ def cmd_scaling(args) -> int:
     return 0
 
 
+def cmd_sweep(args) -> int:
+    from ._sweep import sweep
+
+    result = sweep(args.scene, vary=args.vary or (), disorder=args.disorder or (), samples=args.samples,
+                   seed=args.seed, batch=args.batch, workers=args.workers, scheduler=args.scheduler,
+                   out=args.out, progress=not args.no_progress)
+    if args.json:
+        print(json.dumps(result.to_json(), indent=1))
+        return 0
+    r = result.run
+    print(f"sweep of {result.summary['scene']!r}: {result.rows} samples x {result.summary['modes']} modes; "
+          f"{r['computed']} batches computed, {r['skipped']} already done, {r['seconds']:.2f} s")
+    print(f"  wrote {result.parquet}")
+    print(f"  wrote {result.out / 'summary.json'}")
+    for p in result.figures:
+        print(f"  wrote {p}")
+    return 0
+
+
 # -- parser ---------------------------------------------------------------------------------
 def build_parser() -> argparse.ArgumentParser:
     p = _Parser(prog="springchain",
@@ -334,6 +365,34 @@ def build_parser() -> argparse.ArgumentParser:
     sc.add_argument("--json", action="store_true", help="print one JSON object with both tables")
     sc.add_argument("--out", default="springchain-out", help="output folder (default: %(default)s)")
     sc.set_defaults(func=cmd_scaling)
+
+    sw = sub.add_parser("sweep", help="ensembles and parameter studies on Dask (parquet, summary, figures)",
+                        description="Draw S realisations of a scene (parameters with --vary, per-mass or "
+                                    "per-spring disorder of [chain] scenes with --disorder), compute every "
+                                    "realisation's omega^2 (and, for chains, participation ratios and inverse "
+                                    "localisation lengths) as Dask tasks of B realisations, and write "
+                                    "DIR/sweep.parquet (one part per batch), DIR/summary.json and figures. "
+                                    "DIST: uniform(a, b), normal(mu, sigma), lognormal(mu, sigma) or "
+                                    "grid(a, b, n). Re-running into the same DIR resumes.")
+    sw.add_argument("scene", help="a scene file (TOML) or the name of a bundled scene")
+    sw.add_argument("--vary", action="append", metavar="NAME=DIST",
+                    help="draw scene parameter NAME per sample, repeatable; grids form their product")
+    sw.add_argument("--disorder", action="append", metavar="mass=DIST|k=DIST",
+                    help="[chain] scenes: multiply each mass (or spring) by its own draw, per sample")
+    sw.add_argument("--samples", type=_positive_int("--samples"), required=True,
+                    help="realisations (per grid point)")
+    sw.add_argument("--seed", type=_whole("--seed"), default=0, help="seed (default: %(default)s)")
+    sw.add_argument("--batch", type=_positive_int("--batch"),
+                    help="realisations per Dask task (default: about 64 tasks in all)")
+    where = sw.add_mutually_exclusive_group()
+    where.add_argument("--workers", type=_positive_int("--workers"),
+                       help="processes of the embedded LocalCluster (default: the cores)")
+    where.add_argument("--scheduler", metavar="ADDRESS",
+                       help="use a running `dask scheduler`, e.g. tcp://127.0.0.1:8786")
+    sw.add_argument("--out", default="springchain-sweep", help="output folder (default: %(default)s)")
+    sw.add_argument("--json", action="store_true", help="print one JSON object and nothing else")
+    sw.add_argument("--no-progress", action="store_true", help="no progress lines on stderr")
+    sw.set_defaults(func=cmd_sweep)
     return p
 
 

@@ -1,0 +1,202 @@
+"""``springchain.sweep``: ensembles and parameter studies on Dask (the API behind ``springchain sweep``)."""
+
+from __future__ import annotations
+
+import math
+import os
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from .derive.scene import Scene
+from .numeric.errors import RunRefused
+
+#: Default output folder of a sweep.
+DEFAULT_SWEEP_OUT = "springchain-sweep"
+RESERVED = ("sample", "omega2", "participation_ratio", "inverse_localisation_length")
+
+
+@dataclass(frozen=True)
+class SweepResult:
+    """A finished sweep.
+
+    Attributes
+    ----------
+    out : Path
+        The output folder (``sweep.parquet/``, ``manifest.json``, ``summary.json``, figures).
+    rows : int
+        Number of samples (rows of ``sweep.parquet``).
+    summary : dict
+        What ``DIR/summary.json`` holds.
+    figures : tuple of Path
+    run : dict
+        Batches computed and skipped (resumed), seconds.
+    """
+
+    out: Path
+    rows: int
+    summary: dict = field(repr=False)
+    figures: tuple[Path, ...]
+    run: dict
+    manifest: dict = field(repr=False)
+
+    @property
+    def parquet(self) -> Path:
+        return self.out / "sweep.parquet"
+
+    def table(self, columns: list[str] | None = None):
+        """The rows as a pyarrow Table (sample order)."""
+        from .numeric.sweep_driver import read
+
+        return read(self.out, columns)
+
+    def to_json(self) -> dict:
+        """What ``springchain sweep --json`` prints."""
+        return {"out": str(self.out), "parquet": str(self.parquet), "rows": self.rows,
+                "summary": str(self.out / "summary.json"), "figures": [str(p) for p in self.figures],
+                "batches": self.run["batches"], "computed_batches": self.run["computed"],
+                "skipped_batches": self.run["skipped"], "seconds": self.run["seconds"],
+                "settings": self.manifest}
+
+
+def _whole(value, flag: str, minimum: int = 1) -> int:
+    if isinstance(value, bool) or not isinstance(value, int) or value < minimum:
+        raise RunRefused(f"{flag} {value!r}: accepted: a whole number >= {minimum}")
+    return int(value)
+
+
+def _pairs(items, flag: str, names) -> list[tuple[str, object]]:
+    from .numeric.distributions import Dist, parse, parse_assignment
+
+    out = []
+    if isinstance(items, dict):
+        items = list(items.items())
+    for item in items or ():
+        if isinstance(item, str):
+            out.append(parse_assignment(item, flag, names))
+        else:
+            name, dist = item
+            if name not in names:
+                raise RunRefused(f"{flag} {name}: {name!r} is not accepted here; accepted: {', '.join(sorted(names))}")
+            out.append((name, dist if isinstance(dist, Dist) else parse(dist, f"{flag} {name}")))
+    seen = set()
+    for name, _ in out:
+        if name in seen:
+            raise RunRefused(f"{flag} {name}: given twice; accepted: each name once")
+        seen.add(name)
+    return out
+
+
+def _law(scene: Scene, system, disorder, vary) -> dict | None:
+    """Matsuda–Ishii parameters when they apply: uniform chain, mass disorder only, nothing varied."""
+    import numpy as np
+
+    if vary or [w for w, _ in disorder] != ["mass"] or not scene.chain.uniform or scene.chain.k3 is not None:
+        return None
+    d = disorder[0][1]
+    m, k = float(system.masses[0]), float(np.median(system.stiffness))
+    return {"k": k, "mbar": m * d.mean(), "sigma2": m * m * d.variance()}
+
+
+def sweep(scene: str | Path | Scene, vary=(), disorder=(), samples: int = 100, *, seed: int = 0,
+          batch: int | None = None, workers: int | None = None, scheduler: str | None = None,
+          out: str | Path | None = None, progress: bool = True, client=None) -> SweepResult:
+    """A parameter study or disorder ensemble, computed on Dask and written as parquet.
+
+    Parameters
+    ----------
+    scene : str, Path or Scene
+        As for :func:`springchain.load`.
+    vary : list of "NAME=DIST" (or (name, DIST) pairs, or a dict)
+        One scene parameter per entry, drawn per sample; ``grid(a, b, n)`` entries vary
+        deterministically and several grids form their product (``samples`` realisations
+        per grid point).
+    disorder : list of "mass=DIST" / "k=DIST"
+        ``[chain]`` scenes: every mass (spring) multiplied by its own draw, per sample.
+    samples : int
+        Realisations (per grid point).
+    seed : int
+        Sample ``s`` draws from ``SeedSequence(seed, spawn_key=(s,))``: the same rows
+        whatever the workers, batch size or scheduler.
+    batch : int, optional
+        Realisations per Dask task (default: about 64 batches in all).
+    workers : int, optional
+        Processes of the embedded LocalCluster (default: the cores).
+    scheduler : str, optional
+        Address of a running ``dask scheduler`` (``tcp://HOST:PORT``) instead.
+    out : str or Path
+        Output folder (default ``springchain-sweep``). Re-running into it resumes.
+    progress : bool
+        A line on stderr every few seconds of a long sweep.
+    client : dask.distributed.Client, optional
+        Use this client (and its cluster) instead of ``workers``/``scheduler``.
+
+    Returns
+    -------
+    SweepResult
+    """
+    from ._api import _system, load
+    from .numeric import sweep_driver, sweep_summary
+    from .numeric.realisations import SweepSpec
+
+    sc = load(scene)
+    samples = _whole(samples, "--samples")
+    seed = _whole(seed, "--seed", 0)
+    if workers is not None and scheduler is not None:
+        raise RunRefused(f"--workers {workers} and --scheduler {scheduler}: accepted: one of them")
+    if workers is not None:
+        workers = _whole(workers, "--workers")
+    if scheduler is not None and (not isinstance(scheduler, str) or "://" not in scheduler):
+        raise RunRefused(f"--scheduler {scheduler!r}: accepted: an address such as tcp://HOST:PORT "
+                         "(printed by `dask scheduler`)")
+    vary = _pairs(vary, "--vary", sc.parameter_names)
+    disorder = _pairs(disorder, "--disorder", ("mass", "k"))
+    for name, _ in vary:
+        if name in RESERVED:
+            raise RunRefused(f"--vary {name}: the name clashes with a result column; accepted: other parameters")
+    if disorder and sc.chain is None:
+        raise RunRefused(f"--disorder {disorder[0][0]}: {sc.name!r} is not a [chain] scene; accepted: --disorder "
+                         "on [chain] scenes (use --vary for the others)")
+    for what, dist in disorder:
+        if dist.is_grid:
+            raise RunRefused(f"--disorder {what}={dist.text}: accepted: uniform, normal or lognormal (a grid "
+                             "is not a disorder)")
+    system, _ = _system(sc)
+    source = Path(system.module.__file__).read_text(encoding="utf-8")
+    spec = SweepSpec(sc.name, source, tuple(sorted(sc.parameters.items())), tuple(vary), tuple(disorder),
+                     samples, seed)
+    total = spec.total
+    batch = _whole(batch, "--batch") if batch is not None else max(1, min(1000, math.ceil(total / 64)))
+    out = Path(out if out is not None else DEFAULT_SWEEP_OUT)
+    manifest = {"format": 1, "scene": sc.name, "scene_sha256": sc.sha256,
+                "vary": [f"{n}={d.text}" for n, d in vary], "disorder": [f"{w}={d.text}" for w, d in disorder],
+                "samples": samples, "grid_points": spec.grid_points, "total": total, "seed": seed, "batch": batch}
+    out.mkdir(parents=True, exist_ok=True)
+    sweep_driver.check_manifest(out, manifest)
+
+    own = []
+    n_batches = len(sweep_driver.batches(total, batch))
+    try:
+        if client is None and len(sweep_driver.finished(out, n_batches)) < n_batches:
+            from dask.distributed import Client
+
+            if scheduler is not None:
+                try:
+                    client = Client(scheduler, timeout="10s")
+                except (OSError, TimeoutError) as exc:
+                    raise RunRefused(f"--scheduler {scheduler}: cannot connect ({exc}); accepted: the address "
+                                     "of a running `dask scheduler`, e.g. tcp://127.0.0.1:8786") from None
+                own.append(client)
+            else:
+                cluster = sweep_driver.local_cluster(workers or os.cpu_count() or 1)
+                own.append(cluster)
+                client = Client(cluster)
+                own.append(client)
+        run = sweep_driver.run(spec, out, batch, client, progress=progress)
+    finally:
+        for obj in reversed(own):
+            obj.close()
+    summary, figures = sweep_summary.summarise(out, sc.name, _law(sc, system, disorder, vary) if sc.chain else None)
+    return SweepResult(out, summary["samples"], summary, tuple(figures), run, manifest)
+
+
+__all__ = ["sweep", "SweepResult", "DEFAULT_SWEEP_OUT"]
