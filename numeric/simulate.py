@@ -330,6 +330,15 @@ def stream_methods(system: System, x0: np.ndarray, v0: np.ndarray, h: float, ste
                 summary["methods"][name]["max_position_difference"] = dx
                 summary["methods"][name]["max_velocity_difference"] = dv
     paths = []
+    figure_phase = phase("figures", enabled=progress)
+    with figure_phase:
+        _stream_figures(figures, snaps, summary, t, out, scene_name, paths)
+    summary["npz"] = str(npz)
+    summary["figures"] = [str(p) for p in paths]
+    return summary
+
+
+def _stream_figures(figures, snaps, summary, t, out, scene_name, paths) -> None:
     if figures:
         for name, sn in snaps.items():
             fig = plots.profiles(sn)
@@ -342,6 +351,3 @@ def stream_methods(system: System, x0: np.ndarray, v0: np.ndarray, h: float, ste
     else:
         for rec in summary["methods"].values():
             rec.pop("_energy")
-    summary["npz"] = str(npz)
-    summary["figures"] = [str(p) for p in paths]
-    return summary

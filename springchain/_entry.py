@@ -4,6 +4,7 @@ This module imports nothing heavy; the handler is in place before the command li
 (argparse, the API, NumPy, SymPy, numba) is imported, and stays until the process exits.
 """
 
+import os
 import signal
 import sys
 
@@ -39,4 +40,14 @@ def run() -> None:
         status = main()
     except KeyboardInterrupt:  # between the handler and the try
         status = _interrupted()
+    if status == EXIT_INTERRUPTED:
+        # Leave at once: a KeyboardInterrupt that passed through code run by PyRun_String (some
+        # extension modules' import) makes CPython re-kill itself with SIGINT at exit (status -2)
+        # even though it was handled. Clean-up (temporary files) already ran in finally blocks.
+        for stream in (sys.stdout, sys.stderr):
+            try:
+                stream.flush()
+            except (OSError, ValueError):
+                pass
+        os._exit(status)
     raise SystemExit(status)
