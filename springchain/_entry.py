@@ -11,7 +11,34 @@ import sys
 EXIT_INTERRUPTED = 130
 
 
+#: If a KeyboardInterrupt is swallowed (CPython ignores exceptions raised in finalizers, and
+#: some libraries catch everything), the process still ends this many seconds after Ctrl-C.
+GRACE_SECONDS = 10.0
+_state = {"handled": False}
+
+
+def _hard_exit() -> None:
+    if not _state["handled"]:
+        _state["handled"] = True
+        try:
+            sys.stderr.write("springchain: interrupted\n")
+            sys.stderr.flush()
+        finally:
+            os._exit(EXIT_INTERRUPTED)
+
+
+def _on_sigint(signum, frame):
+    import threading
+
+    timer = threading.Timer(GRACE_SECONDS, _hard_exit)
+    timer.daemon = True
+    timer.start()
+    signal.signal(signal.SIGINT, signal.SIG_IGN)  # a second Ctrl-C during clean-up prints nothing
+    raise KeyboardInterrupt
+
+
 def _interrupted() -> int:
+    _state["handled"] = True
     signal.signal(signal.SIGINT, signal.SIG_IGN)  # a second Ctrl-C during clean-up prints nothing
     try:
         sys.stderr.write("springchain: interrupted\n")
@@ -23,7 +50,7 @@ def _interrupted() -> int:
 
 def main(argv=None) -> int:
     if signal.getsignal(signal.SIGINT) is not signal.SIG_IGN:  # a background job keeps ignoring it
-        signal.signal(signal.SIGINT, signal.default_int_handler)
+        signal.signal(signal.SIGINT, _on_sigint)
     try:
         from .cli import main as cli_main
 
@@ -41,6 +68,7 @@ def run() -> None:
     except KeyboardInterrupt:  # between the handler and the try
         status = _interrupted()
     if status == EXIT_INTERRUPTED:
+        _state["handled"] = True
         # Leave at once: a KeyboardInterrupt that passed through code run by PyRun_String (some
         # extension modules' import) makes CPython re-kill itself with SIGINT at exit (status -2)
         # even though it was handled. Clean-up (temporary files) already ran in finally blocks.
