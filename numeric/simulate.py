@@ -140,16 +140,18 @@ def run_methods(system: System, x0: np.ndarray, v0: np.ndarray, h: float, steps:
                 raise RunRefused(f"--method modal: no exact solution applies ({why}); use "
                                  + ", ".join(INTEGRATORS))
             t0 = time.perf_counter()
-            if plain and "gravity" not in system.effects:
-                sol = ModalSolution.from_initial(system_spectrum(system, spectrum_source), x0, v0)
-                x, v = sol.at(t)
-            else:
-                x, v = AugmentedLinear.from_system(system).solve(x0, v0, t, h * record_every)
+            with phase("exact solution", enabled=progress):
+                if plain and "gravity" not in system.effects:
+                    sol = ModalSolution.from_initial(system_spectrum(system, spectrum_source), x0, v0)
+                    x, v = sol.at(t)
+                else:
+                    x, v = AugmentedLinear.from_system(system).solve(x0, v0, t, h * record_every)
             out[name] = Run(name, t, x, v, time.perf_counter() - t0, 0)
             continue
         if name in ADAPTIVE:
             t0 = time.perf_counter()
-            res = ADAPTIVE[name]().solve(full_problem(system), x0, v0, t, rtol, atol)
+            with phase(name, enabled=progress):
+                res = ADAPTIVE[name]().solve(full_problem(system), x0, v0, t, rtol, atol)
             out[name] = Run(name, t, res.x[..., 0], res.v[..., 0], time.perf_counter() - t0, res.force_evals)
             continue
         integrator = INTEGRATORS[name]()
