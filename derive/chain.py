@@ -55,8 +55,10 @@ class ChainModel:
         self.k = self.chain.k.to_sympy(sym)
         self.k3 = None if self.chain.k3 is None else self.chain.k3.to_sympy(sym)
         # template coordinates x_{i-1}, x_i, x_{i+1}
-        self.xm, self.x0, self.xp = sp.symbols("x_im1 x_i x_ip1", real=True)
-        self.v0 = sp.Symbol("v_i", real=True)
+        # no assumptions: parameters are declared real or positive, so a parameter named x_i
+        # (allowed) is a different symbol from the template coordinate x_i
+        self.xm, self.x0, self.xp = sp.symbols("x_im1 x_i x_ip1")
+        self.v0 = sp.Symbol("v_i")
 
     def element_potential(self, xa, xb, idx) -> sp.Expr:
         """V of the spring between masses idx and idx+1 (extension xb − xa)."""

@@ -100,7 +100,9 @@ def profiles(snapshots: dict[float, np.ndarray], quantity: str = "displacement x
     ax.set_ylabel(f"{quantity} [{unit}]")
     ax.set_title("Chain profile")
     ax.grid(alpha=0.3)
-    ax.legend(fontsize=8)
+    # matplotlib's "best" legend place scans every point: seconds for 10^6-mass profiles
+    big = sum(y.shape[0] for y in snapshots.values()) > 100_000
+    ax.legend(fontsize=8, **({"loc": "upper right"} if big else {}))
     return fig
 
 

@@ -146,10 +146,13 @@ class ExactMethod(Method):
                 recorder.frame(row, x, v)
                 bar.update(row + 1)
             return 0
+        from .progress import phase
+
         if system.conservative:
             from .modal import ModalSolution
 
-            sol = ModalSolution.from_initial(ctx.spectrum, x0, v0)
+            with phase("exact solution: modes", enabled=ctx.progress):
+                sol = ModalSolution.from_initial(ctx.spectrum, x0, v0)
             block = max(1, EXACT_BLOCK_BYTES // (16 * max(system.n, 1)))
             for start in range(0, t.shape[0], block):
                 x, v = sol.at(t[start:start + block])
@@ -158,7 +161,8 @@ class ExactMethod(Method):
             return 0
         from .linear_exact import AugmentedLinear
 
-        x, v = AugmentedLinear.from_system(system).solve(x0, v0, t, grid.h * grid.record_every)
+        with phase("exact solution", enabled=ctx.progress):
+            x, v = AugmentedLinear.from_system(system).solve(x0, v0, t, grid.h * grid.record_every)
         for r in range(x.shape[0]):
             recorder.frame(r, x[r], v[r])
         return 0
@@ -213,7 +217,10 @@ class AdaptiveRunner(Method):
         Ad = system.damping_rate_matrix()
         problem = Problem(system.acceleration_fn, damping=None if Ad is None else (lambda v: Ad @ v),
                           external=system.external_fn)
-        res = ADAPTIVE[self.name]().solve(problem, x0, v0, grid.t, ctx.rtol, ctx.atol)
+        from .progress import phase
+
+        with phase(self.name, enabled=ctx.progress):
+            res = ADAPTIVE[self.name]().solve(problem, x0, v0, grid.t, ctx.rtol, ctx.atol)
         for r in range(res.x.shape[0]):
             recorder.frame(r, res.x[r, :, 0], res.v[r, :, 0])
         return res.force_evals

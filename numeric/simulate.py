@@ -10,6 +10,7 @@ import numpy as np
 
 from . import plots
 from .driver import Progress
+from .progress import phase
 from .errors import RunRefused
 from .files import atomic_path
 from .integrators.base import Problem
@@ -269,14 +270,15 @@ def stream_methods(system: System, x0: np.ndarray, v0: np.ndarray, h: float, ste
                 summary["methods"][name]["max_velocity_difference"] = dv
     paths = []
     if figures:
-        for name, rec in recorders.items():
-            fig = plots.profiles(rec.snapshots)
-            paths.append(out / f"{scene_name}-{name}-profiles.png")
+        with phase("figures", enabled=progress):
+            for name, rec in recorders.items():
+                fig = plots.profiles(rec.snapshots)
+                paths.append(out / f"{scene_name}-{name}-profiles.png")
+                plots.save(fig, paths[-1])
+            energies = {name: rec.energy for name, rec in recorders.items()}
+            fig = plots.energy(t, energies, float(next(iter(energies.values()))[0]))
+            paths.append(out / f"{scene_name}-energy.png")
             plots.save(fig, paths[-1])
-        energies = {name: rec.energy for name, rec in recorders.items()}
-        fig = plots.energy(t, energies, float(next(iter(energies.values()))[0]))
-        paths.append(out / f"{scene_name}-energy.png")
-        plots.save(fig, paths[-1])
     summary["npz"] = str(npz)
     summary["figures"] = [str(p) for p in paths]
     return summary

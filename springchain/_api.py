@@ -45,7 +45,11 @@ def load(source: str | Path | Scene) -> Scene:
         return source
     from .derive.scene import load_scene
 
-    return load_scene(resolve(source))
+    from .numeric.progress import phase
+
+    path = resolve(source)
+    with phase(f"reading {Path(path).name}"):  # a long chain's expressions are checked at every index
+        return load_scene(path)
 
 
 def _system(scene: Scene):
@@ -339,7 +343,8 @@ def simulate(scene: str | Path | Scene, methods: list[str] | None = None, dt: fl
             with phase(f"writing {npz.name}", enabled=progress):
                 sim.save_npz(npz, t, x, v)
             if figures:
-                figs = tuple(sim.write_figures(out, sc.name, sc.mass_names, system, runs))
+                with phase("figures", enabled=progress):
+                    figs = tuple(sim.write_figures(out, sc.name, sc.mass_names, system, runs))
     summary.update({"scene": sc.name, "module": origin, "dt": dt, "steps": steps, "t_end": steps * dt,
                     "npz": None if npz is None else str(npz), "figures": [str(p) for p in figs],
                     "methods_that_apply": sim.applicable(system),

@@ -4,13 +4,41 @@ This module imports nothing heavy; the handler is in place before the command li
 (argparse, the API, NumPy, SymPy, numba) is imported, and stays until the process exits.
 """
 
+import os
 import signal
 import sys
 
 EXIT_INTERRUPTED = 130
 
 
+#: If a KeyboardInterrupt is swallowed (CPython ignores exceptions raised in finalizers, and
+#: some libraries catch everything), the process still ends this many seconds after Ctrl-C.
+GRACE_SECONDS = 10.0
+_state = {"handled": False}
+
+
+def _hard_exit() -> None:
+    if not _state["handled"]:
+        _state["handled"] = True
+        try:
+            sys.stderr.write("springchain: interrupted\n")
+            sys.stderr.flush()
+        finally:
+            os._exit(EXIT_INTERRUPTED)
+
+
+def _on_sigint(signum, frame):
+    import threading
+
+    timer = threading.Timer(GRACE_SECONDS, _hard_exit)
+    timer.daemon = True
+    timer.start()
+    signal.signal(signal.SIGINT, signal.SIG_IGN)  # a second Ctrl-C during clean-up prints nothing
+    raise KeyboardInterrupt
+
+
 def _interrupted() -> int:
+    _state["handled"] = True
     signal.signal(signal.SIGINT, signal.SIG_IGN)  # a second Ctrl-C during clean-up prints nothing
     try:
         sys.stderr.write("springchain: interrupted\n")
@@ -22,7 +50,7 @@ def _interrupted() -> int:
 
 def main(argv=None) -> int:
     if signal.getsignal(signal.SIGINT) is not signal.SIG_IGN:  # a background job keeps ignoring it
-        signal.signal(signal.SIGINT, signal.default_int_handler)
+        signal.signal(signal.SIGINT, _on_sigint)
     try:
         from .cli import main as cli_main
 
@@ -39,4 +67,15 @@ def run() -> None:
         status = main()
     except KeyboardInterrupt:  # between the handler and the try
         status = _interrupted()
+    if status == EXIT_INTERRUPTED:
+        _state["handled"] = True
+        # Leave at once: a KeyboardInterrupt that passed through code run by PyRun_String (some
+        # extension modules' import) makes CPython re-kill itself with SIGINT at exit (status -2)
+        # even though it was handled. Clean-up (temporary files) already ran in finally blocks.
+        for stream in (sys.stdout, sys.stderr):
+            try:
+                stream.flush()
+            except (OSError, ValueError):
+                pass
+        os._exit(status)
     raise SystemExit(status)

@@ -128,3 +128,34 @@ def test_mass_named_a_and_parameter_named_K(tmp_path, monkeypatch, capsys):
     assert main(["simulate", str(path), "--out", str(tmp_path / "o")]) == 0
     assert main(["derive", str(path), "--out", str(tmp_path / "g")]) == 0
     assert (tmp_path / "g" / "aK.py").exists()
+
+
+def _big_scene(n: int, *, cubic: bool) -> str:
+    names = [f"q{j}" for j in range(n)]
+    lines = ['name = "big"', "[parameters]", "m = 1.0", "k = 2.0", "c = 0.1", "g = 0.5", "[masses]"]
+    lines += [f'{q} = "m"' for q in names]
+    for a, b in [(names[0], "wall")] + list(zip(names, names[1:])):
+        lines += ["[[springs]]", f'between = ["{a}", "{b}"]', 'k = "k"'] + (['k3 = "0.1"'] if cubic else [])
+    lines += ["[[dampers]]", f'between = ["{names[-1]}", "wall"]', 'c = "c"',
+              "[[forces]]", f'on = "{names[0]}"', 'f = "g*sin(t)"', "[gravity]", 'g = "g"',
+              "[initial]", f"x = {[0.0] * n}", f"v = {[0.1] * n}"]
+    return "\n".join(lines) + "\n"
+
+
+def _chain(extra: str) -> str:
+    return ('name = "ch"\n[parameters]\nm = 1.0\nk = 2.0\n[chain]\nn = 8\nmass = "m*(1 + i % 2)"\nk = "k"\n'
+            + extra + '[initial]\nx = "0"\nv = "0.1"\n')
+
+
+@pytest.mark.parametrize("text", [_big_scene(14, cubic=False), _big_scene(14, cubic=True), _big_scene(3, cubic=True),
+                                  _chain('left = "ring"\nright = "ring"\n'), _chain('k3 = "0.2"\nleft = "wall"\n'),
+                                  _chain('right = "wall"\n')],
+                         ids=["dense-14-effects", "cubic-14-effects", "cubic-3-effects", "ring-nonuniform",
+                              "chain-cubic-wall", "chain-free-wall"])
+def test_every_kind_of_generated_module_keeps_its_names_private(text):
+    from springchain._modules import derive
+    from tests.test_scene_validation import body_names_not_private
+
+    source = derive(load_scene("s.toml", text=text)).source
+    assert body_names_not_private(source) == set()
+    compile(source, "generated", "exec")

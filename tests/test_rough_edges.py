@@ -132,7 +132,7 @@ def test_ctrl_c_prints_one_line_and_exits_130(delay, tmp_path):
     path = chain_scene(tmp_path, 200_000, "wall", "wall", steps=20_000, dt=0.1)
     env = {**os.environ, "SPRINGCHAIN_CACHE": str(tmp_path / "cache")}
     proc = subprocess.Popen([sys.executable, "-m", "springchain", "simulate", str(path), "--out",
-                             str(tmp_path / "o"), "--no-figures", "--record-every", "1000"], stdout=subprocess.PIPE,
+                             str(tmp_path / "o"), "--no-figures", "--record-every", "2000"], stdout=subprocess.PIPE,
                             stderr=subprocess.PIPE, text=True, env=env,
                             preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
     _wait_until_loaded(proc.pid, "_multiarray_umath")  # imported by springchain's own code
