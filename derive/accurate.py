@@ -94,7 +94,10 @@ def value(expr, subs: dict) -> float:
     NotAccurate
         If successive precisions up to :data:`MAX_DPS` digits never agree.
     """
-    expr = sp.sympify(expr) if isinstance(expr, (int, float)) else expr
+    if isinstance(expr, int):
+        expr = sp.Integer(expr)
+    elif isinstance(expr, float):
+        expr = sp.Float(expr)
     return _value(expr, tuple(sorted(subs.items(), key=lambda kv: str(kv[0]))))
 
 

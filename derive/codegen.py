@@ -189,7 +189,10 @@ def _sign_coherent(expr: sp.Expr) -> bool:
 
 def _stable(expr) -> sp.Expr | None:
     """A float64-stable form of ``expr`` (itself, or numerator/denominator expanded), or None."""
-    expr = sp.sympify(expr)
+    if isinstance(expr, int):
+        expr = sp.Integer(expr)
+    elif isinstance(expr, float):
+        expr = sp.Float(expr)
     if expr.is_Number or _sign_coherent(expr):
         return expr
     n, d = sp.fraction(sp.together(expr))
