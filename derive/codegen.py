@@ -534,6 +534,13 @@ def render_module(model: Model, modes: ModeSet, *, bundled: bool = True) -> str:
               + "]).reshape(_omega.shape[0], _N)")
             w(f"    _const = {_array([_p(c) for c in const])}")
             w("    return _omega, _cos, _sin, _const")
+    if model.table_forces or sc.ground is not None:
+        from .loadgen import ground_lines, table_force_lines
+
+        lines.extend(table_force_lines([on for on, _, _ in model.table_forces],
+                                       [model.masses[on] for on, _, _ in model.table_forces], sig, chain=False))
+        if sc.ground is not None:
+            lines.extend(ground_lines(model.ground, model.ground_motion, model.t, sig))
     w("")
     w("")
     w(f"def energy(_x, _v{kw}):")

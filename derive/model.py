@@ -27,6 +27,8 @@ class Effect(enum.Enum):
     DAMPER = "damper"
     FORCE = "force"
     GRAVITY = "gravity"
+    TABLE = "table"
+    GROUND = "ground"
 
 
 @dataclass(frozen=True)
@@ -76,6 +78,12 @@ class Model:
         self.dampers = tuple((d.a, d.b, d.c.to_sympy(sym), d.key) for d in scene.dampers)
         self.forces = tuple((f.on, f.f.to_sympy(sym), f.key) for f in scene.forces)
         self.g = None if scene.gravity is None else scene.gravity.to_sympy(sym)
+        #: Tabulated forces as undefined functions ``f_table<j>(t)`` (the table is data, not algebra).
+        self.table_forces = tuple((tf.on, sp.Function(f"f_table{tf.key[7:-1]}")(self.t), tf.key)
+                                  for tf in scene.table_forces)
+        #: Ground acceleration: the expression of t, or None for a table or without [ground].
+        self.ground = None if scene.ground is None or scene.ground.acceleration is None else \
+            scene.ground.acceleration.to_sympy(sym)
 
     # -- energies ------------------------------------------------------------------
     def _ext(self, a: int, b: int, q) -> sp.Expr:
@@ -140,6 +148,11 @@ class Model:
                     out.append(Term(key, Effect.DAMPER, i, -sign * c * dv))
         for on, f, key in self.forces:
             out.append(Term(key, Effect.FORCE, on, f))
+        for on, f, key in self.table_forces:
+            out.append(Term(key, Effect.TABLE, on, f))
+        if self.scene.ground is not None:
+            a_g = sp.Function("a_g")(self.t)
+            out.extend(Term("ground", Effect.GROUND, i, -m * a_g) for i, m in enumerate(self.masses))
         return tuple(out)
 
     def euler_lagrange(self) -> list[sp.Expr]:
@@ -170,6 +183,9 @@ class Model:
                 lhs[i] += sp.diff(e, self.v[i])
         for on, f, _ in self.forces:
             lhs[on] -= f
+        for term in self.terms:
+            if term.effect in (Effect.TABLE, Effect.GROUND):
+                lhs[term.coordinate] -= term.force
         return lhs
 
     @cached_property
@@ -222,6 +238,23 @@ class Model:
             if term.effect in effects:
                 out[term.coordinate] += term.force
         return out
+
+    @cached_property
+    def ground_motion(self) -> tuple[sp.Expr, sp.Expr] | None:
+        """Ground velocity and displacement ``(v_g, x_g)`` from an acceleration expression,
+        integrated with ``v_g(0) = x_g(0) = 0``; None for a table, without [ground], or when
+        SymPy finds no closed-form integral."""
+        if self.ground is None:
+            return None
+        s = sp.Symbol("_s", real=True)
+        try:
+            vg = sp.integrate(self.ground.subs(self.t, s), (s, 0, self.t))
+            xg = sp.integrate(vg.subs(self.t, s), (s, 0, self.t))
+        except (NotImplementedError, ValueError, TypeError):  # pragma: no cover - SymPy gives up
+            return None
+        if vg.has(sp.Integral) or xg.has(sp.Integral) or vg.has(sp.Piecewise) or xg.has(sp.Piecewise):
+            return None
+        return sp.simplify(vg), sp.simplify(xg)
 
     @cached_property
     def energy(self) -> sp.Expr:

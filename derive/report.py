@@ -5,6 +5,8 @@ Rendering only: every function returns a string or plain data; the command decid
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import sympy as sp
 
 from .accurate import exact_values, value
@@ -169,10 +171,28 @@ def effect_notes(model: Model) -> list[str]:
         else:
             notes.append("forces are constant + harmonic: exact solution = steady state "
                          "(K - Omega^2 M + i Omega C)^-1 F + transient")
+    notes += _load_notes(model)
     if model.C is not None:
         _, prop = damping_table(model)
         notes.append("damping is proportional (real modes, zeta_j = phi_j.C.phi_j / (2 omega_j))" if prop
                      else "damping is not proportional: complex modes (state-space eigenvalues)")
+    return notes
+
+
+def _load_notes(model: Model) -> list[str]:
+    """Notes on tabulated forces and ground motion (coordinates relative to the ground)."""
+    notes = [f"{key}: f_table{key[7:-1]}(t) is the table {Path(tf.table.file).name} "
+             f"({tf.table.t.shape[0]} rows, t = {tf.table.t[0]:g} ... {tf.table.t[-1]:g}), linear "
+             "between rows, zero outside"
+             for (_, _, key), tf in zip(model.table_forces, model.scene.table_forces)]
+    ground = model.scene.ground
+    if ground is not None:
+        what = (f"a_g(t) = {sp.sstr(model.ground)}" if model.ground is not None else
+                f"a_g(t) is the table {Path(ground.table.file).name} ({ground.table.t.shape[0]} rows), "
+                "linear between rows, zero outside")
+        notes.append(f"ground: {what}; coordinates are relative to the ground (walls move with it)")
+        if model.ground_motion is not None:
+            notes.append(f"ground: x_g(t) = {sp.sstr(model.ground_motion[1])} (x_g(0) = v_g(0) = 0)")
     return notes
 
 
@@ -203,7 +223,10 @@ def render_text(model: Model, modes: ModeSet) -> str:
         out.append(f"R = {sp.sstr(model.R)}   (Rayleigh dissipation)")
     lhs = "M x''" + (" + C x'" if model.C is not None else "") + " + K x" + (
         " + f_nl(x)" if Effect.CUBIC in model.effects else "")
-    rhs = " + ".join([*(["F(t)"] if model.forces else []), *(["M g"] if model.g is not None else [])]) or "0"
+    rhs = " + ".join([*(["F(t)"] if model.forces else []), *(["F_table(t)"] if model.table_forces else []),
+                      *(["M g"] if model.g is not None else [])]) or "0"
+    if sc.ground is not None:
+        rhs = ("" if rhs == "0" else rhs + " ") + "- M 1 a_g(t)"
     out += ["L = T - V", "", f"Equations of motion: {lhs} = {rhs}",
             "Per mass (Euler-Lagrange; each term traced to its scene entry):"]
     out += ["    " + line for line in equation_lines(model)]

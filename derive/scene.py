@@ -29,6 +29,7 @@ import numpy as np
 
 from .errors import SceneError, show
 from .expr import CONSTANTS, FUNCTIONS, Expr, Num, accepted_form, parse_expression
+from .loads import FORCE_KEYS, Ground, TableForce, parse_forces, parse_ground  # noqa: F401
 
 WALL = -1
 
@@ -59,10 +60,9 @@ MAX_CHAIN = 10**7
 _CHUNK = 1 << 16
 
 TOP_KEYS = ("name", "description", "parameters", "masses", "springs", "dampers", "forces",
-            "gravity", "chain", "initial", "simulation")
+            "gravity", "ground", "chain", "initial", "simulation")
 SPRING_KEYS = ("between", "k", "k3")
 DAMPER_KEYS = ("between", "c")
-FORCE_KEYS = ("on", "f")
 GRAVITY_KEYS = ("g",)
 CHAIN_KEYS = ("n", "mass", "k", "k3", "left", "right")
 CHAIN_ENDS = ("free", "wall", "ring")
@@ -164,6 +164,9 @@ class Scene:
     dt: float
     steps: int
     record_every: int
+    #: Tabulated forces (``[[forces]]`` with ``table``) and ground motion (``[ground]``).
+    table_forces: tuple[TableForce, ...] = ()
+    ground: Ground | None = None
 
     @property
     def n(self) -> int:
@@ -523,25 +526,17 @@ def _build(ld: _Loader, sha: str) -> Scene:
         c = ld.expression(f"{key}.c", d["c"], pnames, positive=True, bounded=True, env=env)
         dampers.append(Damper(a, b, c, key))
 
-    forces = []
     times = np.linspace(0.0, dt * steps, 257)
-    for j, f in enumerate(ld.array_of_tables("forces")):
-        key = f"forces[{j}]"
-        if chain is not None:
-            raise ld.bad(key, "[[forces]] with [chain]", "not yet supported", "[[forces]] with [masses]")
-        ld.keys(f, FORCE_KEYS, key, required=("on", "f"), what="a [[forces]] entry")
-        on = f["on"]
-        if not isinstance(on, str) or on not in index:
-            raise ld.bad(f"{key}.on", on, f"not a mass{did_you_mean(on, index)}",
-                         ", ".join(repr(m) for m in mass_names))
-        expr = ld.expression(f"{key}.f", f["f"], pnames | {"t"}, env={**env, "t": times})
-        forces.append(Force(index[on], expr, key))
+    forces, table_forces = parse_forces(ld, ld.array_of_tables("forces"),
+                                        chain_n=None if chain is None else chain.n, index=index,
+                                        pnames=pnames, env=env, times=times)
 
     gravity = None
     if "gravity" in data:
         g = ld.table("gravity", example=' with g = "g"')
         ld.keys(g, GRAVITY_KEYS, "gravity", required=("g",), what="[gravity]")
         gravity = ld.expression("gravity.g", g["g"], pnames, nonzero=True, bounded=True, env=env)
+    ground = parse_ground(ld, pnames, env, times)
 
     init = ld.table("initial", required=True, example=" with x = [...] and v = [...]")
     ld.keys(init, INITIAL_KEYS, "initial", required=("x", "v"), what="[initial]")
@@ -552,7 +547,7 @@ def _build(ld: _Loader, sha: str) -> Scene:
                  parameters=parameters, mass_names=mass_names, mass_exprs=mass_exprs,
                  springs=tuple(springs), dampers=tuple(dampers), forces=tuple(forces),
                  gravity=gravity, chain=chain, x0=x0, v0=v0, dt=dt, steps=steps,
-                 record_every=record_every)
+                 record_every=record_every, table_forces=table_forces, ground=ground)
 
 
 def _chain(ld: _Loader, pnames: frozenset[str], env: dict) -> Chain:
