@@ -55,6 +55,20 @@ def parameter_symbols(scene: Scene) -> dict[str, sp.Symbol]:
     }
 
 
+def integrate_ground(a_g: sp.Expr, t: sp.Symbol) -> tuple[sp.Expr, sp.Expr] | None:
+    """``(v_g, x_g)``: the ground acceleration integrated with ``v_g(0) = x_g(0) = 0``, or None
+    when SymPy finds no closed form without cases (e.g. a frequency that could be 0)."""
+    s = sp.Symbol("_s", real=True)
+    try:
+        vg = sp.integrate(a_g.subs(t, s), (s, 0, t))
+        xg = sp.integrate(vg.subs(t, s), (s, 0, t))
+    except (NotImplementedError, ValueError, TypeError):  # pragma: no cover - SymPy gives up
+        return None
+    if any(e.has(sp.Integral) or e.has(sp.Piecewise) for e in (vg, xg)):
+        return None
+    return sp.simplify(vg), sp.simplify(xg)
+
+
 class Model:
     """Symbolic equations of motion of a (non-[chain]) scene.
 
@@ -244,17 +258,7 @@ class Model:
         """Ground velocity and displacement ``(v_g, x_g)`` from an acceleration expression,
         integrated with ``v_g(0) = x_g(0) = 0``; None for a table, without [ground], or when
         SymPy finds no closed-form integral."""
-        if self.ground is None:
-            return None
-        s = sp.Symbol("_s", real=True)
-        try:
-            vg = sp.integrate(self.ground.subs(self.t, s), (s, 0, self.t))
-            xg = sp.integrate(vg.subs(self.t, s), (s, 0, self.t))
-        except (NotImplementedError, ValueError, TypeError):  # pragma: no cover - SymPy gives up
-            return None
-        if vg.has(sp.Integral) or xg.has(sp.Integral) or vg.has(sp.Piecewise) or xg.has(sp.Piecewise):
-            return None
-        return sp.simplify(vg), sp.simplify(xg)
+        return None if self.ground is None else integrate_ground(self.ground, self.t)
 
     @cached_property
     def energy(self) -> sp.Expr:

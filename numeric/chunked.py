@@ -25,7 +25,7 @@ class ChunkedNPZ:
     """
 
     def __init__(self, path: str | Path, t: np.ndarray, n: int, methods: list[str],
-                 progress: bool | None = None):
+                 progress: bool | None = None, extra: list[str] = ()):
         self.path = Path(path)
         self.progress = progress
         self.path.parent.mkdir(parents=True, exist_ok=True)
@@ -37,11 +37,18 @@ class ChunkedNPZ:
             for q in ("x", "v"):
                 self.arrays[f"{q}_{m}"] = np.lib.format.open_memmap(
                     self.tmpdir / f"{q}_{m}.npy", mode="w+", dtype=float, shape=(len(self.t), n))
+        for key in extra:  # further (S, N) arrays, e.g. aabs_<method>
+            self.arrays[key] = np.lib.format.open_memmap(self.tmpdir / f"{key}.npy", mode="w+", dtype=float,
+                                                         shape=(len(self.t), n))
 
     def frame(self, method: str, row: int, x: np.ndarray, v: np.ndarray) -> None:
         """Store frame number ``row`` (0-based) of ``method``; x, v shape (N,) or (N, 1)."""
         self.arrays[f"x_{method}"][row] = np.reshape(x, -1)
         self.arrays[f"v_{method}"][row] = np.reshape(v, -1)
+
+    def store(self, key: str, row: int, values: np.ndarray) -> None:
+        """Store frame ``row`` of a further array ``key`` (declared in ``extra``); values shape (N,)."""
+        self.arrays[key][row] = np.reshape(values, -1)
 
     def close(self) -> None:
         from .progress import phase

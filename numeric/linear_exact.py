@@ -12,6 +12,17 @@ undamped mode (a Jordan block gives the t·sin growth), critical damping, a
 free piece accelerating under gravity (½ g t²). It is evaluated at anchor
 times ``exp(A t_i)`` every ``anchor`` samples and propagated between anchors
 with ``exp(A h)``, so roundoff cannot accumulate over more than ``anchor`` products.
+
+Ground motion given as a harmonic expression adds the force ``-m_i a_g(t)`` to every mass
+through the same oscillator states. Tabulated inputs (forces, ground acceleration) are
+piecewise linear in t, so the solution stays exact by **first-order hold**: with
+``ż = A z + B u(t)`` and ``u`` linear on ``[a, b]`` (``u(a⁺)``, slope ``s``),
+
+    exp(h [[A, B, 0], [0, 0, I], [0, 0, 0]]) (z(a), u(a⁺), s) = (z(b), …),   h = b − a,
+
+stepped over the union of the output times and every table's rows (one exponential per
+distinct interval length, lengths equal to 13 significant digits sharing one). A table is zero outside its rows, so it jumps at its ends when
+its first or last value is not 0; ``u(a⁺)`` and ``u(b⁻)`` take the one-sided limits.
 """
 
 from __future__ import annotations
@@ -34,6 +45,9 @@ class AugmentedLinear:
     A: np.ndarray = field(repr=False)
     n: int
     extra0: np.ndarray = field(repr=False)
+    #: Piecewise-linear inputs ``(times (R,), values (R,), direction (N,))``: each adds
+    #: ``direction · u(t)`` to the acceleration (first-order hold, see the module docstring).
+    inputs: tuple = field(default=(), repr=False)
 
     @classmethod
     def from_system(cls, system: System) -> "AugmentedLinear":
@@ -51,6 +65,20 @@ class AugmentedLinear:
                 raise ValueError("external forces are not constant + harmonic: no exact solution")
             omegas, fc, fs, c0 = (np.asarray(a, dtype=float) for a in mod.forcing_harmonics(**p))
             const = const + c0
+        if system.ground == "expression":  # every mass feels -m_i a_g(t): acceleration -a_g(t)
+            wg, gc, gs, g0 = mod.ground_harmonics(**p)
+            wg = np.asarray(wg, dtype=float)
+            omegas = np.concatenate([omegas, wg])
+            fc = np.vstack([fc, -np.outer(np.asarray(gc, dtype=float), system.masses)])
+            fs = np.vstack([fs, -np.outer(np.asarray(gs, dtype=float), system.masses)])
+            const = const - float(g0) * system.masses
+        inputs = []
+        for (tt, ff), on in zip(system.tables, getattr(mod, "TABLE_FORCE_ON", ())):
+            direction = np.zeros(n)
+            direction[on] = minv[on]
+            inputs.append((tt, ff, direction))
+        if system.ground == "table":
+            inputs.append((system.ground_table[0], system.ground_table[1], -np.ones(n)))
         h = omegas.shape[0]
         has_const = bool(np.any(const != 0))
         size = 2 * n + 2 * h + int(has_const)
@@ -71,7 +99,7 @@ class AugmentedLinear:
         extra0[0:2 * h:2] = 1.0
         if has_const:
             extra0[-1] = 1.0
-        return cls(A, n, extra0)
+        return cls(A, n, extra0, tuple(inputs))
 
     def solve(self, x0: np.ndarray, v0: np.ndarray, t: np.ndarray, h: float | None = None,
               anchor: int = 64) -> tuple[np.ndarray, np.ndarray]:
@@ -80,6 +108,8 @@ class AugmentedLinear:
         If the times are a uniform grid ``t = i·h`` pass ``h`` to propagate
         between anchors with ``exp(A h)``; otherwise each time gets its own exponential.
         """
+        if self.inputs:
+            return self._solve_inputs(x0, v0, np.asarray(t, dtype=float))
         z0 = np.concatenate([x0, v0, self.extra0])
         t = np.asarray(t, dtype=float)
         Z = np.empty((t.shape[0], z0.shape[0]))
@@ -94,6 +124,46 @@ class AugmentedLinear:
                 for i in range(i0 + 1, min(i0 + anchor, t.shape[0])):
                     z = Eh @ z
                     Z[i] = z
+        return Z[:, :self.n], Z[:, self.n:2 * self.n]
+
+
+    def _input_values(self, a: float, b: float) -> tuple[np.ndarray, np.ndarray]:
+        """One-sided limits ``u(a⁺)`` and ``u(b⁻)`` of every input, shape (m,) each."""
+        right, left = [], []
+        for tt, yy, _ in self.inputs:
+            ua = float(np.interp(a, tt, yy, left=0.0, right=0.0))
+            ub = float(np.interp(b, tt, yy, left=0.0, right=0.0))
+            right.append(0.0 if a == tt[-1] else ua)  # zero after the last row
+            left.append(0.0 if b == tt[0] else ub)  # zero before the first row
+        return np.array(right), np.array(left)
+
+    def _solve_inputs(self, x0: np.ndarray, v0: np.ndarray, t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """First-order-hold solution on the union of ``t`` and the tables' rows (see module docstring)."""
+        size, m = self.A.shape[0], len(self.inputs)
+        B = np.zeros((size, m))
+        for j, (_, _, direction) in enumerate(self.inputs):
+            B[self.n:2 * self.n, j] = direction
+        big = np.zeros((size + 2 * m, size + 2 * m))
+        big[:size, :size] = self.A
+        big[:size, size:size + m] = B
+        big[size:size + m, size + m:] = np.eye(m)
+        knots = np.concatenate([tt for tt, _, _ in self.inputs])
+        knots = knots[(knots > t[0]) & (knots < t[-1])]
+        grid = np.union1d(t, knots)
+        out = np.searchsorted(grid, t)  # rows of grid that are output times
+        flows: dict[float, np.ndarray] = {}
+        Z = np.empty((grid.shape[0], size))
+        Z[0] = np.concatenate([x0, v0, self.extra0])
+        for i in range(grid.shape[0] - 1):  # loop over time intervals, not masses
+            a, b = float(grid[i]), float(grid[i + 1])
+            h = b - a
+            key = float(f"{h:.13e}")  # t = i·h grids differ from h by rounding: one exponential
+            E = flows.get(key)
+            if E is None:
+                E = flows[key] = scipy.linalg.expm(big * key)[:size]
+            ua, ub = self._input_values(a, b)
+            Z[i + 1] = E[:, :size] @ Z[i] + E[:, size:size + m] @ ua + E[:, size + m:] @ ((ub - ua) / h)
+        Z = Z[out]
         return Z[:, :self.n], Z[:, self.n:2 * self.n]
 
 

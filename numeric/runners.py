@@ -20,7 +20,7 @@ import numpy as np
 from .errors import RunRefused
 from .methods import ADAPTIVE as ADAPTIVE_NAMES
 from .methods import EXACT, FIXED_STEP
-from .system import System
+from .system import LOADED_CHAIN_EXACT_MAX, System
 
 #: Runs shorter than this many mass-steps show no progress bar.
 PROGRESS_MIN_WORK = 2_000_000
@@ -126,13 +126,16 @@ class ExactMethod(Method):
     def refusal(self, system: System) -> str | None:
         if system.exact_available:
             return None
-        why = "this scene has cubic springs" if not system.linear else "its external forces are not constant + harmonic"
+        why = ("this scene has cubic springs" if not system.linear else
+               f"a loaded [chain] of more than {LOADED_CHAIN_EXACT_MAX} masses (the exact solution is dense)"
+               if system.chain and system.n > LOADED_CHAIN_EXACT_MAX else
+               "its external forces or ground acceleration are not constant + harmonic")
         return f"no exact solution applies ({why}); use one of {', '.join(FIXED_STEP)}"
 
     def run(self, ctx, x0, v0, grid, recorder) -> int:
         self.check(ctx.system)
         system, t = ctx.system, grid.t
-        if system.chain:
+        if system.chain and system.conservative:
             from .chain_modal import ChainModal
             from .driver import Progress
             from .progress import phase

@@ -150,18 +150,59 @@ def compare(system: System, runs: dict[str, Run]) -> dict:
     return summary
 
 
+def absolute_motion(system: System, t: np.ndarray, x: np.ndarray, v: np.ndarray) -> dict[str, np.ndarray]:
+    """Absolute motion of a scene with ``[ground]`` (empty dict without it).
+
+    Coordinates are relative to the ground, so the absolute acceleration is the relative one
+    plus ``a_g``: ``aabs = a(x) − M⁻¹C v + M⁻¹F(t)`` (every force but the ground's ``−m a_g``).
+    The absolute displacement ``xabs = x + x_g(t)`` is given only when ``x_g`` is known in
+    closed form (an acceleration expression integrated with ``x_g(0) = v_g(0) = 0``).
+
+    Parameters
+    ----------
+    t : ndarray, shape (S,)
+    x, v : ndarray, shape (S, N)
+
+    Returns
+    -------
+    dict with ``"aabs"`` and possibly ``"xabs"``, each shape (S, N)
+    """
+    if system.ground is None:
+        return {}
+    a = np.asarray(system.acceleration_fn(np.ascontiguousarray(x.T)), dtype=float)
+    Ad = system.damping_rate_matrix()
+    if Ad is not None:
+        a = a + Ad @ v.T
+    out = {"aabs": (a + system.applied_acceleration(t)).T}
+    if getattr(system.module, "GROUND_DISPLACEMENT", False):
+        out["xabs"] = x + system.module.ground_motion(t, **system.params)[1][:, None]
+    return out
+
+
+def absolute_npz_arrays(system: System, t: np.ndarray, x: dict, v: dict) -> dict[str, np.ndarray]:
+    """``aabs_<method>`` (and ``xabs_<method>`` when the ground displacement is known) of every run."""
+    out = {}
+    for name in x:
+        for key, arr in absolute_motion(system, t, x[name], v[name]).items():
+            out[f"{key}_{name}"] = arr
+    return out
+
+
 def write_npz(path: Path, runs: dict[str, Run]) -> None:
     """NPZ with ``t`` (S,) and ``x_<method>``, ``v_<method>`` (S, N), written atomically."""
     first = next(iter(runs.values()))
     save_npz(path, first.t, {m: r.x for m, r in runs.items()}, {m: r.v for m, r in runs.items()})
 
 
-def save_npz(path: Path, t: np.ndarray, x: dict[str, np.ndarray], v: dict[str, np.ndarray]) -> None:
-    """NPZ with ``t`` (S,) and ``x_<method>``, ``v_<method>`` (S, N), written atomically."""
+def save_npz(path: Path, t: np.ndarray, x: dict[str, np.ndarray], v: dict[str, np.ndarray],
+             extra: dict[str, np.ndarray] | None = None) -> None:
+    """NPZ with ``t`` (S,) and ``x_<method>``, ``v_<method>`` (S, N) (and ``extra`` arrays such as
+    ``aabs_<method>``), written atomically."""
     arrays = {"t": t}
     for name in x:
         arrays[f"x_{name}"] = x[name]
         arrays[f"v_{name}"] = v[name]
+    arrays.update(extra or {})
     with atomic_path(path, suffix=".npz") as tmp:
         with open(tmp, "wb") as fh:
             np.savez(fh, **arrays)
@@ -186,7 +227,7 @@ def write_figures(out: Path, scene_name: str, names, system: System, runs: dict[
             fig = plots.differences(t, run.x - runs[EXACT].x, run.v - runs[EXACT].v, names, name)
             paths.append(out / f"{scene_name}-{name}-minus-exact.png")
             plots.save(fig, paths[-1])
-    if system.forced and system.exact_available:
+    if system.forced and system.exact_available and hasattr(system.module, "forcing_harmonics"):
         from .linear_exact import frequency_response
 
         omegas, fc, fs, _ = (np.asarray(a, dtype=float) for a in system.module.forcing_harmonics(**system.params))
@@ -219,6 +260,8 @@ class _StreamRecorder:
         n = self.system.n
         x1, v1 = np.reshape(x, (-1, 1))[:n], np.reshape(v, (-1, 1))[:n]
         self.writer.frame(self.name, row, x1, v1)
+        for key, arr in absolute_motion(self.system, self.t[row:row + 1], x1.T, v1.T).items():
+            self.writer.store(f"{key}_{self.name}", row, arr[0])
         self.energy[row] = float(self.system.energy(x1, v1)[0])
         if row in self.keep:
             self.snapshots[float(self.t[row])] = np.array(x1[:, 0])
@@ -245,7 +288,9 @@ def stream_methods(system: System, x0: np.ndarray, v0: np.ndarray, h: float, ste
     summary: dict = {"methods": {}}
     recorders: dict[str, _StreamRecorder] = {}
     npz = out / f"{scene_name}.npz"
-    with ChunkedNPZ(npz, t, system.n, methods, progress=progress) as writer:
+    ground = ("aabs", "xabs") if getattr(system.module, "GROUND_DISPLACEMENT", False) else ("aabs",)
+    extra = [f"{q}_{m}" for m in methods for q in ground] if system.ground is not None else []
+    with ChunkedNPZ(npz, t, system.n, methods, progress=progress, extra=extra) as writer:
         for m in chosen:
             rec = recorders[m.name] = _StreamRecorder(writer, system, m.name, t, keep)
             t0 = time.perf_counter()

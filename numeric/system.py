@@ -9,6 +9,11 @@ from typing import Callable
 import numpy as np
 
 
+#: Loaded (forced, tabulated, ground) ``[chain]`` scenes have an exact solution (the dense augmented
+#: matrix exponential) up to this many masses.
+LOADED_CHAIN_EXACT_MAX = 400
+
+
 @dataclass(frozen=True)
 class System:
     """A scene's generated equations at fixed parameter values.
@@ -23,6 +28,10 @@ class System:
     spring_ends : ndarray of int, shape (S, 2)
         Mass indices of the spring ends, -1 for a wall.
     stiffness : ndarray, shape (S,)
+    tables : tuple of (ndarray, ndarray)
+        ``(times, values)`` of each tabulated force, in the module's ``TABLE_FORCE_ON`` order.
+    ground_table : (ndarray, ndarray) or None
+        ``(times, a_g)`` of a ``[ground]`` table.
     """
 
     module: ModuleType
@@ -30,17 +39,27 @@ class System:
     masses: np.ndarray = field(repr=False)
     spring_ends: np.ndarray = field(repr=False)
     stiffness: np.ndarray = field(repr=False)
+    tables: tuple = field(default=(), repr=False)
+    ground_table: tuple | None = field(default=None, repr=False)
 
     @classmethod
-    def from_module(cls, module: ModuleType, params: dict[str, float] | None = None) -> "System":
+    def from_module(cls, module: ModuleType, params: dict[str, float] | None = None, *,
+                    tables: tuple = (), ground_table: tuple | None = None) -> "System":
         values = dict(module.DEFAULTS)
         values.update(params or {})
         if getattr(module, "CHAIN", False):
             ends = np.asarray(module.spring_ends(), dtype=np.intp).reshape(-1, 2)
         else:
             ends = np.asarray(module.SPRING_ENDS, dtype=np.intp).reshape(-1, 2)
+        wanted = len(getattr(module, "TABLE_FORCE_ON", ()))
+        if len(tables) != wanted or (getattr(module, "GROUND", None) == "table") != (ground_table is not None):
+            raise ValueError(f"System.from_module: the module takes {wanted} force tables"
+                             + (" and a ground table" if getattr(module, "GROUND", None) == "table" else "")
+                             + f"; got {len(tables)}" + (" and a ground table" if ground_table is not None else ""))
         return cls(module, values, np.asarray(module.masses(**values), dtype=float),
-                   ends, np.asarray(module.spring_constants(**values), dtype=float))
+                   ends, np.asarray(module.spring_constants(**values), dtype=float),
+                   tuple((np.asarray(a, dtype=float), np.asarray(b, dtype=float)) for a, b in tables),
+                   None if ground_table is None else tuple(np.asarray(a, dtype=float) for a in ground_table))
 
     @property
     def chain(self) -> bool:
@@ -77,7 +96,37 @@ class System:
 
     @property
     def forced(self) -> bool:
-        return hasattr(self.module, "external_acceleration")
+        """External forces of any kind: expressions, tables or ground motion."""
+        return hasattr(self.module, "external_acceleration") or self.tabulated or self.ground is not None
+
+    @property
+    def tabulated(self) -> bool:
+        """Tabulated forces ([[forces]] with table)."""
+        return bool(getattr(self.module, "TABLE_FORCE_ON", ()))
+
+    @property
+    def ground(self) -> str | None:
+        """``"expression"`` or ``"table"`` for a scene with [ground], else None."""
+        return getattr(self.module, "GROUND", None)
+
+    def ground_acceleration(self, t) -> np.ndarray:
+        """Ground acceleration a_g(t), shape of t (zeros without [ground])."""
+        if self.ground == "expression":
+            return self.module.ground_acceleration(t, **self.params)
+        if self.ground == "table":
+            return self.module.ground_table_acceleration(t, self.ground_table)
+        return np.zeros(np.shape(t))
+
+    def applied_acceleration(self, t) -> np.ndarray:
+        """``M⁻¹F(t)`` of the expression and tabulated forces (not the ground), shape (N, *t.shape)."""
+        t = np.asarray(t, dtype=float)
+        mod, p = self.module, self.params
+        out = np.zeros((self.n,) + t.shape)
+        if hasattr(mod, "external_acceleration"):
+            out += mod.external_acceleration(t, **p)
+        if self.tabulated:
+            out += mod.table_acceleration(t, self.tables, **p)
+        return out
 
     @property
     def conservative(self) -> bool:
@@ -100,12 +149,27 @@ class System:
         if not self.forced:
             return None
         mod, p = self.module, self.params
-        return lambda t: mod.external_acceleration(t, **p)
+        if not (self.tabulated or self.ground):
+            return lambda t: mod.external_acceleration(t, **p)
+
+        def external(t):  # relative coordinates: every mass feels -a_g(t) (force -m_i a_g)
+            return self.applied_acceleration(t) - self.ground_acceleration(t)
+
+        return external
 
     @property
     def exact_available(self) -> bool:
-        """Whether an exact solution exists: linear, and forces (if any) constant + harmonic."""
-        return self.linear and (not self.forced or bool(getattr(self.module, "FORCING_HARMONIC", False)))
+        """Whether an exact solution exists: linear; expression forces and ground acceleration (if
+        any) constant + harmonic (tables are exact by first-order hold); a loaded ``[chain]`` only
+        up to ``LOADED_CHAIN_EXACT_MAX`` masses (its exact solution is dense)."""
+        mod = self.module
+        if not self.linear:
+            return False
+        if hasattr(mod, "external_acceleration") and not getattr(mod, "FORCING_HARMONIC", False):
+            return False
+        if self.ground == "expression" and not getattr(mod, "GROUND_HARMONIC", False):
+            return False
+        return not (self.chain and not self.conservative and self.n > LOADED_CHAIN_EXACT_MAX)
 
     def energy(self, x: np.ndarray, v: np.ndarray) -> np.ndarray:
         """Total energy; x, v shape (N, ...) -> (...)."""

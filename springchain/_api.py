@@ -58,7 +58,14 @@ def _system(scene: Scene):
     from .numeric.system import System
 
     module, origin = load_module(scene)
-    return System.from_module(module), origin
+    return System.from_module(module, **load_tables(scene)), origin
+
+
+def load_tables(scene: Scene) -> dict:
+    """The scene's tables as keyword arguments of ``System.from_module`` (data, never source)."""
+    ground = scene.ground
+    return {"tables": tuple((tf.table.t, tf.table.y) for tf in scene.table_forces),
+            "ground_table": None if ground is None or ground.table is None else (ground.table.t, ground.table.y)}
 
 
 # -- modes ------------------------------------------------------------------------------------------
@@ -196,6 +203,8 @@ class Simulation:
     summary: dict = field(repr=False)
     npz: Path | None = None
     figures: tuple[Path, ...] = ()
+    #: Further arrays of the NPZ: ``aabs_<method>`` (and ``xabs_<method>``) for scenes with [ground].
+    extra: dict = field(default_factory=dict, repr=False)
 
     @property
     def methods(self) -> list[str]:
@@ -206,7 +215,7 @@ class Simulation:
         from .numeric.simulate import save_npz
 
         path = Path(path)
-        save_npz(path, self.t, self.x, self.v)
+        save_npz(path, self.t, self.x, self.v, self.extra)
         return path
 
     def plot(self, quantity: str = "x"):
@@ -327,6 +336,7 @@ def simulate(scene: str | Path | Scene, methods: list[str] | None = None, dt: fl
         t = data["t"]
         x = {m: data[f"x_{m}"] for m in names}
         v = {m: data[f"v_{m}"] for m in names}
+        extra = {k: data[k] for k in data.files if k.startswith(("aabs_", "xabs_"))}
     else:
         _check_memory(sc, steps, record_every, len(names), "steps")
         runs = sim.run_methods(system, sc.x0, sc.v0, dt, steps, names, record_every,
@@ -336,12 +346,13 @@ def simulate(scene: str | Path | Scene, methods: list[str] | None = None, dt: fl
         x = {m: r.x for m, r in runs.items()}
         v = {m: r.v for m, r in runs.items()}
         npz, figs = None, ()
+        extra = sim.absolute_npz_arrays(system, t, x, v)
         if out is not None:
             out = Path(out)
             out.mkdir(parents=True, exist_ok=True)
             npz = out / f"{sc.name}.npz"
             with phase(f"writing {npz.name}", enabled=progress):
-                sim.save_npz(npz, t, x, v)
+                sim.save_npz(npz, t, x, v, extra)
             if figures:
                 with phase("figures", enabled=progress):
                     figs = tuple(sim.write_figures(out, sc.name, sc.mass_names, system, runs))
@@ -350,7 +361,7 @@ def simulate(scene: str | Path | Scene, methods: list[str] | None = None, dt: fl
                     "methods_that_apply": sim.applicable(system),
                     "energy_conserved": not (system.damped or system.forced),
                     "seconds": time.perf_counter() - t0})
-    return Simulation(sc, t, x, v, summary, npz, figs)
+    return Simulation(sc, t, x, v, summary, npz, figs, extra)
 
 
 # -- plan and bench ---------------------------------------------------------------------------------
