@@ -91,14 +91,15 @@ def read_table(scene_file: str, key: str, value, column: str) -> Table:
     try:
         mode = os.stat(path).st_mode
     except OSError as exc:
-        raise bad(value, f"cannot read {path} ({exc.strerror or exc})") from None
+        raise bad(value, f"cannot read the file ({exc.strerror or exc}; names are relative to the scene "
+                         "file's folder)") from None
     if not stat.S_ISREG(mode):
-        raise bad(value, f"{path} is not a regular file")
+        raise bad(value, "not a regular file (a folder, FIFO or device)")
     try:
         with open(path, "rb") as fh:
             raw = fh.read(MAX_TABLE_BYTES + 1)
     except OSError as exc:
-        raise bad(value, f"cannot read {path} ({exc.strerror or exc})") from None
+        raise bad(value, f"cannot read the file ({exc.strerror or exc})") from None
     if len(raw) > MAX_TABLE_BYTES:
         raise bad(value, f"larger than {MAX_TABLE_BYTES // 2**20} MiB")
     try:
