@@ -35,6 +35,11 @@ import scipy.linalg
 from .system import System
 
 
+#: A table row closer than SNAP·max|t| to an output time is taken at that time (rows read from
+#: decimal text and times t = i·h differ by rounding; a kink moved by 1e-13 changes nothing).
+SNAP = 1e-13
+
+
 @dataclass(frozen=True)
 class AugmentedLinear:
     """The autonomous first-order system ``ż = A z`` of a linear scene.
@@ -127,14 +132,14 @@ class AugmentedLinear:
         return Z[:, :self.n], Z[:, self.n:2 * self.n]
 
 
-    def _input_values(self, a: float, b: float) -> tuple[np.ndarray, np.ndarray]:
+    def _input_values(self, a: float, b: float, tol: float) -> tuple[np.ndarray, np.ndarray]:
         """One-sided limits ``u(a⁺)`` and ``u(b⁻)`` of every input, shape (m,) each."""
         right, left = [], []
         for tt, yy, _ in self.inputs:
             ua = float(np.interp(a, tt, yy, left=0.0, right=0.0))
             ub = float(np.interp(b, tt, yy, left=0.0, right=0.0))
-            right.append(0.0 if a == tt[-1] else ua)  # zero after the last row
-            left.append(0.0 if b == tt[0] else ub)  # zero before the first row
+            right.append(0.0 if a >= tt[-1] - tol else ua)  # zero after the last row
+            left.append(0.0 if b <= tt[0] + tol else ub)  # zero before the first row
         return np.array(right), np.array(left)
 
     def _solve_inputs(self, x0: np.ndarray, v0: np.ndarray, t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -147,9 +152,12 @@ class AugmentedLinear:
         big[:size, :size] = self.A
         big[:size, size:size + m] = B
         big[size:size + m, size + m:] = np.eye(m)
+        tol = SNAP * max(1.0, float(np.max(np.abs(t))))
         knots = np.concatenate([tt for tt, _, _ in self.inputs])
         knots = knots[(knots > t[0]) & (knots < t[-1])]
-        grid = np.union1d(t, knots)
+        near = np.clip(np.searchsorted(t, knots), 1, t.shape[0] - 1)
+        gap = np.minimum(np.abs(knots - t[near - 1]), np.abs(t[near] - knots))
+        grid = np.union1d(t, knots[gap > tol])  # a row within rounding of an output time is that time
         out = np.searchsorted(grid, t)  # rows of grid that are output times
         flows: dict[float, np.ndarray] = {}
         Z = np.empty((grid.shape[0], size))
@@ -161,7 +169,7 @@ class AugmentedLinear:
             E = flows.get(key)
             if E is None:
                 E = flows[key] = scipy.linalg.expm(big * key)[:size]
-            ua, ub = self._input_values(a, b)
+            ua, ub = self._input_values(a, b, tol)
             Z[i + 1] = E[:, :size] @ Z[i] + E[:, size:size + m] @ ua + E[:, size + m:] @ ((ub - ua) / h)
         Z = Z[out]
         return Z[:, :self.n], Z[:, self.n:2 * self.n]

@@ -419,3 +419,14 @@ def test_cli_refuses_a_bad_table_in_one_line_with_exit_2(tmp_path, capsys):
     assert main(["simulate", str(path), "--out", str(tmp_path / "o")]) == 2
     err = capsys.readouterr().err.strip()
     assert len(err.splitlines()) == 1 and "forces[0].table" in err and "bad.csv" in err
+
+
+def test_bundled_building_quake_exact_matches_reference():
+    """The README's building under its (synthetic) record: exact vs DOP853 over the first 4 s."""
+    path = ROOT / "scenes" / "building_quake.toml"
+    scene, system = system_of(path)
+    runs = run_methods(system, scene.x0, scene.v0, scene.dt, 800, ["modal"])
+    rhs, n, knots, *_ = reference(path)
+    xr, vr = dop853(rhs, n, scene.x0, scene.v0, runs["modal"].t, knots)
+    assert np.max(np.abs(runs["modal"].x - xr)) <= 1e-8 * np.max(np.abs(xr))
+    assert np.max(np.abs(runs["modal"].v - vr)) <= 1e-8 * np.max(np.abs(vr))
