@@ -41,7 +41,12 @@ def default_methods(system: System) -> list[str]:
 def applicable(system: System) -> str:
     """Which methods apply to the system, in words."""
     if not system.exact_available:
-        why = "cubic springs" if not system.linear else "non-harmonic forces"
+        from .system import LOADED_CHAIN_EXACT_MAX
+
+        why = ("cubic springs" if not system.linear else
+               f"a loaded [chain] of more than {LOADED_CHAIN_EXACT_MAX} masses"
+               if system.chain and not system.conservative and system.n > LOADED_CHAIN_EXACT_MAX else
+               "non-harmonic forces or ground acceleration")
         return f"integrators only ({why}: no exact solution)"
     if _long_dense_chain(system):
         return f"integrators (an index-dependent chain has an exact solution up to {DENSE_EXACT_MAX} masses)"

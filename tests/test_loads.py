@@ -430,3 +430,91 @@ def test_bundled_building_quake_exact_matches_reference():
     xr, vr = dop853(rhs, n, scene.x0, scene.v0, runs["modal"].t, knots)
     assert np.max(np.abs(runs["modal"].x - xr)) <= 1e-8 * np.max(np.abs(xr))
     assert np.max(np.abs(runs["modal"].v - vr)) <= 1e-8 * np.max(np.abs(vr))
+
+
+def test_non_harmonic_ground_expression_runs_verlet_at_order_2_and_refuses_exact(tmp_path):
+    path = masses_scene(tmp_path, '[ground]\nacceleration = "A*exp(-t)*sin(W*t)"\n', name="decay")
+    scene, system = system_of(path)
+    assert not system.exact_available
+    with pytest.raises(sc.RunRefused, match="not constant \\+ harmonic"):
+        run_methods(system, scene.x0, scene.v0, scene.dt, 10, ["modal"])
+    rhs, n, knots, *_ = reference(path)
+    hs, errs = [0.02, 0.01, 0.005], []
+    for h in hs:
+        run = run_methods(system, scene.x0, scene.v0, h, int(round(4.0 / h)), ["verlet"])["verlet"]
+        xr, _ = dop853(rhs, n, scene.x0, scene.v0, run.t, knots)
+        errs.append(np.max(np.abs(run.x - xr)))
+    assert abs(np.polyfit(np.log(hs), np.log(errs), 1)[0] - 2.0) < 0.15, errs
+    sim = sc.simulate(str(path), steps=50, progress=False)
+    assert sim.methods == ["verlet"] and {"aabs_verlet", "xabs_verlet"} == set(sim.extra)
+
+
+def test_long_loaded_chain_needs_no_n_by_n_memory(tmp_path):
+    """A loaded chain of 40 000 masses (an n x n float array would take 12.8 GB) runs Verlet
+    through the forcing splitting in memory proportional to n."""
+    import tracemalloc
+
+    text = CHAIN.format(name="longload", extra='[[forces]]\non = 39999\ntable = "f.csv"\n'
+                        '[[forces]]\non = 0\nf = "F0*sin(0.3*t)"\n[ground]\nacceleration = "A*cos(0.5*t)"\n')
+    text = text.replace("n = 7", "n = 40000")
+    path = write(tmp_path, text, {"f.csv": FORCE_TABLE}, "longload")
+    scene, system = system_of(path)
+    assert not system.exact_available
+    tracemalloc.start()
+    run = run_methods(system, scene.x0, scene.v0, 0.05, 40, ["verlet"], record_every=20)["verlet"]
+    peak = tracemalloc.get_traced_memory()[1]
+    tracemalloc.stop()
+    assert np.all(np.isfinite(run.x)) and peak < 200 * 40000 * 8, peak
+
+
+def test_system_needs_the_scene_tables():
+    module, _ = load_module(load_scene(ROOT / "scenes" / "building_quake.toml"))
+    with pytest.raises(ValueError, match="ground table"):
+        System.from_module(module)
+
+
+# -- first-order hold: any piecewise-linear table, one damped oscillator -----------------------------
+from hypothesis import given, settings  # noqa: E402
+from hypothesis import strategies as st  # noqa: E402
+
+ONE = """
+name = "one"
+[parameters]
+m = 1.3
+k = 2.0
+c = 0.1
+[masses]
+m1 = "m"
+[[springs]]
+between = ["wall", "m1"]
+k = "k"
+[[dampers]]
+between = ["wall", "m1"]
+c = "c"
+[[forces]]
+on = "m1"
+table = "r.csv"
+[initial]
+x = [0.1]
+v = [0.0]
+[simulation]
+dt = 0.05
+steps = 80
+"""
+
+
+@settings(max_examples=15)
+@given(gaps=st.lists(st.floats(0.05, 1.5), min_size=1, max_size=6),
+       values=st.lists(st.floats(-2.0, 2.0), min_size=7, max_size=7),
+       start=st.floats(-0.5, 2.0))
+def test_first_order_hold_is_exact_for_any_piecewise_linear_table(tmp_path_factory, gaps, values, start):
+    tmp = tmp_path_factory.mktemp("foh")
+    times = start + np.concatenate([[0.0], np.cumsum(gaps)])
+    rows = "\n".join(f"{float(t)!r},{float(v)!r}" for t, v in zip(times, values))
+    path = write(tmp, ONE, {"r.csv": "t,f\n" + rows + "\n"}, "one")
+    scene, system = system_of(path)
+    run = run_methods(system, scene.x0, scene.v0, scene.dt, scene.steps, ["modal"])["modal"]
+    rhs, n, knots, *_ = reference(path)
+    xr, vr = dop853(rhs, n, scene.x0, scene.v0, run.t, knots)
+    assert np.max(np.abs(run.x - xr)) <= 1e-8 * np.max(np.abs(xr))
+    assert np.max(np.abs(run.v - vr)) <= 1e-8 * np.max(np.abs(vr))
