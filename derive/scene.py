@@ -27,6 +27,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ..ends import END_WORDS, End
 from .errors import SceneError, show
 from .expr import CONSTANTS, FUNCTIONS, Expr, Num, accepted_form, parse_expression
 
@@ -65,7 +66,7 @@ DAMPER_KEYS = ("between", "c")
 FORCE_KEYS = ("on", "f")
 GRAVITY_KEYS = ("g",)
 CHAIN_KEYS = ("n", "mass", "k", "k3", "left", "right")
-CHAIN_ENDS = ("free", "wall", "ring")
+CHAIN_ENDS = END_WORDS
 INITIAL_KEYS = ("x", "v")
 SIMULATION_KEYS = ("dt", "steps", "record_every")
 
@@ -133,8 +134,8 @@ class Chain:
     mass: Expr
     k: Expr
     k3: Expr | None
-    left: str
-    right: str
+    left: End
+    right: End
 
     @property
     def uniform(self) -> bool:
@@ -563,13 +564,14 @@ def _chain(ld: _Loader, pnames: frozenset[str], env: dict) -> Chain:
     for key, v in (("chain.left", left), ("chain.right", right)):
         if not isinstance(v, str) or v not in CHAIN_ENDS:
             raise ld.bad(key, v, f"not a chain end{did_you_mean(v, CHAIN_ENDS)}", ", ".join(CHAIN_ENDS))
-    if (left == "ring") != (right == "ring"):
-        raise ld.bad("chain.right" if left == "ring" else "chain.left", right if left == "ring" else left,
+    left, right = End(left), End(right)
+    if (left is End.RING) != (right is End.RING):
+        raise ld.bad("chain.right" if left is End.RING else "chain.left", right if left is End.RING else left,
                      "a ring closes both ends", 'left = right = "ring"')
     names = pnames | {"i"}
     # springs: i = 0 .. n-2 between masses i, i+1; i = -1 for a left wall; i = n-1 for a
     # right wall or the ring's closing spring
-    spring_idx = range(-1 if left == "wall" else 0, n if right in ("wall", "ring") else n - 1)
+    spring_idx = range(-1 if left is End.WALL else 0, n if right.has_spring else n - 1)
     mass = ld.expression("chain.mass", c["mass"], names, positive=True, bounded=True, env=env,
                          index_range=range(n))
     k = ld.expression("chain.k", c["k"], names, positive=True, bounded=True, env=env,
