@@ -21,6 +21,7 @@ from dataclasses import dataclass
 
 import sympy as sp
 
+from ..ends import End
 from .codegen import _p, header, privatize, regenerate_command
 from .model import parameter_symbols
 from .scene import Scene
@@ -98,7 +99,7 @@ class ChainModel:
 
     @property
     def rigid_modes(self) -> int:
-        return 1 if (self.chain.left != "wall" and self.chain.right != "wall") else 0
+        return 1 if (self.chain.left is not End.WALL and self.chain.right is not End.WALL) else 0
 
 
 def chain_modes(model: ChainModel) -> ChainModes:
@@ -110,18 +111,18 @@ def chain_modes(model: ChainModel) -> ChainModes:
                            "(scipy.linalg.eigh_tridiagonal) in the generated module",), closed_form=False)
     k, m, i, j, n = model.k, model.mass, model.i, model.j, model.n
     c = 4 * k / m
-    if left == "ring":
+    if left is End.RING:
         return ChainModes(c * sp.sin(sp.pi * j / n) ** 2, sp.cos(2 * sp.pi * j * i / n), (0, "n - 1"),
                           "ring", ("each 0 < j < n/2 appears twice (cos and sin shapes)",))
-    if left == "free" and right == "free":
+    if left is End.FREE and right is End.FREE:
         return ChainModes(c * sp.sin(sp.pi * j / (2 * n)) ** 2, sp.cos(sp.pi * j * (i + sp.Rational(1, 2)) / n),
                           (0, "n - 1"), "free-free", ())
-    if left == "wall" and right == "wall":
+    if left is End.WALL and right is End.WALL:
         return ChainModes(c * sp.sin(sp.pi * j / (2 * (n + 1))) ** 2, sp.sin(sp.pi * j * (i + 1) / (n + 1)),
                           (1, "n"), "wall-wall", ())
     # one wall: index from the wall end
     shape = sp.sin((2 * j - 1) * sp.pi * (i + 1) / (2 * n + 1))
-    note = () if left == "wall" else ("wall on the right: i counts from the right end",)
+    note = () if left is End.WALL else ("wall on the right: i counts from the right end",)
     return ChainModes(c * sp.sin((2 * j - 1) * sp.pi / (2 * (2 * n + 1))) ** 2, shape, (1, "n"),
                       f"{left}-{right}", note)
 
@@ -269,8 +270,8 @@ def render_chain_module(model: ChainModel, *, bundled: bool = True) -> str:
     w(f"DEFAULTS = {{{', '.join(f'{p!r}: {sc.parameters[p]!r}' for p in params)}}}")
     w(f"N = {ch.n}")
     w("CHAIN = True")
-    w(f"LEFT = {ch.left!r}")
-    w(f"RIGHT = {ch.right!r}")
+    w(f"LEFT = {ch.left.value!r}")
+    w(f"RIGHT = {ch.right.value!r}")
     w(f"UNIFORM = {ch.uniform!r}")
     w(f"EFFECTS = {model.effects!r}")
     w(f"LINEAR = {model.k3 is None!r}")
@@ -299,11 +300,11 @@ def render_chain_module(model: ChainModel, *, bundled: bool = True) -> str:
     w('    """Spring ends (mass indices, -1 = wall) in spring_constants() order, shape (S, 2)."""')
     w("    i = numpy.arange(n - 1)")
     w("    _parts = [numpy.stack([i, i + 1], axis=1)]")
-    if ch.left == "wall":
+    if ch.left is End.WALL:
         w("    _parts.insert(0, numpy.array([[-1, 0]]))")
-    if ch.right == "wall":
+    if ch.right is End.WALL:
         w("    _parts.append(numpy.array([[n - 1, -1]]))")
-    if ch.left == "ring":
+    if ch.left is End.RING:
         w("    _parts.append(numpy.array([[n - 1, 0]]))")
     w("    return numpy.concatenate(_parts).astype(numpy.intp)")
     w("")
@@ -312,9 +313,9 @@ def render_chain_module(model: ChainModel, *, bundled: bool = True) -> str:
     w('    """Stiffness of each spring in spring_ends() order, shape (S,)."""')
     w("    i = numpy.arange(n - 1, dtype=float)")
     w(f"    _parts = [numpy.broadcast_to(_spring_k(i, {kw}), (n - 1,))]")
-    if ch.left == "wall":
+    if ch.left is End.WALL:
         w(f"    _parts.insert(0, numpy.broadcast_to(_spring_k(numpy.array([-1.0]), {kw}), (1,)))")
-    if ch.right in ("wall", "ring"):
+    if ch.right.has_spring:
         w(f"    _parts.append(numpy.broadcast_to(_spring_k(numpy.array([n - 1.0]), {kw}), (1,)))")
     w("    return numpy.concatenate(_parts).astype(float)")
     if model.k3 is not None:
@@ -324,9 +325,9 @@ def render_chain_module(model: ChainModel, *, bundled: bool = True) -> str:
         w('    """Cubic coefficient k3 of each spring in spring_ends() order, shape (S,)."""')
         w("    i = numpy.arange(n - 1, dtype=float)")
         w(f"    _parts = [numpy.broadcast_to(_spring_k3(i, {kw}), (n - 1,))]")
-        if ch.left == "wall":
+        if ch.left is End.WALL:
             w(f"    _parts.insert(0, numpy.broadcast_to(_spring_k3(numpy.array([-1.0]), {kw}), (1,)))")
-        if ch.right in ("wall", "ring"):
+        if ch.right.has_spring:
             w(f"    _parts.append(numpy.broadcast_to(_spring_k3(numpy.array([n - 1.0]), {kw}), (1,)))")
         w("    return numpy.concatenate(_parts).astype(float)")
     w("")
@@ -349,11 +350,11 @@ def render_chain_module(model: ChainModel, *, bundled: bool = True) -> str:
         if cubic:
             w(f"    _k3s1 = numpy.broadcast_to(_spring_k3(i, {kw}), (n - 1,))")
         w("    _inv_m1 = _inv_m")
-    if ch.left == "wall":
+    if ch.left is End.WALL:
         w(f"    _k_left = _float(_spring_k(numpy.array(-1.0), {kw}))")
         if cubic:
             w(f"    _k3_left = _float(_spring_k3(numpy.array(-1.0), {kw}))")
-    if ch.right in ("wall", "ring"):
+    if ch.right.has_spring:
         w(f"    _k_right = _float(_spring_k(numpy.array(n - 1.0), {kw}))")
         if cubic:
             w(f"    _k3_right = _float(_spring_k3(numpy.array(n - 1.0), {kw}))")
@@ -370,11 +371,11 @@ def render_chain_module(model: ChainModel, *, bundled: bool = True) -> str:
     w("        _f[:-1] = _s")
     w("        _f[-1] = 0.0")
     w("        _f[1:] -= _s")
-    if ch.left == "wall":
+    if ch.left is End.WALL:
         w("        _f[0] -= _k_left * _y[0]" + (" + _k3_left * _y[0]**3" if cubic else ""))
-    if ch.right == "wall":
+    if ch.right is End.WALL:
         w("        _f[-1] -= _k_right * _y[-1]" + (" + _k3_right * _y[-1]**3" if cubic else ""))
-    if ch.left == "ring":
+    if ch.left is End.RING:
         w("        _dr = _y[0] - _y[-1]")
         w("        _sr = _k_right * _dr" + (" + _k3_right * _dr**3" if cubic else ""))
         w("        _f[-1] += _sr")
@@ -402,7 +403,7 @@ def render_chain_module(model: ChainModel, *, bundled: bool = True) -> str:
     w("    _d = _xb - _xa")
     w("    _e = 0.5 * numpy.sum(_m * _v**2, axis=0) + 0.5 * numpy.sum(_kk.reshape((-1,) + _extra) * _d**2, axis=0)")
     if cubic:
-        w("    i = numpy.arange(_kk.shape[0], dtype=float) - (1.0 if _LEFT == 'wall' else 0.0)")
+        w(f"    i = numpy.arange(_kk.shape[0], dtype=float) - (1.0 if _LEFT == {End.WALL.value!r} else 0.0)")
         w(f"    _k3s = numpy.broadcast_to(_spring_k3(i, {kw}), _kk.shape)")
         w("    _e = _e + 0.25 * numpy.sum(_k3s.reshape((-1,) + _extra) * _d**4, axis=0)")
     w("    return _e")
@@ -429,7 +430,7 @@ def render_chain_module(model: ChainModel, *, bundled: bool = True) -> str:
     w("        raise ValueError(f'stiffness_matrix: n = {n} > MAX_DENSE = {_MAX_DENSE}; use stiffness_bands()')")
     w(f"    _diag, _off = stiffness_bands({kw}, n=n)")
     w("    _K = numpy.diag(_diag) + numpy.diag(_off, 1) + numpy.diag(_off, -1)")
-    if ch.left == "ring":
+    if ch.left is End.RING:
         w(f"    _kr = spring_constants({kw}, n=n)[-1]")
         w("    _K[0, n - 1] -= _kr")
         w("    _K[n - 1, 0] -= _kr")
@@ -451,7 +452,16 @@ def render_chain_module(model: ChainModel, *, bundled: bool = True) -> str:
         w(f"    _j = numpy.arange({lo}, n + {lo}, dtype=float)")
         expr = modes.omega2.subs({model.j: sp.Symbol("_j"), model.n: sp.Symbol("n")})
         w(f"    return numpy.sort(numpy.broadcast_to({_p(expr)}, (n,)))")
-    elif ch.left == "ring":
+        w("")
+        w("")
+        w(f"def mode_omega({sig}, n=N):")
+        w(f'    """Closed-form angular frequencies of modes j = {lo} … n{lo - 1:+d} in index order (not sorted), shape (n,).')
+        w("")
+        w("    The order of the chain's sine/cosine/Fourier transform: the numeric exact solution of long")
+        w('    uniform chains takes its frequencies from here."""')
+        w(f"    _j = numpy.arange({lo}, n + {lo}, dtype=float)")
+        w(f"    return numpy.sqrt(numpy.broadcast_to({_p(expr)}, (n,)))")
+    elif ch.left is End.RING:
         w('    """Squared angular frequencies (non-uniform ring: dense, n <= MAX_DENSE), shape (n,)."""')
         w(f"    _w = scipy.linalg.eigh(stiffness_matrix({kw}, n=n), mass_matrix({kw}, n=n), eigvals_only=True)")
         w("    _w[:_RIGID_MODES] = 0.0")

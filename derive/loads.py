@@ -146,10 +146,11 @@ def parse_forces(ld, entries: list[dict], *, chain_n: int | None, index: dict[st
                  pnames: frozenset[str], env: dict, times: np.ndarray):
     """``[[forces]]`` entries as (expression forces, tabulated forces).
 
-    ``ld`` is the scene loader (:class:`derive.scene._Loader`); ``chain_n`` is the chain
+    ``ld`` is the scene loader (:class:`derive.scene_loader.Loader`); ``chain_n`` is the chain
     length for ``[chain]`` scenes (``on`` is then an index), else None.
     """
-    from .scene import Force, did_you_mean
+    from .scene import Force
+    from .scene_loader import did_you_mean
 
     forces, tables = [], []
     for j, f in enumerate(entries):

@@ -15,9 +15,7 @@ point, exactly 0) is refused. SymPy is not imported here.
 
 from __future__ import annotations
 
-import difflib
 import hashlib
-import keyword
 import math
 import os
 import stat
@@ -27,8 +25,10 @@ from pathlib import Path
 
 import numpy as np
 
-from .errors import SceneError, show
-from .expr import CONSTANTS, FUNCTIONS, Expr, Num, accepted_form, parse_expression
+from ..ends import END_WORDS, End
+from .errors import SceneError
+from .expr import CONSTANTS, FUNCTIONS, Expr, Num, accepted_form
+from .scene_loader import _CHUNK, Loader, did_you_mean
 from .loads import FORCE_KEYS, Ground, TableForce, parse_forces, parse_ground  # noqa: F401
 
 WALL = -1
@@ -44,20 +44,13 @@ RESERVED = VOCABULARY | {"wall"}
 RESERVED_PREFIXES = ("x_", "v_", "a_")
 #: Names a mass may not take (masses appear only as strings in ``between``/``on``).
 MASS_RESERVED = frozenset({"wall"})
-MAX_NAME = 64
 
-#: Largest number of bytes all recorded trajectories of one run may hold.
 #: Largest scene file read.
 MAX_FILE_BYTES = 64 * 2**20
 #: Largest description (characters).
 MAX_DESCRIPTION = 2000
-#: Masses, stiffnesses, damping and |k3|, |g| must lie in this range (no
-#: subnormal numbers, no overflow when two of them multiply).
-MIN_MAGNITUDE, MAX_MAGNITUDE = 1e-150, 1e150
 MAX_STEPS = 10**12
 MAX_CHAIN = 10**7
-#: Index values evaluated at once when checking [chain] expressions.
-_CHUNK = 1 << 16
 
 TOP_KEYS = ("name", "description", "parameters", "masses", "springs", "dampers", "forces",
             "gravity", "ground", "chain", "initial", "simulation")
@@ -65,32 +58,9 @@ SPRING_KEYS = ("between", "k", "k3")
 DAMPER_KEYS = ("between", "c")
 GRAVITY_KEYS = ("g",)
 CHAIN_KEYS = ("n", "mass", "k", "k3", "left", "right")
-CHAIN_ENDS = ("free", "wall", "ring")
+CHAIN_ENDS = END_WORDS
 INITIAL_KEYS = ("x", "v")
 SIMULATION_KEYS = ("dt", "steps", "record_every")
-
-#: Words people write for a key, tried after spelling mistakes for "did you mean".
-ALIASES = {
-    "stiffness": "k", "spring_constant": "k", "spring_k": "k", "k1": "k", "kappa": "k3",
-    "cubic": "k3", "k_cubic": "k3", "nonlinear": "k3",
-    "damping": "c", "viscosity": "c", "coefficient": "c", "c1": "c",
-    "ends": "between", "connects": "between", "nodes": "between", "pair": "between", "link": "between",
-    "mass": "masses", "spring": "springs", "damper": "dampers", "dashpots": "dampers",
-    "force": "forces", "forcing": "forces", "loads": "forces", "load": "forces",
-    "target": "on", "mass_name": "on", "at": "on", "force_expression": "f", "value": "f",
-    "params": "parameters", "parameter": "parameters", "constants": "parameters", "values": "parameters",
-    "init": "initial", "initial_conditions": "initial", "ic": "initial", "start": "initial",
-    "x0": "x", "position": "x", "positions": "x", "displacement": "x", "displacements": "x",
-    "v0": "v", "velocity": "v", "velocities": "v",
-    "sim": "simulation", "settings": "simulation", "solver": "simulation", "run": "simulation",
-    "h": "dt", "step": "dt", "timestep": "dt", "time_step": "dt", "step_size": "dt",
-    "nsteps": "steps", "n_steps": "steps", "num_steps": "steps", "iterations": "steps",
-    "record": "record_every", "stride": "record_every", "every": "record_every", "save_every": "record_every",
-    "title": "name", "desc": "description", "comment": "description",
-    "count": "n", "length": "n", "size": "n", "m": "mass", "left_end": "left", "right_end": "right",
-    "g0": "g", "acceleration": "g",
-}
-
 
 @dataclass(frozen=True)
 class Spring:
@@ -133,8 +103,8 @@ class Chain:
     mass: Expr
     k: Expr
     k3: Expr | None
-    left: str
-    right: str
+    left: End
+    right: End
 
     @property
     def uniform(self) -> bool:
@@ -182,169 +152,6 @@ class Scene:
     @property
     def parameter_names(self) -> tuple[str, ...]:
         return tuple(sorted(self.parameters))
-
-
-def did_you_mean(word: object, options) -> str:
-    """`` (did you mean 'x'?)`` for a near spelling or a usual synonym of ``word``, else ``""``."""
-    if not isinstance(word, str):
-        return ""
-    options = [o for o in options if isinstance(o, str)]
-    norm = word.strip().lower().replace("-", "_").replace(" ", "_")
-    if norm in options and norm != word:
-        return f" (did you mean {norm!r}?)"
-    near = difflib.get_close_matches(word, options, n=1) or difflib.get_close_matches(norm, options, n=1)
-    if not near and ALIASES.get(norm) in options:
-        near = [ALIASES[norm]]
-    return f" (did you mean {near[0]!r}?)" if near else ""
-
-
-class _Loader:
-    def __init__(self, file: str, data: dict):
-        self.file = file
-        self.data = data
-
-    def err(self, key: str | None, message: str) -> SceneError:
-        return SceneError(self.file, key, message)
-
-    def bad(self, key: str | None, value, why: str, accepted: str) -> SceneError:
-        """``<key>: <value>: <why>; accepted: <accepted>``."""
-        return SceneError(self.file, key, f"{show(value)}: {why}; accepted: {accepted}")
-
-    def keys(self, table: dict, allowed: tuple[str, ...], where: str | None, required=(),
-             what: str | None = None) -> None:
-        for k in table:
-            if k not in allowed:
-                raise self.err(f"{where}.{k}" if where else k,
-                               f"unknown key{did_you_mean(k, allowed)}; accepted: {', '.join(allowed)}")
-        optional = [k for k in allowed if k not in required]
-        form = (f"{what or where or 'the file'} with {', '.join(required)}"
-                + (f" (optional: {', '.join(optional)})" if optional else ""))
-        for k in required:
-            if k not in table:
-                raise self.err(f"{where}.{k}" if where else k, f"missing; accepted: {form}")
-
-    def table(self, key: str, required=False, example: str = "") -> dict:
-        value = self.data.get(key)
-        if value is None:
-            if required:
-                raise self.err(key, f"missing; accepted: a table [{key}]{example}")
-            return {}
-        if not isinstance(value, dict):
-            raise self.bad(key, value, "not a table", f"a table written [{key}]{example}")
-        return value
-
-    def array_of_tables(self, key: str) -> list[dict]:
-        value = self.data.get(key, [])
-        if not isinstance(value, list) or not all(isinstance(v, dict) for v in value):
-            raise self.bad(key, value, "not an array of tables", f"entries written [[{key}]]")
-        return value
-
-    def identifier(self, key: str, value, what: str = "name") -> str:
-        accepted = f"an ASCII Python identifier of at most {MAX_NAME} characters, such as 'm1'"
-        if not isinstance(value, str):
-            raise self.bad(key, value, f"a {type(value).__name__}, not a {what}", accepted)
-        if not value.isascii():
-            bad = next(ch for ch in value if not ch.isascii())
-            raise self.bad(key, value, f"non-ASCII character {bad!r} (look-alike letters are refused)",
-                           accepted)
-        if not value.isidentifier():
-            raise self.bad(key, value, f"not an identifier", accepted)
-        if len(value) > MAX_NAME:
-            raise self.bad(key, value, f"longer than {MAX_NAME} characters", accepted)
-        if keyword.iskeyword(value):
-            raise self.bad(key, value, "a Python keyword", f"another {what}, e.g. {value}_1")
-        if value.startswith("_"):
-            raise self.bad(key, value, "starts with '_' (kept for generated code)", accepted)
-        return value
-
-    def number(self, key: str, value, *, positive=False, integer=False, maximum=None) -> float | int:
-        """A finite TOML number (int or float; never a boolean or a string)."""
-        what = "a whole number" if integer else "a number"
-        accepted = what + (" > 0" if positive else "") + (f" up to {maximum:g}" if maximum else "")
-        if isinstance(value, bool) or not isinstance(value, (int, float)):
-            kind = "a boolean" if isinstance(value, bool) else f"a {type(value).__name__}"
-            raise self.bad(key, value, f"{kind}, not a number", accepted)
-        if integer and not isinstance(value, int):
-            raise self.bad(key, value, "not a whole number", accepted)
-        try:
-            finite = math.isfinite(value) and abs(float(value)) < math.inf
-        except OverflowError:
-            finite = False
-        if not finite:
-            raise self.bad(key, value, "not a finite number", accepted)
-        if positive and value <= 0:
-            raise self.bad(key, value, "not > 0", accepted)
-        if maximum is not None and value > maximum:
-            raise self.bad(key, value, f"more than {maximum:g}", accepted)
-        return value
-
-    def expression(self, key: str, text, allowed, *, positive=False, nonzero=False, env=None,
-                   index_range=None, bounded=False) -> Expr:
-        """Parse an expression and check its value at the scene's parameter values.
-
-        ``index_range`` is an iterable of index values i (for [chain]
-        expressions), evaluated in chunks so that memory stays bounded.
-        ``positive`` and ``nonzero`` hold only if rounding cannot blur them:
-        the value must exceed its error bound. ``bounded`` asks for
-        ``MIN_MAGNITUDE <= |value| <= MAX_MAGNITUDE``.
-        """
-        expr = parse_expression(text, allowed, file=self.file, key=key)
-        env = dict(env or {})
-        chunks = [None] if index_range is None else [index_range[s:s + _CHUNK]
-                                                    for s in range(0, len(index_range), _CHUNK)]
-        for chunk in chunks:
-            if chunk is not None:
-                env["i"] = np.asarray(chunk, dtype=float)
-            self._check_value(key, text, expr, env, positive=positive, nonzero=nonzero, bounded=bounded)
-        return expr
-
-    def _check_value(self, key, text, expr, env, *, positive, nonzero, bounded):
-        try:
-            value, error = expr.evaluate_error(env)
-        except (OverflowError, ZeroDivisionError, ValueError, TypeError, FloatingPointError):
-            value, error = math.nan, math.inf
-        shape = np.broadcast_shapes(np.shape(value), np.shape(error), np.shape(env.get("i", 0.0)),
-                                    np.shape(env.get("t", 0.0)))
-        value = np.broadcast_to(np.asarray(value, dtype=float), shape)
-        error = np.broadcast_to(np.asarray(error, dtype=float), shape)
-        verb = "is" if isinstance(expr, Num) else "evaluates to"
-
-        def where(mask) -> str:
-            if "i" in env and np.ndim(env["i"]):
-                return f" at i = {int(np.asarray(env['i'])[np.argmax(mask)])}"
-            if "t" in env and np.ndim(env["t"]):
-                return f" at t = {float(np.asarray(env['t'])[np.argmax(mask)]):g}"
-            return ""
-
-        def first(mask):
-            return float(value.ravel()[np.argmax(mask.ravel())])
-
-        bad = ~np.isfinite(value)
-        if bad.any():
-            raise self.bad(key, text, f"{verb} {first(bad):g}{where(bad)}",
-                           "an expression finite at the scene's parameter values")
-        unbounded = ~np.isfinite(error)
-        if unbounded.any():
-            raise self.bad(key, text, f"rounding cannot pin its value down{where(unbounded)} (a divisor "
-                                      "or root argument that rounding cannot tell from 0, or % at a jump)",
-                           "an expression whose divisors are clearly away from 0")
-        wanted = "a value > 0" if positive else "a nonzero value"
-        if positive and (value <= 0).any():
-            mask = value <= 0
-            raise self.bad(key, text, f"{verb} {first(mask):g}{where(mask)}", wanted)
-        if nonzero and (value == 0).any():
-            mask = value == 0
-            raise self.bad(key, text, f"{verb} 0{where(mask)}", wanted + " (or leave the key out)")
-        if (positive or nonzero) and (np.abs(value) <= error).any():
-            mask = np.abs(value) <= error
-            raise self.bad(key, text, f"{verb} {first(mask):.3g}{where(mask)}, which rounding cannot "
-                                      f"tell from 0 (error bound {float(error.ravel()[np.argmax(mask.ravel())]):.2g})",
-                           wanted + " clearly away from 0")
-        if bounded:
-            mask = (np.abs(value) < MIN_MAGNITUDE) | (np.abs(value) > MAX_MAGNITUDE)
-            if mask.any():
-                raise self.bad(key, text, f"{verb} {first(mask):g}{where(mask)}",
-                               f"values of size {MIN_MAGNITUDE:g} to {MAX_MAGNITUDE:g}")
 
 
 def load_scene(path: str | Path, text: str | None = None) -> Scene:
@@ -408,12 +215,12 @@ def load_scene(path: str | Path, text: str | None = None) -> Scene:
                                      "digits); accepted: numbers of ordinary size") from None
     sha = hashlib.sha256(raw).hexdigest()
     try:
-        return _build(_Loader(file, data), sha)
+        return _build(Loader(file, data), sha)
     except RecursionError:
         raise SceneError(file, None, "nested too deeply; accepted: a flat scene file") from None
 
 
-def _build(ld: _Loader, sha: str) -> Scene:
+def _build(ld: Loader, sha: str) -> Scene:
     data = ld.data
     ld.keys(data, TOP_KEYS, None, required=("name", "parameters", "initial"), what="a scene")
     name = ld.identifier("name", data["name"], "scene name")
@@ -550,7 +357,7 @@ def _build(ld: _Loader, sha: str) -> Scene:
                  record_every=record_every, table_forces=table_forces, ground=ground)
 
 
-def _chain(ld: _Loader, pnames: frozenset[str], env: dict) -> Chain:
+def _chain(ld: Loader, pnames: frozenset[str], env: dict) -> Chain:
     c = ld.table("chain")
     ld.keys(c, CHAIN_KEYS, "chain", required=("n", "mass", "k"), what="[chain]")
     n = int(ld.number("chain.n", c["n"], positive=True, integer=True, maximum=MAX_CHAIN))
@@ -558,13 +365,14 @@ def _chain(ld: _Loader, pnames: frozenset[str], env: dict) -> Chain:
     for key, v in (("chain.left", left), ("chain.right", right)):
         if not isinstance(v, str) or v not in CHAIN_ENDS:
             raise ld.bad(key, v, f"not a chain end{did_you_mean(v, CHAIN_ENDS)}", ", ".join(CHAIN_ENDS))
-    if (left == "ring") != (right == "ring"):
-        raise ld.bad("chain.right" if left == "ring" else "chain.left", right if left == "ring" else left,
+    left, right = End(left), End(right)
+    if (left is End.RING) != (right is End.RING):
+        raise ld.bad("chain.right" if left is End.RING else "chain.left", right if left is End.RING else left,
                      "a ring closes both ends", 'left = right = "ring"')
     names = pnames | {"i"}
     # springs: i = 0 .. n-2 between masses i, i+1; i = -1 for a left wall; i = n-1 for a
     # right wall or the ring's closing spring
-    spring_idx = range(-1 if left == "wall" else 0, n if right in ("wall", "ring") else n - 1)
+    spring_idx = range(-1 if left is End.WALL else 0, n if right.has_spring else n - 1)
     mass = ld.expression("chain.mass", c["mass"], names, positive=True, bounded=True, env=env,
                          index_range=range(n))
     k = ld.expression("chain.k", c["k"], names, positive=True, bounded=True, env=env,
@@ -574,7 +382,7 @@ def _chain(ld: _Loader, pnames: frozenset[str], env: dict) -> Chain:
     return Chain(n, mass, k, k3, left, right)
 
 
-def _initial(ld: _Loader, key: str, value, n: int, chain: bool, pnames, env) -> np.ndarray:
+def _initial(ld: Loader, key: str, value, n: int, chain: bool, pnames, env) -> np.ndarray:
     if isinstance(value, list):
         if len(value) != n:
             raise ld.bad(key, value, f"{len(value)} values for {n} masses",

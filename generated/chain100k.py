@@ -134,6 +134,15 @@ def omega2(k, m, n=N):
     return _np.sort(_np.broadcast_to(4*k*_np.sin((1/2)*_np.pi*_j/n)**2/m, (n,)))
 
 
+def mode_omega(k, m, n=N):
+    """Closed-form angular frequencies of modes j = 0 … n-1 in index order (not sorted), shape (n,).
+
+    The order of the chain's sine/cosine/Fourier transform: the numeric exact solution of long
+    uniform chains takes its frequencies from here."""
+    _j = _np.arange(0, n + 0, dtype=_np.float64)
+    return _np.sqrt(_np.broadcast_to(4*k*_np.sin((1/2)*_np.pi*_j/n)**2/m, (n,)))
+
+
 # Private aliases used by the function bodies above.
 _masses = masses
 _spring_ends = spring_ends
@@ -145,3 +154,4 @@ _stiffness_bands = stiffness_bands
 _stiffness_matrix = stiffness_matrix
 _mass_matrix = mass_matrix
 _omega2 = omega2
+_mode_omega = mode_omega

@@ -16,6 +16,10 @@ wall–free   sin((2j+1)π(i+1)/(2n+1)), j = 0 … n−1         sin((2j+1)π/(2
 ring        exp(2πi·j·l/n), j = 0 … ⌊n/2⌋ (real FFT)       |sin(jπ/n)|;  rFFT
 ==========  ===========================================  ==============================================
 
+The frequencies themselves are not written here: they come from the generated
+module's ``mode_omega()`` (the closed forms live once, in :mod:`derive.chain`);
+the table records which transform diagonalises each family and in which order.
+
 Wall–free has no standard transform of its own (the denominator 2n + 1 is
 odd); it is embedded in a DST-I of size 2n, whose kernel is
 ``sin(π(k+1)(l+1)/(2n+1))``: zero-pad x to 2n entries and keep the outputs
@@ -42,6 +46,7 @@ import numpy as np
 import scipy.fft
 import scipy.linalg
 
+from ..ends import End
 from .errors import RunRefused
 from .modal import tsinc
 
@@ -64,39 +69,13 @@ class Basis(enum.Enum):
         return self is not Basis.EIGENVECTORS
 
 
-def uniform_omega(n: int, m: float, k: float, left: str, right: str) -> np.ndarray:
-    """Angular frequencies of a uniform chain in the order of its transform's coefficients.
-
-    Parameters
-    ----------
-    n : int
-    m, k : float
-        Mass and spring constant (walls and ring closure use the same k).
-    left, right : str
-        ``"free"``, ``"wall"`` or ``"ring"`` (both).
-
-    Returns
-    -------
-    ndarray, shape (n,) — or (n//2 + 1,) for a ring (one per rFFT coefficient)
-    """
-    c = 2.0 * np.sqrt(k / m)
-    if left == "ring":
-        j = np.arange(n // 2 + 1)
-        return c * np.abs(np.sin(np.pi * j / n))
-    j = np.arange(n)
-    if left == "free" and right == "free":
-        return c * np.sin(np.pi * j / (2 * n))
-    if left == "wall" and right == "wall":
-        return c * np.sin(np.pi * (j + 1) / (2 * (n + 1)))
-    return c * np.sin(np.pi * (2 * j + 1) / (2 * (2 * n + 1)))
-
-
-def _basis_of(left: str, right: str) -> Basis:
-    if left == "ring":
+def _basis_of(left: End, right: End) -> Basis:
+    """The transform that diagonalises a uniform chain with these ends (free–wall: reversed wall–free)."""
+    if left is End.RING:
         return Basis.FFT
-    if left == "free" and right == "free":
+    if left is End.FREE and right is End.FREE:
         return Basis.DCT
-    if left == "wall" and right == "wall":
+    if left is End.WALL and right is End.WALL:
         return Basis.DST
     return Basis.DST_ODD
 
@@ -157,23 +136,35 @@ class ChainModal:
 
     # -- construction -------------------------------------------------------------------------
     @classmethod
-    def uniform(cls, m: float, k: float, left: str, right: str, x0: np.ndarray, v0: np.ndarray) -> "ChainModal":
-        """A uniform chain of len(x0) masses m and springs k.
+    def transform(cls, mode_omega: np.ndarray, left: End | str, right: End | str, x0: np.ndarray,
+                  v0: np.ndarray) -> "ChainModal":
+        """The transform solution of a uniform chain of len(x0) masses.
 
         Parameters
         ----------
+        mode_omega : ndarray, shape (n,)
+            Angular frequencies in mode-index order, as a generated uniform chain module's
+            ``mode_omega()`` returns them (the closed forms are written once, in :mod:`derive.chain`).
+        left, right : End or its word
         x0, v0 : ndarray, shape (n,) or (n, B)
         """
         x0, v0 = _initial(x0, v0)
-        if left not in ("free", "wall", "ring") or right not in ("free", "wall", "ring") or (
-                (left == "ring") != (right == "ring")):
+        try:
+            left, right = End(left), End(right)
+        except ValueError:
+            raise ValueError(f"chain ends must be free/wall on each side or ring on both, got {left!r}, {right!r}") from None
+        if (left is End.RING) != (right is End.RING):
             raise ValueError(f"chain ends must be free/wall on each side or ring on both, got {left!r}, {right!r}")
         n = x0.shape[0]
+        omega = np.asarray(mode_omega, dtype=float)
+        if omega.shape != (n,):
+            raise ValueError(f"mode_omega: need shape ({n},), got {omega.shape}")
         basis = _basis_of(left, right)
-        reverse = left == "free" and right == "wall"
+        if basis is Basis.FFT:
+            omega = omega[: n // 2 + 1]  # one frequency per rFFT coefficient (j and n - j coincide)
+        reverse = left is End.FREE and right is End.WALL
         if reverse:
             x0, v0 = x0[::-1], v0[::-1]
-        omega = uniform_omega(n, m, k, *(("wall", "free") if reverse else (left, right)))
         return cls(basis, n, omega, _forward(basis, x0), _forward(basis, v0), reverse)
 
     @classmethod
@@ -193,11 +184,11 @@ class ChainModal:
         values.update(params or {})
         x0, v0 = _initial(x0, v0)
         n = x0.shape[0]
-        left, right = str(module.LEFT), str(module.RIGHT)
+        left, right = End(str(module.LEFT)), End(str(module.RIGHT))
+        if bool(module.UNIFORM) and hasattr(module, "mode_omega"):
+            return cls.transform(module.mode_omega(**values, n=n), left, right, x0, v0)
         masses = np.asarray(module.masses(**values, n=n), dtype=float)
         ks = np.asarray(module.spring_constants(**values, n=n), dtype=float)
-        if bool(module.UNIFORM):
-            return cls.uniform(float(masses[0]), float(ks[0]) if ks.size else 1.0, left, right, x0, v0)
         if n > MAX_FALLBACK:
             raise RunRefused(f"index-dependent chain of n = {n} masses: no closed-form modes, and the "
                              f"eigenvector fallback is limited to n <= {MAX_FALLBACK}; use method 'verlet'", quantity="method")
@@ -207,7 +198,7 @@ class ChainModal:
     def _eigenvectors(cls, module, values, masses, ks, x0, v0) -> "ChainModal":
         n = masses.shape[0]
         r = np.sqrt(masses)
-        if str(module.LEFT) == "ring":
+        if End(str(module.LEFT)) is End.RING:
             from .spectrum import spectrum
 
             spec = spectrum(masses, module.spring_ends(n=n), ks)
@@ -284,4 +275,4 @@ def _initial(x0, v0) -> tuple[np.ndarray, np.ndarray]:
     return x0, v0
 
 
-__all__ = ["ChainModal", "Basis", "uniform_omega", "MAX_FALLBACK"]
+__all__ = ["ChainModal", "Basis", "MAX_FALLBACK"]

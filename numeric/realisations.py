@@ -25,6 +25,7 @@ site of the interior equations' solution) at ω² midway to the next mode.
 from __future__ import annotations
 
 import hashlib
+import os
 import types
 from dataclasses import dataclass
 
@@ -67,9 +68,28 @@ def module_of(source: str) -> types.ModuleType:
     key = hashlib.sha256(source.encode()).hexdigest()
     mod = _MODULES.get(key)
     if mod is None:
-        mod = types.ModuleType(f"springchain_sweep_{key[:12]}")
-        exec(compile(source, mod.__name__, "exec"), mod.__dict__)  # noqa: S102 - our own generated code
+        mod = _import_generated(source, key)
         _MODULES[key] = mod
+    return mod
+
+
+def _import_generated(source: str, key: str) -> types.ModuleType:
+    """Import generated source through a content-addressed file (written atomically once per machine),
+    so a worker on another host loads the very module the client derived, by the import system."""
+    import importlib.util
+    import tempfile
+    from pathlib import Path
+
+    from .files import atomic_write_text
+
+    path = Path(tempfile.gettempdir()) / f"springchain-sweep-{os.getuid() if hasattr(os, 'getuid') else 0}" / f"m_{key[:32]}.py"
+    if not path.exists() or hashlib.sha256(path.read_bytes()).hexdigest() != key:
+        path.parent.mkdir(mode=0o700, parents=True, exist_ok=True)
+        atomic_write_text(path, source)
+    name = f"springchain_sweep_{key[:12]}"
+    spec = importlib.util.spec_from_file_location(name, path)
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
     return mod
 
 
@@ -183,11 +203,11 @@ def solve_chain(masses: np.ndarray, ends: np.ndarray, k: np.ndarray, rigid: int)
     if bands is not None:
         diag, off = bands
         w2, psi = scipy.linalg.eigh_tridiagonal(diag * rs * rs, off * rs[:-1] * rs[1:])
-    else:  # a ring: dense
-        from .spectrum import stiffness_matrix
+    else:  # a ring: the accurate dense route (spring-factor SVD; rigid modes exact by structure)
+        from .spectrum import spectrum
 
-        K = stiffness_matrix(n, ends, k)
-        w2, psi = scipy.linalg.eigh(K * rs[:, None] * rs[None, :])
+        spec = spectrum(masses, ends, k)
+        w2, psi = spec.omega2, spec.vectors
     if rigid:
         w2[:rigid] = 0.0  # rigid-body modes are exact zeros (structure, not rounding)
     w2 = np.maximum(w2, 0.0)

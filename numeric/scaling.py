@@ -35,13 +35,14 @@ from __future__ import annotations
 import math
 import time
 from dataclasses import asdict, dataclass, field
-from pathlib import Path
 from types import ModuleType
 from typing import Callable
 
 import numpy as np
 
+from ..ends import End
 from . import fast
+from .timing import best_seconds, interleaved_samples, interleaved_seconds, single_threaded_blas
 from .chain_modal import ChainModal
 
 #: Default chain sizes of ``springchain scaling``.
@@ -138,48 +139,6 @@ class ScalingResult:
                 "notes": list(self.notes)}
 
 
-# -- timing -------------------------------------------------------------------------------------------
-def best_seconds(fn: Callable[[], object], *, budget: float = 0.25, max_repeats: int = 9, min_time: float = 2e-3,
-                 warmup: bool = True) -> float:
-    """Minimum seconds per call of ``fn`` after a warm-up.
-
-    A call longer than ``budget`` is timed once (its own first run). Short calls
-    are batched so that one timed sample lasts at least
-    ``min_time``; samples are repeated until ``budget`` seconds are spent
-    (at least one, at most ``max_repeats``).
-    """
-    if warmup:
-        t0 = time.perf_counter()
-        fn()
-        first = time.perf_counter() - t0
-        if first > budget:  # a long call (an O(N³) set-up): its caches are warm within it; one run is enough
-            return float(first)
-    else:
-        first = 0.0
-    inner = 1 if first >= min_time else int(min(10_000, max(1, math.ceil(min_time / max(first, 1e-7)))))
-    samples: list[float] = []
-    spent = 0.0
-    while len(samples) < max_repeats and (not samples or spent < budget):
-        t0 = time.perf_counter()
-        for _ in range(inner):
-            fn()
-        dt = time.perf_counter() - t0
-        spent += dt
-        samples.append(dt / inner)
-    return float(min(samples))
-
-
-def _single_threaded():
-    """threadpoolctl's limit to one BLAS thread, or a no-op if threadpoolctl is missing."""
-    try:
-        from threadpoolctl import threadpool_limits
-    except ImportError:  # pragma: no cover - threadpoolctl ships with scikit-style stacks; optional here
-        import contextlib
-
-        return contextlib.nullcontext()
-    return threadpool_limits(limits=1)
-
-
 # -- error model and crossover ---------------------------------------------------------------------
 def verlet_step_for(t_end: float, tol: float, omega_max: float) -> float:
     """Verlet step meeting ``ω_max³ h² T / 24 <= tol`` (relative phase error), capped at ``1.9/ω_max``."""
@@ -253,50 +212,6 @@ def _numpy_step(case: ChainCase, n: int, h: float) -> tuple[Callable, str]:
 
 
 # -- measurements ---------------------------------------------------------------------------------------
-def interleaved_samples(calls: dict[str, tuple[Callable[[], object], int]], *, budget: float,
-                        min_rounds: int = 5, max_rounds: int = 200, min_time: float = 2e-3) -> dict[str, list[float]]:
-    """Seconds per unit of several calls timed in turns, so that they share the same conditions.
-
-    Parameters
-    ----------
-    calls : dict of name -> (callable, units per call)
-        E.g. ``(advance, 100)`` for a call that makes 100 steps.
-    budget : float
-        Seconds after which no new round starts (at least ``min_rounds`` rounds).
-
-    Returns
-    -------
-    dict of name -> list of float
-        One sample per round, in round order (so samples of one round can be paired).
-
-    Each call is warmed up once and batched so that one sample lasts at least
-    ``min_time``; a round times every call once.
-    """
-    inner = {}
-    for name, (fn, _) in calls.items():
-        t0 = time.perf_counter()
-        fn()
-        first = time.perf_counter() - t0
-        inner[name] = int(min(10_000, max(1, math.ceil(min_time / max(first, 1e-7)))))
-    samples: dict[str, list[float]] = {name: [] for name in calls}
-    spent, rounds = 0.0, 0
-    while rounds < min_rounds or (spent < budget and rounds < max_rounds):
-        for name, (fn, units) in calls.items():
-            t0 = time.perf_counter()
-            for _ in range(inner[name]):
-                fn()
-            dt = time.perf_counter() - t0
-            spent += dt
-            samples[name].append(dt / (inner[name] * units))
-        rounds += 1
-    return samples
-
-
-def interleaved_seconds(calls: dict[str, tuple[Callable[[], object], int]], **kw) -> dict[str, float]:
-    """The minimum of :func:`interleaved_samples` for each call."""
-    return {name: float(min(v)) for name, v in interleaved_samples(calls, **kw).items()}
-
-
 def floor_calls(n: int) -> dict[str, tuple[Callable[[], object], int]]:
     """The two measurements of the 32-byte-per-mass floor, as calls for :func:`interleaved_seconds`.
 
@@ -391,7 +306,7 @@ def measure_exact_dense(case: ChainCase, n: int, config: ScalingConfig) -> dict:
         if K is not None:
             D = K * r[:, None] * r[None, :]
             out["setup_dense_eigh"] = best_seconds(lambda: scipy.linalg.eigh(D), budget=b)
-    if n <= config.tridiagonal_max and str(case.module.LEFT) != "ring":
+    if n <= config.tridiagonal_max and End(str(case.module.LEFT)) is not End.RING:
         diag, off = case.module.stiffness_bands(**case.values, n=n)
         r = 1.0 / np.sqrt(m)
         d, e = diag * r * r, off * r[:-1] * r[1:]
@@ -478,7 +393,7 @@ def run(uniform: ChainCase, random: ChainCase, config: ScalingConfig = ScalingCo
     records: list[dict] = []
     omega_random: dict[int, float] = {}
     omega_uniform = fast.ChainCoefficients.from_module(uniform.module, uniform.params, 3).omega_max_bound
-    with _single_threaded():
+    with single_threaded_blas():
         if fast.available():
             say("compiling the fused kernels (numba; cached after the first run)")
             for case in (uniform, random):
@@ -535,129 +450,6 @@ def _ns(seconds, n) -> str:
     return "   -   " if seconds is None else f"{1e9 * seconds / n:7.3f} ns"
 
 
-# -- output -----------------------------------------------------------------------------------------------
-def _fmt(value) -> str:
-    if value is None:
-        return "–"
-    if isinstance(value, str):
-        return value
-    if isinstance(value, float) and math.isinf(value):
-        return "∞"
-    if isinstance(value, int):
-        return str(value)
-    return f"{value:.3g}"
-
-
-def markdown(result: ScalingResult) -> str:
-    """The scaling table (seconds; T* in time units) with the headline and notes."""
-    cfg, h = result.config, result.headline
-    ns = h["ns_per_mass"]
-    lines = ["### Scaling: exact set-up vs Verlet step (single-threaded, minimum of repeats)", "",
-             f"At N = {h['n']:,} (ns per mass and step): NumPy stencil step {_fmt(ns['step_numpy'])} "
-             f"({h['numpy_source']}); fused step on (x, v, a) {_fmt(ns['step_fused'])} (48 B/mass); fused "
-             f"multi-step {_fmt(ns['step_fused_advance'])} (two steps per sweep); fused one-step sweeps "
-             f"{_fmt(ns['step_fused_sweep'])} (32 B/mass); memory floor, moving 32 B/mass, "
-             f"{_fmt(ns['floor'])} (in-place stream {_fmt(ns['floor_stream'])}, NumPy copy "
-             f"{_fmt(ns['floor_copy'])}).", "",
-             f"Fused multi-step / floor = {_fmt(h['fused_over_floor'])} (ratio of minima; median of per-round "
-             f"ratios {_fmt(h['fused_over_floor_paired'])}; target, on the median: ≤ 1.5: "
-             f"{'met' if h['target_met'] else 'not met' if h['target_met'] is not None else 'n/a'}); one-step "
-             f"sweeps / floor = {_fmt(h['fused_sweep_over_floor'])} "
-             f"(median {_fmt(h['fused_sweep_over_floor_paired'])}); "
-             f"single fused step / floor = {_fmt(h['fused_step_over_floor'])} "
-             f"(median {_fmt(h['fused_step_over_floor_paired'])}).", "",
-             f"Crossover for T = {cfg.t_end:g}, tolerance {cfg.tol:g} (Verlet phase error ω³h²T/24): "
-             "T* is the horizon beyond which the exact solution is cheaper than fused Verlet.", ""]
-    lines += _table(result.records, SECONDS_COLUMNS, "Seconds (random = index-dependent chain):")
-    lines += _table(result.records, PER_MASS_COLUMNS, "Per mass and crossover:")
-    lines.append("")
-    lines += [f"- {note}" for note in result.notes]
-    return "\n".join(lines) + "\n"
-
-
-def _cell(record: dict, key: str) -> str:
-    if key.startswith("ns:"):
-        v = record.get(key[3:])
-        return _fmt(None if v is None else 1e9 * v / record["n"])
-    text = _fmt(record.get(key))
-    if key == "crossover_dense" and record.get("exact_dense_extrapolated"):
-        text += " (extrap.)"
-    return text
-
-
-def _table(records: list[dict], columns: dict[str, str], title: str) -> list[str]:
-    lines = [title, "", "| " + " | ".join(columns.values()) + " |", "|" + "---|" * len(columns)]
-    lines += ["| " + " | ".join(_cell(r, key) for key in columns) + " |" for r in records]
-    return lines + [""]
-
-
-def figure(result: ScalingResult):
-    """Seconds vs N (log–log): set-up costs, per-step costs and the memory floor."""
-    import matplotlib
-
-    from .plots import new_figure
-
-    recs = result.records
-    n = np.array([r["n"] for r in recs], dtype=float)
-    fig, ax = new_figure(figsize=(9, 6))
-    series = [
-        ("setup_dense_svd", "exact set-up: dense SVD (modal), random chain", "C3", "o-"),
-        ("setup_dense_eigh", "exact set-up: dense eigh, random chain", "C1", "s-"),
-        ("setup_tridiagonal", "exact set-up: eigh_tridiagonal + vectors, random", "C5", "^-"),
-        ("setup_transform", "exact set-up: transform (uniform)", "C2", "D-"),
-        ("eval_transform", "exact, one output time: transform (uniform)", "C2", "d:"),
-        ("step_numpy", "Verlet step: NumPy stencil (uniform)", "C0", "o-"),
-        ("step_numpy_random", "Verlet step: NumPy stencil (random)", "C0", "o--"),
-        ("step_fused", "Verlet step: fused (uniform)", "C4", "v-"),
-        ("step_fused_random", "Verlet step: fused (random)", "C4", "v--"),
-        ("step_fused_advance", "Verlet step: fused multi-step, 2 steps/sweep (uniform)", "C6", "*-"),
-        ("step_fused_sweep", "Verlet step: fused multi-step, 1 step/sweep (uniform)", "C6", "*:"),
-    ]
-    for key, label, color, style in series:
-        y = np.array([np.nan if r.get(key) is None else r[key] for r in recs], dtype=float)
-        if np.all(np.isnan(y)):
-            continue
-        ax.plot(n, y, style, color=color, label=label, ms=4, lw=1.2)
-    floor = np.array([r["floor"] for r in recs], dtype=float)
-    ax.plot(n, floor, "k-", lw=2, alpha=0.5, label="memory floor: move 32 B per mass (measured)")
-    ax.set_xscale("log")
-    ax.set_yscale("log")
-    ax.set_xlabel("chain size N (masses)")
-    ax.set_ylabel("seconds")
-    ax.set_title("Exact-solution set-up vs one Verlet step (single-threaded)")
-    ax.grid(alpha=0.3, which="both")
-    ax.legend(fontsize=7, loc="upper left")
-    return fig
-
-
-def write(result: ScalingResult, out: Path, *, json_name: str = "scaling.json", md_name: str = "scaling.md",
-          png_name: str = "scaling.png") -> list[Path]:
-    """Write the JSON, Markdown and figure into ``out`` (atomically); returns the paths."""
-    import json
-
-    from . import plots
-    from .files import atomic_write_text
-
-    out = Path(out)
-    paths = [out / json_name, out / md_name, out / png_name]
-    atomic_write_text(paths[0], json.dumps(_jsonable(result.to_json()), indent=1) + "\n")
-    atomic_write_text(paths[1], markdown(result))
-    plots.save(figure(result), paths[2])
-    return paths
-
-
-def _jsonable(obj):
-    if isinstance(obj, dict):
-        return {k: _jsonable(v) for k, v in obj.items()}
-    if isinstance(obj, (list, tuple)):
-        return [_jsonable(v) for v in obj]
-    if isinstance(obj, float) and not math.isfinite(obj):
-        return None
-    if isinstance(obj, (np.floating, np.integer)):
-        return _jsonable(obj.item())
-    return obj
-
-
 def print_progress(line: str) -> None:
     """Progress on stderr (:func:`numeric.progress.line`)."""
     from . import progress
@@ -665,6 +457,6 @@ def print_progress(line: str) -> None:
     progress.line(line, prefix="scaling")
 
 
-__all__ = ["ScalingConfig", "ScalingResult", "ChainCase", "run", "markdown", "figure", "write", "best_seconds",
+__all__ = ["ScalingConfig", "ScalingResult", "ChainCase", "run", "best_seconds",
            "verlet_step_for", "verlet_steps", "crossover_time", "interleaved_seconds", "DEFAULT_SIZES",
            "FLOOR_BYTES_PER_MASS"]

@@ -213,7 +213,7 @@ def cmd_plan(args) -> int:
 def cmd_scaling(args) -> int:
     """Scaling to long chains (numeric.scaling) and the symbolic cost (symbolic_cost)."""
     from . import symbolic_cost
-    from .numeric import scaling
+    from .numeric import scaling, scaling_report
     from .numeric.errors import RunRefused
 
     if args.max_n < 3:
@@ -224,7 +224,7 @@ def cmd_scaling(args) -> int:
     sizes = tuple(n for n in scaling.DEFAULT_SIZES if n < args.max_n) + (args.max_n,)
     uniform, random = symbolic_cost.scaling_cases()
     result = scaling.run(uniform, random, scaling.ScalingConfig(sizes=sizes), progress=scaling.print_progress)
-    paths = scaling.write(result, out)
+    paths = scaling_report.write(result, out)
     sym = None
     if args.symbolic_max_n:
         say = lambda line: scaling.print_progress("symbolic: " + line)  # noqa: E731
@@ -232,11 +232,11 @@ def cmd_scaling(args) -> int:
         sym = symbolic_cost.run(small, symbolic_cost.DEFAULT_CHAIN_SIZES, progress=say)
         paths += symbolic_cost.write(sym, out)
     if args.json:
-        print(json.dumps({"scaling": scaling._jsonable(result.to_json()),
-                          "symbolic": None if sym is None else scaling._jsonable(sym.to_json()),
+        print(json.dumps({"scaling": scaling_report.jsonable(result.to_json()),
+                          "symbolic": None if sym is None else scaling_report.jsonable(sym.to_json()),
                           "files": [str(p) for p in paths]}, indent=1))
         return 0
-    print(scaling.markdown(result))
+    print(scaling_report.markdown(result))
     if sym is not None:
         print(symbolic_cost.markdown(sym))
     for path in paths:

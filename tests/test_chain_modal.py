@@ -20,7 +20,7 @@ import scipy.linalg
 
 from springchain.derive.chain import ChainModel, render_chain_module
 from springchain.derive.scene import load_scene
-from springchain.numeric.chain_modal import Basis, ChainModal, uniform_omega
+from springchain.numeric.chain_modal import Basis, ChainModal
 from springchain.numeric.errors import RunRefused
 from springchain.numeric.modal import ModalSolution
 from springchain.numeric.spectrum import spectrum
@@ -117,18 +117,21 @@ def test_closed_form_frequencies_equal_tridiagonal_eigenvalues(chain_module, end
                                w_mod, rtol=1e-13, atol=1e-13)
 
 
-def test_uniform_omega_rigid_mode_is_exactly_zero():
-    assert uniform_omega(7, 1.0, 1.0, "free", "free")[0] == 0.0
-    assert uniform_omega(7, 1.0, 1.0, "ring", "ring")[0] == 0.0
-    assert np.all(uniform_omega(7, 1.0, 1.0, "wall", "free") > 0)
+def test_mode_omega_rigid_mode_is_exactly_zero(chain_module):
+    """The generated closed forms (derive.chain) give ω = 0 exactly for the rigid mode, > 0 otherwise."""
+    p = {"m": 1.0, "k": 1.0, "c": 0.1}
+    assert chain_module("free", "free").mode_omega(**p, n=7)[0] == 0.0
+    assert chain_module("ring", "ring").mode_omega(**p, n=7)[0] == 0.0
+    assert np.all(chain_module("wall", "free").mode_omega(**p, n=7) > 0)
 
 
-def test_rigid_drift_is_exact_at_long_times():
+def test_rigid_drift_is_exact_at_long_times(chain_module):
     n = 1000
     x0 = np.zeros(n)
     v0 = np.full(n, 0.25)
     for ends in (("free", "free"), ("ring", "ring")):
-        x, v = ChainModal.uniform(2.0, 3.0, *ends, x0, v0).at(1e6)
+        module = chain_module(*ends)
+        x, v = ChainModal.from_module(module, {"m": 2.0, "k": 3.0}, x0, v0).at(1e6)
         np.testing.assert_allclose(x, 0.25e6, rtol=1e-12)
         np.testing.assert_allclose(v, 0.25, rtol=1e-12)
 
@@ -153,18 +156,20 @@ def test_refusals(chain_module, seed_module):
     with pytest.raises(RunRefused, match="n <= "):
         ChainModal.from_module(chain_module("free", "free", uniform=False), None, np.zeros(5000), np.zeros(5000))
     with pytest.raises(ValueError, match="same shape"):
-        ChainModal.uniform(1.0, 1.0, "free", "free", np.zeros(3), np.zeros(4))
+        ChainModal.transform(np.zeros(3), "free", "free", np.zeros(3), np.zeros(4))
     with pytest.raises(ValueError, match="ring on both"):
-        ChainModal.uniform(1.0, 1.0, "ring", "free", np.zeros(3), np.zeros(3))
+        ChainModal.transform(np.zeros(3), "ring", "free", np.zeros(3), np.zeros(3))
+    with pytest.raises(ValueError, match="ring on both"):
+        ChainModal.transform(np.zeros(3), "sideways", "free", np.zeros(3), np.zeros(3))
 
 
-def test_large_uniform_chain_needs_no_matrix():
+def test_large_uniform_chain_needs_no_matrix(chain_module):
     """n = 2·10⁵ wall–free: only transforms (memory O(n)); energy is conserved exactly."""
     n = 200_000
     i = np.arange(n)
     x0 = 0.01 * np.sin(np.pi * (i + 1) / (n + 1))
     v0 = np.zeros(n)
-    sol = ChainModal.uniform(1.0, 1.0, "wall", "free", x0, v0)
+    sol = ChainModal.from_module(chain_module("wall", "free"), {"m": 1.0, "k": 1.0}, x0, v0)
     x, v = sol.at(123.0)
 
     def energy(x, v):

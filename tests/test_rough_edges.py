@@ -252,14 +252,14 @@ def test_the_three_reporters_share_one_module():
 
 
 def test_numba_compile_note(monkeypatch, capsys):
-    from springchain.numeric import fast
+    from springchain.numeric import fast_kernels
 
-    if not fast.available():
+    if not fast_kernels.available():
         pytest.skip("numba not installed")
-    fast._compiled.cache_clear()
-    monkeypatch.setattr(fast, "_numba_cache_present", lambda: False)
-    fast._compiled()
-    assert fast.COMPILE_NOTE in capsys.readouterr().err
+    fast_kernels._compiled.cache_clear()
+    monkeypatch.setattr(fast_kernels, "_numba_cache_present", lambda: False)
+    fast_kernels._compiled()
+    assert fast_kernels.COMPILE_NOTE in capsys.readouterr().err
 
 
 # -- settings where they belong -------------------------------------------------------------------

@@ -27,7 +27,7 @@ import sympy as sp
 from springchain import symbolic_cost
 from springchain.derive.chain import ChainModel, render_chain_module
 from springchain.derive.scene import load_scene
-from springchain.numeric import fast, scaling
+from springchain.numeric import fast, scaling, scaling_report
 from springchain.numeric.chain_modal import ChainModal
 
 
@@ -111,9 +111,9 @@ def test_tiny_run_has_every_field_and_writes_outputs(cases, tmp_path):
         assert result.records[-1]["step_fused"] > 0 and result.headline["fused_over_floor"] > 0
     head = result.headline
     assert head["n"] == 7 and set(head["ns_per_mass"]) >= {"step_numpy", "step_fused", "floor"}
-    md = scaling.markdown(result)
+    md = scaling_report.markdown(result)
     assert "| N |" in md and "floor" in md and "T*" in md
-    paths = scaling.write(result, tmp_path)
+    paths = scaling_report.write(result, tmp_path)
     assert [p.name for p in paths] == ["scaling.json", "scaling.md", "scaling.png"]
     data = json.loads(paths[0].read_text())
     assert data["records"][0]["n"] == 3 and data["config"]["sizes"] == [3, 7]
@@ -210,4 +210,4 @@ def test_tiny_run_without_numba(cases, monkeypatch):
     assert rec["floor"] == rec["floor_copy"] and rec["cheaper_uniform"]
     assert result.headline["target_met"] is None
     assert any("numba" in note for note in result.notes)
-    assert "n/a" in scaling.markdown(result)
+    assert "n/a" in scaling_report.markdown(result)
