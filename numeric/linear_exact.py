@@ -136,10 +136,12 @@ class AugmentedLinear:
         """One-sided limits ``u(a⁺)`` and ``u(b⁻)`` of every input, shape (m,) each."""
         right, left = [], []
         for tt, yy, _ in self.inputs:
-            ua = float(np.interp(a, tt, yy, left=0.0, right=0.0))
-            ub = float(np.interp(b, tt, yy, left=0.0, right=0.0))
-            right.append(0.0 if a >= tt[-1] - tol else ua)  # zero after the last row
-            left.append(0.0 if b <= tt[0] + tol else ub)  # zero before the first row
+            t0, t1 = float(tt[0]), float(tt[-1])
+            # a row within tol of a or b was snapped onto it: the limits are taken at the row
+            inside_a = t0 - tol <= a < t1 - tol
+            inside_b = t0 + tol < b <= t1 + tol
+            right.append(float(np.interp(min(max(a, t0), t1), tt, yy)) if inside_a else 0.0)
+            left.append(float(np.interp(min(max(b, t0), t1), tt, yy)) if inside_b else 0.0)
         return np.array(right), np.array(left)
 
     def _solve_inputs(self, x0: np.ndarray, v0: np.ndarray, t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
