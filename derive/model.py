@@ -58,6 +58,8 @@ def parameter_symbols(scene: Scene) -> dict[str, sp.Symbol]:
 def integrate_ground(a_g: sp.Expr, t: sp.Symbol) -> tuple[sp.Expr, sp.Expr] | None:
     """``(v_g, x_g)``: the ground acceleration integrated with ``v_g(0) = x_g(0) = 0``, or None
     when SymPy finds no closed form without cases (e.g. a frequency that could be 0)."""
+    if not _elementary_in_t(a_g, t):  # e.g. sin(t**2): no elementary integral, and SymPy may take long
+        return None
     s = sp.Symbol("_s", real=True)
     try:
         vg = sp.integrate(a_g.subs(t, s), (s, 0, t))
@@ -66,7 +68,26 @@ def integrate_ground(a_g: sp.Expr, t: sp.Symbol) -> tuple[sp.Expr, sp.Expr] | No
         return None
     if any(e.has(sp.Integral) or e.has(sp.Piecewise) for e in (vg, xg)):
         return None
-    return sp.simplify(vg), sp.simplify(xg)
+    vg, xg = sp.expand(vg), sp.expand(xg)  # expanded: no exp(t)*exp(-t) that overflows for large t
+    if not all(isinstance(f, (sp.sin, sp.cos, sp.exp)) for e in (vg, xg) for f in e.atoms(sp.Function)):
+        return None  # only what the generated module can print with NumPy
+    return vg, xg
+
+
+def _elementary_in_t(expr: sp.Expr, t: sp.Symbol) -> bool:
+    """Sums of products of constants, whole powers of t and sin/cos/exp of linear functions of t:
+    the forms whose double integral is elementary and quick to find."""
+    for node in sp.preorder_traversal(expr):
+        if isinstance(node, sp.Function) and node.has(t):
+            if not isinstance(node, (sp.sin, sp.cos, sp.exp)):
+                return False
+            arg = sp.expand(node.args[0])
+            if sp.diff(arg, t).has(t):
+                return False
+        elif isinstance(node, sp.Pow) and node.has(t):
+            if node.exp.has(t) or (node.base.has(t) and not (node.exp.is_Integer and node.exp >= 0)):
+                return False
+    return True
 
 
 class Model:
