@@ -62,6 +62,7 @@ class ChainModel:
         self.v0 = sp.Symbol("v_i")
         # loads: forces on masses named by index, tabulated forces, ground motion
         self.t = sp.Symbol("t", real=True)
+        self.g = None if scene.gravity is None else scene.gravity.to_sympy(self.params)
         self.forces = tuple((f.on, f.f.to_sympy({**self.params, "t": self.t}), f.key) for f in scene.forces)
         self.table_forces = tuple((tf.on, tf.key) for tf in scene.table_forces)
         self.ground = None if scene.ground is None or scene.ground.acceleration is None else \
@@ -95,7 +96,8 @@ class ChainModel:
     def effects(self) -> tuple[str, ...]:
         return tuple(sorted({"spring", *(["cubic"] if self.k3 is not None else []),
                              *(["force"] if self.forces else []), *(["table"] if self.table_forces else []),
-                             *(["ground"] if self.scene.ground is not None else [])}))
+                             *(["ground"] if self.scene.ground is not None else []),
+                             *(["gravity"] if self.g is not None else [])}))
 
     @property
     def rigid_modes(self) -> int:
@@ -232,6 +234,8 @@ def chain_load_lines(model: ChainModel) -> list[str]:
     lines = [f"    + {sp.sstr(f)} on mass {on}  [{key}]" for on, f, key in model.forces]
     lines += [f"    + f_table{key[7:-1]}(t) on mass {on}  [{key}] (table, linear between rows, zero outside)"
               for on, key in model.table_forces]
+    if model.g is not None:
+        lines.append(f"    + {sp.sstr(model.mass * model.g)} on every mass i  [gravity]")
     if model.scene.ground is not None:
         lines.append(f"    - {sp.sstr(model.mass)}*a_g(t) on every mass i  [ground]"
                      + (f", a_g(t) = {sp.sstr(model.ground)}" if model.ground is not None else " (table)")
@@ -340,6 +344,8 @@ def render_chain_module(model: ChainModel, *, bundled: bool = True) -> str:
     w('    d_i = x_{i+1} − x_i; mass i feels s_i − s_{i−1}; walls and the ring closure act at the ends."""')
     w("    i = numpy.arange(n - 1, dtype=float)")
     w(f"    _inv_m = 1.0 / masses({kw}, n=n)")
+    if model.g is not None:  # m_i g / m_i: the same acceleration on every mass
+        w(f"    _g_acc = _float({_p(model.g)})")
     if ch.uniform:
         w("    _inv_m = _float(_inv_m[0])")
         w(f"    _ks = _float(_spring_k(0.0, {kw}))")
@@ -381,6 +387,8 @@ def render_chain_module(model: ChainModel, *, bundled: bool = True) -> str:
         w("        _f[-1] += _sr")
         w("        _f[0] -= _sr")
     w("        _f *= _inv_m")
+    if model.g is not None:
+        w("        _f += _g_acc")
     w("        return _f")
     w("")
     w("    return _stencil")
@@ -406,6 +414,8 @@ def render_chain_module(model: ChainModel, *, bundled: bool = True) -> str:
         w(f"    i = numpy.arange(_kk.shape[0], dtype=float) - (1.0 if _LEFT == {End.WALL.value!r} else 0.0)")
         w(f"    _k3s = numpy.broadcast_to(_spring_k3(i, {kw}), _kk.shape)")
         w("    _e = _e + 0.25 * numpy.sum(_k3s.reshape((-1,) + _extra) * _d**4, axis=0)")
+    if model.g is not None:
+        w(f"    _e = _e - ({_p(model.g)}) * numpy.sum(_m * _x, axis=0)")
     w("    return _e")
     w_lines.extend(_chain_load_code(model, sig, kw))
     w("")
@@ -478,13 +488,17 @@ def render_chain_module(model: ChainModel, *, bundled: bool = True) -> str:
 
 
 def _chain_load_code(model: ChainModel, sig: str, kw: str) -> list[str]:
-    """External forces (expressions), tabulated forces and ground motion of a chain module:
-    nothing for a chain without loads. Forces act on single masses, so no loop over masses."""
+    """Gravity, external forces (expressions), tabulated forces and ground motion of a chain
+    module: nothing for a chain without loads. Forces act on single masses, so no loop over masses."""
     from .codegen import _array, forcing_harmonics_of
     from .loadgen import ground_lines, table_force_lines
 
     out: list[str] = []
     sep = ", " if sig else ""
+    if model.g is not None:
+        out += ["", "", f"def gravity_forces({sig}{sep}n=N):",
+                '    """Constant gravity force m_i*g on each mass (+x direction), shape (n,)."""',
+                f"    return masses({kw}{sep}n=n) * ({_p(model.g)})"]
     if model.forces:
         out += ["", "", f"def external_acceleration(t{sep}{sig}, n=N):",
                 '    """Acceleration M^-1 F(t) from the external forces; result shape (n, *t.shape)."""',

@@ -184,12 +184,14 @@ def reference(path: Path):
             f[on] += float(fn(s))
         return f
 
+    g = num(data["gravity"]["g"]) if "gravity" in data else 0.0
+
     def rhs(s, z):
         x, v = z[:n], z[n:]
-        return np.concatenate([v, (-K @ x - C @ v + applied(s)) / m - float(a_g(s))])
+        return np.concatenate([v, (-K @ x - C @ v + applied(s)) / m + g - float(a_g(s))])
 
     def absolute_acceleration(s, x, v):
-        return (-K @ x - C @ v + applied(s)) / m
+        return (-K @ x - C @ v + applied(s)) / m + g
 
     return rhs, n, np.unique(np.concatenate(knots)), a_g, x_g, absolute_acceleration
 
@@ -290,6 +292,7 @@ CASES = {
     "chain-loads": ('[[forces]]\non = 6\nf = "F0*cos(1.7*t)"\n[[forces]]\non = 2\ntable = "f.csv"\n'
                     '[ground]\ntable = "g.csv"\n', {"f.csv": FORCE_TABLE, "g.csv": GROUND_TABLE}, "chain"),
     "chain-ground-expression": ('[ground]\nacceleration = "A*cos(2*t)"\n', {}, "chain"),
+    "chain-gravity": ('[gravity]\ng = "0.5*A"\n[[forces]]\non = 3\nf = "F0*sin(t)"\n', {}, "chain"),
 }
 
 
@@ -311,7 +314,8 @@ def test_exact_matches_dop853_reference(tmp_path, name):
     assert np.max(np.abs(runs["modal"].v - vr)) <= 1e-8 * np.max(np.abs(vr))
 
 
-@pytest.mark.parametrize("name", ["table-force-damped", "ground-expression", "ground-table", "chain-loads"])
+@pytest.mark.parametrize("name", ["table-force-damped", "ground-expression", "ground-table", "chain-loads",
+                                  "chain-gravity"])
 def test_verlet_is_second_order_against_reference(tmp_path, name):
     path = _case(tmp_path, name)
     scene, system = system_of(path)
