@@ -207,6 +207,8 @@ def chain_report(model: ChainModel, modes: ChainModes, omega2_values=None) -> tu
              f"            V_i = {sp.sstr(model.element_potential(model.x0, model.xp, model.i))}",
              "Interior equation (Euler-Lagrange on elements i-1 and i):",
              f"    {sp.sstr(model.mass)}*a_i = {sp.sstr(force)}"]
+    from .loadgen import chain_load_lines
+
     lines += chain_load_lines(model)
     if modes.omega2 is not None:
         lo, hi = modes.j_range
@@ -227,20 +229,6 @@ def chain_report(model: ChainModel, modes: ChainModes, omega2_values=None) -> tu
             "family": {"omega2": None if modes.omega2 is None else sp.sstr(modes.omega2),
                        "shape": None if modes.shape is None else sp.sstr(modes.shape)}}
     return "\n".join(lines) + "\n", data
-
-
-def chain_load_lines(model: ChainModel) -> list[str]:
-    """The loads' terms, each traced to its scene entry (forces name masses by index)."""
-    lines = [f"    + {sp.sstr(f)} on mass {on}  [{key}]" for on, f, key in model.forces]
-    lines += [f"    + f_table{key[7:-1]}(t) on mass {on}  [{key}] (table, linear between rows, zero outside)"
-              for on, key in model.table_forces]
-    if model.g is not None:
-        lines.append(f"    + {sp.sstr(model.mass * model.g)} on every mass i  [gravity]")
-    if model.scene.ground is not None:
-        lines.append(f"    - {sp.sstr(model.mass)}*a_g(t) on every mass i  [ground]"
-                     + (f", a_g(t) = {sp.sstr(model.ground)}" if model.ground is not None else " (table)")
-                     + "; coordinates relative to the ground")
-    return (["Loads:"] + lines) if lines else []
 
 
 def _index_expr(expr: sp.Expr, model: ChainModel, at: str) -> str:
@@ -417,7 +405,9 @@ def render_chain_module(model: ChainModel, *, bundled: bool = True) -> str:
     if model.g is not None:
         w(f"    _e = _e - ({_p(model.g)}) * numpy.sum(_m * _x, axis=0)")
     w("    return _e")
-    w_lines.extend(_chain_load_code(model, sig, kw))
+    from .loadgen import chain_load_code
+
+    w_lines.extend(chain_load_code(model, sig, kw))
     w("")
     w("")
     w(f"def stiffness_bands({sig}, n=N):")
@@ -486,48 +476,3 @@ def render_chain_module(model: ChainModel, *, bundled: bool = True) -> str:
         w("    return numpy.maximum(_w, 0.0)")
     return privatize("\n".join(w_lines) + "\n")
 
-
-def _chain_load_code(model: ChainModel, sig: str, kw: str) -> list[str]:
-    """Gravity, external forces (expressions), tabulated forces and ground motion of a chain
-    module: nothing for a chain without loads. Forces act on single masses, so no loop over masses."""
-    from .codegen import _array, forcing_harmonics_of
-    from .loadgen import ground_lines, table_force_lines
-
-    out: list[str] = []
-    sep = ", " if sig else ""
-    if model.g is not None:
-        out += ["", "", f"def gravity_forces({sig}{sep}n=N):",
-                '    """Constant gravity force m_i*g on each mass (+x direction), shape (n,)."""',
-                f"    return masses({kw}{sep}n=n) * ({_p(model.g)})"]
-    if model.forces:
-        out += ["", "", f"def external_acceleration(t{sep}{sig}, n=N):",
-                '    """Acceleration M^-1 F(t) from the external forces; result shape (n, *t.shape)."""',
-                "    t = numpy.asarray(t, dtype=float)",
-                "    _out = numpy.zeros((n,) + t.shape)"]
-        for on, f, _ in model.forces:
-            out.append(f"    _out[{on}] += {_p(f / model.mass_at(on))}")
-        out.append("    return _out")
-        harmonic = forcing_harmonics_of([(on, f) for on, f, _ in model.forces], model.t)
-        out += ["", f"FORCING_HARMONIC = {harmonic is not None!r}"]
-        if harmonic is not None:
-            const, freqs, rows = harmonic
-            out += ["", "", f"def forcing_harmonics({sig}{sep}n=N):",
-                    '    """F(t) = const + sum_h cos_amp[h] cos(omega[h] t) + sin_amp[h] sin(omega[h] t);',
-                    '    omega (H,), cos_amp and sin_amp (H, n), const (n,)."""',
-                    f"    _omega = {_array([_p(w) for w in freqs])}",
-                    "    _cos = numpy.zeros((_omega.shape[0], n))",
-                    "    _sin = numpy.zeros((_omega.shape[0], n))",
-                    "    _const = numpy.zeros(n)"]
-            for on, c in const.items():
-                out.append(f"    _const[{on}] += {_p(c)}")
-            for h, (cos_amp, sin_amp) in enumerate(rows):
-                for on, c in cos_amp.items():
-                    out.append(f"    _cos[{h}, {on}] += {_p(c)}")
-                for on, c in sin_amp.items():
-                    out.append(f"    _sin[{h}, {on}] += {_p(c)}")
-            out.append("    return _omega, _cos, _sin, _const")
-    out += table_force_lines([on for on, _ in model.table_forces],
-                             [model.mass_at(on) for on, _ in model.table_forces], sig, chain=True)
-    if model.scene.ground is not None:
-        out += ground_lines(model.ground, model.ground_motion, model.t, sig)
-    return out

@@ -247,30 +247,6 @@ def forcing_harmonics(model: Model):
     return const, freqs, [table[f][0] for f in freqs], [table[f][1] for f in freqs]
 
 
-def forcing_harmonics_of(forces, t):
-    """Sparse form of :func:`forcing_harmonics` for forces ``[(on, f(t)), ...]`` on single masses:
-    ``(const {on: c}, frequencies, [({on: cos_amp}, {on: sin_amp}) per frequency])`` or None."""
-    from .forcing import decompose
-
-    const: dict = {}
-    table: dict = {}
-    for on, f in forces:
-        parts = decompose(f, t)
-        if parts is None:
-            return None
-        c, harmonics = parts
-        if c != 0:
-            const[on] = const.get(on, 0) + c
-        for h in harmonics:
-            cos_amp, sin_amp = table.setdefault(h.omega, ({}, {}))
-            if h.cos_amp != 0:
-                cos_amp[on] = cos_amp.get(on, 0) + h.cos_amp
-            if h.sin_amp != 0:
-                sin_amp[on] = sin_amp.get(on, 0) + h.sin_amp
-    freqs = sorted(table, key=sp.default_sort_key)
-    return const, freqs, [table[f] for f in freqs]
-
-
 _p_public = _p
 
 

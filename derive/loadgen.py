@@ -82,4 +82,85 @@ def ground_lines(acceleration: sp.Expr | None, motion, t: sp.Symbol, sig: str) -
     return out
 
 
-__all__ = ["table_force_lines", "ground_lines"]
+def forcing_harmonics_of(forces, t):
+    """Sparse form of :func:`forcing_harmonics` for forces ``[(on, f(t)), ...]`` on single masses:
+    ``(const {on: c}, frequencies, [({on: cos_amp}, {on: sin_amp}) per frequency])`` or None."""
+    from .forcing import decompose
+
+    const: dict = {}
+    table: dict = {}
+    for on, f in forces:
+        parts = decompose(f, t)
+        if parts is None:
+            return None
+        c, harmonics = parts
+        if c != 0:
+            const[on] = const.get(on, 0) + c
+        for h in harmonics:
+            cos_amp, sin_amp = table.setdefault(h.omega, ({}, {}))
+            if h.cos_amp != 0:
+                cos_amp[on] = cos_amp.get(on, 0) + h.cos_amp
+            if h.sin_amp != 0:
+                sin_amp[on] = sin_amp.get(on, 0) + h.sin_amp
+    freqs = sorted(table, key=sp.default_sort_key)
+    return const, freqs, [table[f] for f in freqs]
+
+
+def chain_load_lines(model) -> list[str]:
+    """The loads' terms, each traced to its scene entry (forces name masses by index)."""
+    lines = [f"    + {sp.sstr(f)} on mass {on}  [{key}]" for on, f, key in model.forces]
+    lines += [f"    + f_table{key[7:-1]}(t) on mass {on}  [{key}] (table, linear between rows, zero outside)"
+              for on, key in model.table_forces]
+    if model.g is not None:
+        lines.append(f"    + {sp.sstr(model.mass * model.g)} on every mass i  [gravity]")
+    if model.scene.ground is not None:
+        lines.append(f"    - {sp.sstr(model.mass)}*a_g(t) on every mass i  [ground]"
+                     + (f", a_g(t) = {sp.sstr(model.ground)}" if model.ground is not None else " (table)")
+                     + "; coordinates relative to the ground")
+    return (["Loads:"] + lines) if lines else []
+
+
+def chain_load_code(model, sig: str, kw: str) -> list[str]:
+    """Gravity, external forces (expressions), tabulated forces and ground motion of a chain
+    module: nothing for a chain without loads. Forces act on single masses, so no loop over masses."""
+    out: list[str] = []
+    sep = ", " if sig else ""
+    if model.g is not None:
+        out += ["", "", f"def gravity_forces({sig}{sep}n=N):",
+                '    """Constant gravity force m_i*g on each mass (+x direction), shape (n,)."""',
+                f"    return masses({kw}{sep}n=n) * ({_p(model.g)})"]
+    if model.forces:
+        out += ["", "", f"def external_acceleration(t{sep}{sig}, n=N):",
+                '    """Acceleration M^-1 F(t) from the external forces; result shape (n, *t.shape)."""',
+                "    t = numpy.asarray(t, dtype=float)",
+                "    _out = numpy.zeros((n,) + t.shape)"]
+        for on, f, _ in model.forces:
+            out.append(f"    _out[{on}] += {_p(f / model.mass_at(on))}")
+        out.append("    return _out")
+        harmonic = forcing_harmonics_of([(on, f) for on, f, _ in model.forces], model.t)
+        out += ["", f"FORCING_HARMONIC = {harmonic is not None!r}"]
+        if harmonic is not None:
+            const, freqs, rows = harmonic
+            out += ["", "", f"def forcing_harmonics({sig}{sep}n=N):",
+                    '    """F(t) = const + sum_h cos_amp[h] cos(omega[h] t) + sin_amp[h] sin(omega[h] t);',
+                    '    omega (H,), cos_amp and sin_amp (H, n), const (n,)."""',
+                    f"    _omega = {_array([_p(w) for w in freqs])}",
+                    "    _cos = numpy.zeros((_omega.shape[0], n))",
+                    "    _sin = numpy.zeros((_omega.shape[0], n))",
+                    "    _const = numpy.zeros(n)"]
+            for on, c in const.items():
+                out.append(f"    _const[{on}] += {_p(c)}")
+            for h, (cos_amp, sin_amp) in enumerate(rows):
+                for on, c in cos_amp.items():
+                    out.append(f"    _cos[{h}, {on}] += {_p(c)}")
+                for on, c in sin_amp.items():
+                    out.append(f"    _sin[{h}, {on}] += {_p(c)}")
+            out.append("    return _omega, _cos, _sin, _const")
+    out += table_force_lines([on for on, _ in model.table_forces],
+                             [model.mass_at(on) for on, _ in model.table_forces], sig, chain=True)
+    if model.scene.ground is not None:
+        out += ground_lines(model.ground, model.ground_motion, model.t, sig)
+    return out
+
+
+__all__ = ["table_force_lines", "ground_lines", "forcing_harmonics_of", "chain_load_lines", "chain_load_code"]
