@@ -6,7 +6,8 @@
 
 A table is a CSV file with a header line (``t,f`` for forces, ``t,a`` for ground motion)
 and rows of two finite numbers, times strictly increasing. It is resolved relative to the
-scene file, linearly interpolated and zero outside its time range. Tables are data: they are
+scene file and must lie in the scene's folder or below (the scene is untrusted: it cannot
+make springchain read other files), linearly interpolated and zero outside its time range. Tables are data: they are
 read here into arrays, never pasted into generated source (the generated module takes them
 as arguments). Every problem raises :class:`~derive.errors.SceneError` naming the file, the
 key, the bad value and what is accepted. SymPy is not imported here.
@@ -87,7 +88,14 @@ def read_table(scene_file: str, key: str, value, column: str) -> Table:
     if not isinstance(value, str) or not value or "\x00" in value:
         raise bad(value, "not a file name")
     base = Path(scene_file).parent if scene_file else Path(".")
-    path = Path(value) if os.path.isabs(value) else base / value
+    path = base / value
+    try:  # the scene is untrusted: it may name files in its own folder (or below), nothing else
+        inside = not os.path.isabs(value) and path.resolve().is_relative_to(base.resolve())
+    except (OSError, RuntimeError):
+        inside = False
+    if not inside:
+        raise bad(value, "outside the scene file's folder (absolute, '..' or a link out of it); "
+                         "tables are read from the scene's folder or below")
     try:
         mode = os.stat(path).st_mode
     except OSError as exc:

@@ -394,6 +394,20 @@ def test_hostile_force_tables_are_refused_in_one_line(tmp_path, body, _unused, w
     assert "accepted: a CSV file with a header line 't,f'" in msg
 
 
+@pytest.mark.parametrize("name", ["/etc/passwd", "../outside.csv", "link.csv", "sub/../../outside.csv"])
+def test_tables_outside_the_scene_folder_are_refused(tmp_path, name):
+    (tmp_path / "outside.csv").write_text(FORCE_TABLE)
+    scene_dir = tmp_path / "scene"
+    scene_dir.mkdir()
+    (scene_dir / "sub").mkdir()
+    (scene_dir / "link.csv").symlink_to(tmp_path / "outside.csv")
+    path = masses_scene(scene_dir, f'[[forces]]\non = "m1"\ntable = "{name}"\n')
+    with pytest.raises(SceneError, match="outside the scene file's folder"):
+        load_scene(path)
+    (scene_dir / "sub" / "inside.csv").write_text(FORCE_TABLE)
+    load_scene(masses_scene(scene_dir, '[[forces]]\non = "m1"\ntable = "sub/inside.csv"\n'))
+
+
 @pytest.mark.parametrize("extra, key, why", [
     ('[[forces]]\non = "m1"\nf = "t"\ntable = "f.csv"\n', "forces[0]", "exactly one of f and table"),
     ('[[forces]]\non = "m1"\n', "forces[0]", "exactly one of f and table"),
