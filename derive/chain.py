@@ -470,7 +470,7 @@ def _bidiagonal_omega2(w, ch, kw: str) -> None:
     w("    _t[0::2], _t[1::2] = _a, _b")
     w("    _sv = scipy.linalg.eigh_tridiagonal(numpy.zeros(2 * _s), _t, eigvals_only=True, select='i',")
     w("                                        select_range=(_s, 2 * _s - 1), lapack_driver='stebz',")
-    w("                                        tol=numpy.finfo(float).tiny)")
+    w("                                        tol=numpy.finfo(numpy.float64).tiny)")
     w("    _w = numpy.sort(numpy.abs(_sv))[_s - n:] ** 2")
     w("    _w[:_RIGID_MODES] = 0.0")
     w("    return _w")
