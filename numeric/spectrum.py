@@ -132,9 +132,23 @@ def incidence(n: int, ends: np.ndarray) -> np.ndarray:
 
 
 def stiffness_matrix(n: int, ends: np.ndarray, k: np.ndarray) -> np.ndarray:
-    """``K = Bᵀ diag(k) B``, shape (N, N) (for checks; the spectrum never forms it)."""
-    B = incidence(n, ends)
-    return B.T @ (np.asarray(k, dtype=float)[:, None] * B)
+    """``K = Bᵀ diag(k) B``, shape (N, N) (for checks; the spectrum never forms it).
+
+    Assembled by scattering each spring's 2×2 stamp (not a matrix product, whose blocked sums
+    differ between K_ij and K_ji by an ulp), so K is exactly symmetric.
+    """
+    ends = np.asarray(ends, dtype=np.intp).reshape(-1, 2)
+    k = np.asarray(k, dtype=float)
+    a, b = ends[:, 0], ends[:, 1]
+    loop = a == b  # a spring from a mass to itself stores no energy (as its zero row of B)
+    K = np.zeros((n, n))
+    for end in (a, b):
+        on = (end >= 0) & ~loop
+        np.add.at(K, (end[on], end[on]), k[on])
+    both = (a >= 0) & (b >= 0) & (a != b)
+    np.add.at(K, (a[both], b[both]), -k[both])
+    np.add.at(K, (b[both], a[both]), -k[both])
+    return K
 
 
 def spring_factor(masses: np.ndarray, ends: np.ndarray, k: np.ndarray) -> np.ndarray:
