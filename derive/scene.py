@@ -137,6 +137,13 @@ class Scene:
     #: Tabulated forces (``[[forces]]`` with ``table``) and ground motion (``[ground]``).
     table_forces: tuple[TableForce, ...] = ()
     ground: Ground | None = None
+    #: Whether the file has an ``[initial]`` table (without one the scene starts at rest).
+    initial_given: bool = True
+
+    @property
+    def loaded(self) -> bool:
+        """Whether anything drives the scene from outside (forces, tables, ground, gravity)."""
+        return bool(self.forces or self.table_forces or self.ground is not None or self.gravity is not None)
 
     @property
     def n(self) -> int:
@@ -222,7 +229,7 @@ def load_scene(path: str | Path, text: str | None = None) -> Scene:
 
 def _build(ld: Loader, sha: str) -> Scene:
     data = ld.data
-    ld.keys(data, TOP_KEYS, None, required=("name", "parameters", "initial"), what="a scene")
+    ld.keys(data, TOP_KEYS, None, required=("name", "parameters"), what="a scene")
     name = ld.identifier("name", data["name"], "scene name")
     description = data.get("description", "")
     if not isinstance(description, str):
@@ -345,16 +352,20 @@ def _build(ld: Loader, sha: str) -> Scene:
         gravity = ld.expression("gravity.g", g["g"], pnames, nonzero=True, bounded=True, env=env)
     ground = parse_ground(ld, pnames, env, times)
 
-    init = ld.table("initial", required=True, example=" with x = [...] and v = [...]")
-    ld.keys(init, INITIAL_KEYS, "initial", required=("x", "v"), what="[initial]")
-    x0 = _initial(ld, "initial.x", init["x"], n, chain is not None, pnames, env)
-    v0 = _initial(ld, "initial.v", init["v"], n, chain is not None, pnames, env)
+    # [initial] is optional: a missing table or key means rest (zero displacement or velocity).
+    # Whether a run from rest is worth making is decided by the commands that run (simulate,
+    # plan, bench), not here: modes and derive never need it.
+    init = ld.table("initial", example=" with x = [...] and v = [...]")
+    ld.keys(init, INITIAL_KEYS, "initial", what="[initial]")
+    x0 = _initial(ld, "initial.x", init["x"], n, chain is not None, pnames, env) if "x" in init else np.zeros(n)
+    v0 = _initial(ld, "initial.v", init["v"], n, chain is not None, pnames, env) if "v" in init else np.zeros(n)
 
     return Scene(file=ld.file, sha256=sha, name=name, description=description,
                  parameters=parameters, mass_names=mass_names, mass_exprs=mass_exprs,
                  springs=tuple(springs), dampers=tuple(dampers), forces=tuple(forces),
                  gravity=gravity, chain=chain, x0=x0, v0=v0, dt=dt, steps=steps,
-                 record_every=record_every, table_forces=table_forces, ground=ground)
+                 record_every=record_every, table_forces=table_forces, ground=ground,
+                 initial_given=bool(init))
 
 
 def _chain(ld: Loader, pnames: frozenset[str], env: dict) -> Chain:

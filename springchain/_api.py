@@ -302,6 +302,7 @@ def simulate(scene: str | Path | Scene, methods: list[str] | None = None, dt: fl
     from .numeric import simulate as sim
 
     sc = load(scene)
+    _check_motion(sc, "simulate")
     dt = dt if dt is not None else sc.dt
     steps = steps if steps is not None else sc.steps
     record_every = record_every if record_every is not None else sc.record_every
@@ -365,6 +366,16 @@ def simulate(scene: str | Path | Scene, methods: list[str] | None = None, dt: fl
 
 
 # -- plan and bench ---------------------------------------------------------------------------------
+def _check_motion(sc: Scene, what: str) -> None:
+    """Refuse a run whose answer is known: no ``[initial]`` and nothing driving the scene."""
+    from .numeric.errors import RunRefused
+
+    if not sc.initial_given and not sc.loaded:
+        raise RunRefused(f"{sc.file}: initial: missing; {what} of {sc.name!r} would start at rest with nothing "
+                         "driving it (its motion is zero); accepted: a table [initial] with x = [...] and/or "
+                         "v = [...] (modes and derive do not need one)", quantity="initial")
+
+
 def _horizon(sc: Scene, t_end: float | None) -> float:
     return t_end if t_end is not None else sc.dt * sc.steps
 
@@ -392,6 +403,7 @@ def plan(scene: str | Path | Scene, tol: float, t_end: float | None = None):
     if not (isinstance(tol, float | int) and math.isfinite(tol) and tol > 0):
         raise RunRefused(f"tol {tol!r}: accepted: a finite number > 0", quantity="tol")
     sc = load(scene)
+    _check_motion(sc, "plan")
     system, _ = _system(sc)
     if not system.conservative:
         raise RunRefused(f"plan covers conservative scenes (springs, cubic springs); {sc.name!r} has "
@@ -421,6 +433,7 @@ def bench(scene: str | Path | Scene = "seed", t_end: float | None = None, *, qui
     from .numeric.timing import single_threaded_blas
 
     sc = load(scene)
+    _check_motion(sc, "bench")
     system, _ = _system(sc)
     import sympy  # noqa: F401  (imported before timing: the derive time excludes the SymPy import)
 
