@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -36,6 +37,29 @@ def _long_dense_chain(system: System) -> bool:
 def default_methods(system: System) -> list[str]:
     """The exact solution and Verlet where an exact solution applies, else Verlet alone."""
     return [EXACT, "verlet"] if system.exact_available and not _long_dense_chain(system) else ["verlet"]
+
+
+def unstable_defaults(system: System, methods: list[str], h: float) -> tuple[list[str], list[str]]:
+    """Drop default step methods that would be unstable at ``h`` when the exact method stays.
+
+    A cheap Gershgorin bound clears the usual case; only when it cannot, the exact ω_max is
+    computed (dense systems). Returns the kept methods and one note per dropped method.
+    """
+    if EXACT not in methods or len(methods) < 2:
+        return methods, []
+    from .bounds import omega2_bound
+    from .runners import RunContext
+
+    bound = math.sqrt(omega2_bound(system.masses, system.spring_ends, system.stiffness))
+    if bound * h < 2.0:
+        return methods, []
+    omega_max = RunContext(system).omega_max()
+    if omega_max * h < 2.0:
+        return methods, []
+    kept = [m for m in methods if m == EXACT]
+    notes = [f"{m} not run by default: dt = {h:g} is beyond its stability limit 2/ω_max = {2.0 / omega_max:.6g} "
+             f"(ω_max = {omega_max:.6g}); ask for it with a smaller dt" for m in methods if m != EXACT]
+    return kept, notes
 
 
 def applicable(system: System) -> str:

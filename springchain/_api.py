@@ -318,6 +318,9 @@ def simulate(scene: str | Path | Scene, methods: list[str] | None = None, dt: fl
     with phase("loading the generated module (deriving it if not cached)", enabled=progress):
         system, origin = _system(sc)
     names = methods or sim.default_methods(system)
+    notes: list[str] = []
+    if not methods:  # a default Verlet that would be unstable at this dt gives way to the exact method
+        names, notes = sim.unstable_defaults(system, names, dt)
     unknown = [m for m in names if m not in method_names()]
     if unknown:
         raise RunRefused(f"method {unknown[0]!r} is unknown; accepted: {', '.join(method_names())}",
@@ -361,7 +364,7 @@ def simulate(scene: str | Path | Scene, methods: list[str] | None = None, dt: fl
                     "npz": None if npz is None else str(npz), "figures": [str(p) for p in figs],
                     "methods_that_apply": sim.applicable(system),
                     "energy_conserved": not (system.damped or system.forced),
-                    "seconds": time.perf_counter() - t0})
+                    "seconds": time.perf_counter() - t0, "notes": notes})
     return Simulation(sc, t, x, v, summary, npz, figs, extra)
 
 

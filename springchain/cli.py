@@ -118,6 +118,8 @@ def _print_simulation(result) -> None:
         else:
             line += f"   energy drift = {rec['energy_drift']:.3e} (rel {rec['energy_drift_relative']:.2e})"
         print(line)
+    for note in s.get("notes", ()):
+        print(f"  note: {note}")
     if s["npz"]:
         print(f"  wrote {s['npz']}")
     for p in s["figures"]:
