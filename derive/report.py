@@ -264,9 +264,9 @@ def render_latex(model: Model, modes: ModeSet) -> str:
              rf"V &= {L(model.V)} \\"]
     if model.dampers:
         lines.append(rf"R &= {L(model.R)} \\")
-    lhs = model.euler_lagrange()
-    for i, e in enumerate(lhs):
-        lines.append(rf"0 &= {L(e)} \\")
+    for i in range(len(model.scene.mass_names)):  # as the text: m_i a_i = the traced forces
+        rhs = sp.Add(*(t.force for t in model.terms if t.coordinate == i))
+        lines.append(rf"{L(model.masses[i] * model.a[i])} &= {L(rhs)} \\")
     lines += [rf"M &= {L(model.M)} \\", rf"K &= {L(model.K)} \\",
               rf"D &= M^{{-1/2}} K M^{{-1/2}} = {L(model.D)}"]
     for mode in modes.modes:

@@ -140,6 +140,11 @@ class Scene:
     #: Whether the file has an ``[initial]`` table (without one the scene starts at rest).
     initial_given: bool = True
 
+    def __repr__(self) -> str:  # short: the arrays and expressions are attributes
+        form = (f"chain n={self.chain.n} ({self.chain.left.value}-{self.chain.right.value})" if self.chain
+                else f"{len(self.mass_names)} masses, {len(self.springs)} springs")
+        return f"Scene({self.name!r}, {form}, parameters={self.parameters}, file={self.file!r})"
+
     @property
     def loaded(self) -> bool:
         """Whether anything drives the scene from outside (forces, tables, ground, gravity)."""

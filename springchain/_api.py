@@ -147,6 +147,9 @@ class Modes:
     def __str__(self) -> str:
         return self.to_text()
 
+    def __repr__(self) -> str:  # short; str() and the notebook show everything
+        return f"Modes(scene={self.scene.name!r}, omega2={self.omega2})"
+
     def _repr_latex_(self) -> str:
         text = self.to_latex()
         return text if text.lstrip().startswith(("$", "\\begin")) else f"$${text}$$"
