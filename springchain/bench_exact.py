@@ -38,10 +38,13 @@ def measure(scene: str = "seed", rounds: int = 7, number: int = 200) -> dict:
     def trig():
         return np.cos(phase), np.sin(phase)
 
+    from .numeric.timing import single_threaded_blas
+
     samples = {"exact": [], "trig": []}
-    for _ in range(rounds):
-        for name, f in (("exact", exact), ("trig", trig)):
-            samples[name].append(timeit.timeit(f, number=number) / number)
+    with single_threaded_blas():  # one BLAS thread, as every benchmark here
+        for _ in range(rounds):
+            for name, f in (("exact", exact), ("trig", trig)):
+                samples[name].append(timeit.timeit(f, number=number) / number)
     ratios = [e / g for e, g in zip(samples["exact"], samples["trig"])]
     return {"scene": sc.name, "S": int(t.shape[0]), "N": int(system.n),
             "seconds": {k: {"median": statistics.median(v), "min": min(v)} for k, v in samples.items()},
