@@ -155,29 +155,38 @@ def _receptance_banded(op: Operator, omega: np.ndarray, input: int, output: int)
     n = op.n
     b = np.zeros((n, 2), dtype=complex)
     b[input, 0] = 1.0
-    ab = np.zeros((3, n), dtype=complex)
+    gtsv = scipy.linalg.lapack.get_lapack_funcs("gtsv", dtype=complex)
     out = np.empty(omega.shape[0], dtype=complex)
-    for j, w in enumerate(omega):  # one O(n) banded solve per frequency
+    for j, w in enumerate(omega):  # one O(n) tridiagonal solve (LAPACK zgtsv, partial pivoting) per frequency
         diag = kd - w * w * op.masses + 1j * w * cd
         offd = ko + 1j * w * co
         a = kc + 1j * w * cc
-        ab[0, 1:] = offd
-        ab[1] = diag
-        ab[2, :-1] = offd
         if a == 0:
-            out[j] = scipy.linalg.solve_banded((1, 1), ab, b[:, 0], check_finite=False)[output]
+            yq = _gtsv(gtsv, offd, diag, b[:, :1])
+            out[j] = yq[output, 0]
             continue
         gamma = -diag[0]  # Z = T' + u vᵀ, u = (γ, 0, …, a), v = (1, 0, …, a/γ)
-        ab[1, 0] -= gamma
-        ab[1, -1] -= a * a / gamma
+        diag[0] -= gamma
+        diag[-1] -= a * a / gamma
         b[:, 1] = 0.0
         b[0, 1], b[-1, 1] = gamma, a
-        yq = scipy.linalg.solve_banded((1, 1), ab, b, check_finite=False)
+        yq = _gtsv(gtsv, offd, diag, b)
         y, q = yq[:, 0], yq[:, 1]
         vy = y[0] + (a / gamma) * y[-1]
         vq = q[0] + (a / gamma) * q[-1]
         out[j] = y[output] - q[output] * vy / (1.0 + vq)
     return out
+
+
+def _gtsv(gtsv, off: np.ndarray, diag: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Solve the symmetric tridiagonal system (off, diag, off) X = b; b shape (n, r)."""
+    if diag.shape[0] == 1:
+        return b / diag[0]
+    _, _, _, x, info = gtsv(off.copy(), diag, off.copy(), b.copy(), overwrite_dl=True, overwrite_d=True,
+                            overwrite_du=True, overwrite_b=True)
+    if info != 0:
+        raise np.linalg.LinAlgError(f"tridiagonal solve: exactly singular at pivot {info}")
+    return x
 
 
 # -- resonances -----------------------------------------------------------------------------------------
@@ -255,13 +264,14 @@ def _participation(system: System, input: int, output: int) -> list[Resonance]:
     return out
 
 
-def resonances(system: System, op: Operator, input: int, output: int) -> list[Resonance]:
+def resonances(system: System, op: Operator, input: int, output: int,
+               omega: np.ndarray | None = None) -> list[Resonance]:
     """Elastic resonances, ascending: undamped ω_j (ζ = 0) without damping; with damping the poles
     of ``M s² + C s + K`` (the generalised eigenvalues of its first-order linearisation) for
     ``[masses]`` scenes, the undamped ω_j for chains (their peaks are found by the search)."""
     if op.C is None and not op.banded:
         return _participation(system, input, output)
-    omega = undamped_omegas(system, MAX_REFINED)
+    omega = undamped_omegas(system, MAX_REFINED) if omega is None else omega
     elastic = omega[omega > 0]
     if op.C is None or op.banded:  # a chain: its lowest MAX_REFINED (more than any grid resolves)
         return [Resonance(float(w), 0.0, float(w)) for w in elastic[:MAX_REFINED]]
@@ -275,9 +285,9 @@ def resonances(system: System, op: Operator, input: int, output: int) -> list[Re
     return [Resonance(float(abs(l)), float(max(-l.real / abs(l), 0.0)), float(l.imag)) for l in osc]
 
 
-def default_range(res: list[Resonance], system: System) -> tuple[float, float]:
-    """``(smallest nonzero ω / 10, largest ω · 3)``; refused for a scene without an elastic mode."""
-    omega = undamped_omegas(system, MAX_REFINED)
+def default_range(res: list[Resonance], omega: np.ndarray) -> tuple[float, float]:
+    """``(smallest nonzero ω / 10, largest ω · 3)`` of the undamped ``omega``; refused for a scene
+    without an elastic mode."""
     elastic = omega[omega > 0]
     if elastic.size == 0:
         raise RunRefused("the scene has no elastic mode (every ω is 0), so there is no default frequency "
@@ -368,8 +378,9 @@ def frequency_response(system: System, input: int, output: int, omega_min: float
     Response
     """
     op = operator(system)
-    res = resonances(system, op, input, output)
-    lo, hi = default_range(res, system) if omega_min is None or omega_max is None else (0.0, 0.0)
+    natural = undamped_omegas(system, MAX_REFINED)
+    res = resonances(system, op, input, output, natural)
+    lo, hi = default_range(res, natural) if omega_min is None or omega_max is None else (0.0, 0.0)
     lo = omega_min if omega_min is not None else lo
     hi = omega_max if omega_max is not None else hi
     if not lo < hi:
