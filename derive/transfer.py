@@ -46,35 +46,36 @@ class TransferFunction:
     def expr(self) -> sp.Expr:
         return self.numerator / self.denominator
 
-    def at_values(self, digits: int = 6) -> tuple[sp.Expr, sp.Expr]:
-        """Numerator and denominator at the scene's values, coefficients to ``digits`` digits,
-        normalised so the denominator's leading coefficient is 1."""
+    def at_values(self, digits: int = 6) -> tuple[str, str]:
+        """Numerator and denominator at the scene's values in descending powers of s, coefficients
+        evaluated at 30 digits and shown to ``digits``, the denominator's leading coefficient 1."""
         num = sp.Poly(self.numerator.subs(self.values), self.s)
         den = sp.Poly(self.denominator.subs(self.values), self.s)
         lead = den.LC()
-        fmt = lambda p: sp.Add(*(sp.Float(sp.N(c / lead, 30), digits) * self.s**e  # noqa: E731
-                                 for (e,), c in p.terms()))
-        return fmt(num), fmt(den)
+        fmt = lambda c: f"{float(sp.N(c / lead, 30)):.{digits}g}"  # noqa: E731
+        return _descending(num, fmt, "s"), _descending(den, fmt, "s")
 
     def text(self) -> str:
         """Two lines: the symbolic ratio, and the ratio at the scene's values."""
         lhs = f"H(s) = X_{self.output}(s)/F_{self.input}(s)"
         n, d = self.at_values()
-        return (f"{lhs} = ({sp.sstr(self.numerator)}) / ({sp.sstr(self.denominator)})\n"
-                f"{' ' * (len(lhs) - 1)}= ({sp.sstr(n)}) / ({sp.sstr(d)})   (at the scene's values)\n")
+        sym = lambda e: _descending(sp.Poly(e, self.s), _coefficient(sp.sstr), "s")  # noqa: E731
+        return (f"{lhs} = ({sym(self.numerator)}) / ({sym(self.denominator)})\n"
+                f"{' ' * (len(lhs) + 1)}= ({n}) / ({d})   (at the scene's values)\n")
 
     def latex(self) -> str:
-        """``H(s) = \\frac{...}{...}`` (amsmath)."""
+        """``H(s) = \\frac{...}{...}`` (amsmath), polynomials in descending powers of s."""
         lhs = (r"H(s) = \frac{X_{\mathrm{" + self.output.replace("_", r"\_") + r"}}(s)}{F_{\mathrm{"
                + self.input.replace("_", r"\_") + r"}}(s)}")
-        return ("\\begin{align*}\n" + lhs + " &= \\frac{" + sp.latex(self.numerator) + "}{"
-                + sp.latex(self.denominator) + "}\n\\end{align*}\n")
+        tex = lambda e: _descending(sp.Poly(e, self.s), _coefficient(sp.latex, r"\left(", r"\right)"), "s",  # noqa: E731
+                                    power=lambda k: f"s^{{{k}}}", times=" ")
+        return ("\\begin{align*}\n" + lhs + " &= \\frac{" + tex(self.numerator) + "}{"
+                + tex(self.denominator) + "}\n\\end{align*}\n")
 
     def as_json(self) -> dict:
         n, d = self.at_values(15)
         return {"numerator": sp.sstr(self.numerator), "denominator": sp.sstr(self.denominator),
-                "variable": "s", "latex": self.latex(), "numerator_value": sp.sstr(n),
-                "denominator_value": sp.sstr(d)}
+                "variable": "s", "latex": self.latex(), "numerator_value": n, "denominator_value": d}
 
     def evaluate(self, s_values):
         """H at complex ``s`` values (the scene's parameters substituted), via mpmath at 30 digits.
@@ -93,6 +94,26 @@ class TransferFunction:
             dcm = [mpmath.mpf(str(c)) for c in dc]
             return [complex(mpmath.polyval(ncm, mpmath.mpc(z)) / mpmath.polyval(dcm, mpmath.mpc(z)))
                     for z in s_values]
+
+
+def _coefficient(printer, left: str = "(", right: str = ")"):
+    """A printer of a polynomial coefficient: a sum is parenthesised."""
+    return lambda c: f"{left}{printer(c)}{right}" if isinstance(c, sp.Add) else printer(c)
+
+
+def _descending(poly: sp.Poly, coefficient, var: str, power=None, times: str = "*") -> str:
+    """``c_n*s**n + ... + c_0`` in descending powers (SymPy's printers order terms canonically)."""
+    power = power or (lambda k: f"{var}**{k}")
+    parts = []
+    for (k,), c in poly.terms():
+        neg = bool(c.could_extract_minus_sign()) if isinstance(c, sp.Expr) else c < 0
+        text = coefficient(-c if neg else c)
+        if k:
+            mono = var if k == 1 else power(k)
+            text = mono if text in ("1", "1.0") else f"{text}{times}{mono}"
+        parts.append(("- " if neg else "+ ") + text)
+    out = " ".join(parts) or "0"
+    return out[2:] if out.startswith("+ ") else "-" + out[2:]
 
 
 def transfer_function(model: Model, input: int, output: int, budget: float | None = BUDGET) -> TransferFunction | None:
