@@ -207,7 +207,7 @@ class Resonance:
         return self.zeta <= UNDAMPED_ZETA
 
     def as_json(self) -> dict:
-        return {"omega_n": self.omega_n, "zeta": self.zeta, "omega_d": self.omega_d,
+        return {"omega_n": self.omega_n, "zeta": None if np.isnan(self.zeta) else self.zeta, "omega_d": self.omega_d,
                 "peak_omega": self.peak_omega, "peak_magnitude": self.peak_magnitude}
 
 
@@ -274,7 +274,8 @@ def resonances(system: System, op: Operator, input: int, output: int,
     omega = undamped_omegas(system, MAX_REFINED) if omega is None else omega
     elastic = omega[omega > 0]
     if op.C is None or op.banded:  # a chain: its lowest MAX_REFINED (more than any grid resolves)
-        return [Resonance(float(w), 0.0, float(w)) for w in elastic[:MAX_REFINED]]
+        zeta = 0.0 if op.C is None else float("nan")  # a damped chain: ζ not computed (no dense solve)
+        return [Resonance(float(w), zeta, float(w)) for w in elastic[:MAX_REFINED]]
     n = op.n
     A = np.block([[np.zeros((n, n)), np.eye(n)], [-op.K, -op.C]])
     B = np.block([[np.eye(n), np.zeros((n, n))], [np.zeros((n, n)), np.diag(op.masses)]])
@@ -331,10 +332,10 @@ def _grid(lo: float, hi: float, points: int, res: list[Resonance]) -> np.ndarray
     extra = []
     g = np.geomspace(0.03, 30.0, REFINE_POINTS // 2)
     for r in [r for r in res if r.participates][:MAX_REFINED]:
-        width = max(r.zeta, UNDAMPED_GAP / g[0])
+        width = r.zeta if r.zeta > UNDAMPED_GAP / g[0] else UNDAMPED_GAP / g[0]  # (NaN: the gap)
         near = r.omega_d * np.concatenate([1 - width * g, 1 + width * g])
         extra.append(near[(near > 0)])
-        if not r.undamped:
+        if not r.undamped and not np.isnan(r.zeta):
             extra.append([r.omega_d])
     grid = np.union1d(base, np.concatenate(extra)) if extra else base
     grid = grid[(grid >= lo) & (grid <= hi)]

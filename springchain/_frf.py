@@ -76,7 +76,9 @@ class FrequencyResponse:
             lines.append("resonances in range (undamped ω_n, damping ratio ζ, damped ω_d; exact peak of |H|):")
         for r in seen:
             line = f"  ω_n = {r.omega_n:.8g} rad/s   ζ = {r.zeta:.4g}   ω_d = {r.omega_d:.8g} rad/s"
-            if r.undamped:
+            if math.isnan(r.zeta):
+                line = f"  ω_n = {r.omega_n:.8g} rad/s (undamped; damped [chain]: ζ not computed, grid refined here)"
+            elif r.undamped:
                 line += "   |H| = ∞ at ω_n (undamped; the grid stops 1e-4 short on each side)"
             elif r.peak_omega is not None:
                 line += f"   peak |H| = {r.peak_magnitude:.6e} m/N at ω = {r.peak_omega:.8g} rad/s"

@@ -245,3 +245,23 @@ def test_plot_is_a_figure_without_pyplot():
     assert ax.get_xscale() == "log" and ax.get_yscale() == "log"
     assert "rad/s" in fig.axes[1].get_xlabel() and "deg" in fig.axes[1].get_ylabel()
     assert matplotlib.get_backend() == before
+
+
+@pytest.mark.parametrize("ring", [False, True])
+def test_banded_solver_with_damping_matches_dense(ring):
+    """The tridiagonal path with a damping band (and ring corners) against the dense solve."""
+    from springchain.numeric.frf import Operator, receptance
+
+    rng = np.random.default_rng(3)
+    n = 25
+    m = rng.uniform(0.5, 2.0, n)
+    kd, ko = rng.uniform(2, 4, n), -rng.uniform(0.5, 1.0, n - 1)
+    cd, co = rng.uniform(0.01, 0.1, n), -rng.uniform(0.0, 0.02, n - 1)
+    kc, cc = (-0.7, -0.03) if ring else (0.0, 0.0)
+    dense = lambda d, o, c: np.diag(d) + np.diag(o, 1) + np.diag(o, -1) + c * (np.eye(n, k=n - 1) + np.eye(n, k=1 - n))  # noqa: E731
+    K, C = dense(kd, ko, kc), dense(cd, co, cc)
+    op = Operator(m, (kd, ko, kc), (cd, co, cc), True)
+    w = np.geomspace(0.1, 5.0, 200)
+    got = receptance(op, w, 4, 17)
+    ref = _reference(np.diag(m), K, C, w, 4, 17)
+    assert np.max(np.abs(got - ref) / np.abs(ref)) <= REL
