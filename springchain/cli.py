@@ -437,7 +437,7 @@ def build_parser() -> argparse.ArgumentParser:
     fr.add_argument("--json", action="store_true",
                     help='print one JSON object {"omega", "magnitude", "phase" (deg), "resonances", '
                          '"transfer_function", ...} and nothing else')
-    fr.add_argument("--out", default="springchain-out", help="folder for the Bode figure (default: %(default)s)")
+    fr.add_argument("--out", default="springchain-out", metavar="DIR", help="folder for the Bode figure (default: %(default)s)")
     fr.set_defaults(func=cmd_frf)
 
     an = sub.add_parser("animate", help="a GIF of a mode shape oscillating or of a simulated trajectory",
@@ -456,7 +456,7 @@ def build_parser() -> argparse.ArgumentParser:
                     help="frames in the GIF (default: %(default)s)")
     an.add_argument("--fps", type=_positive_float("--fps"), default=16.0, metavar="R",
                     help="frames per second (default: %(default)g)")
-    an.add_argument("--out", default="springchain-out", help="output folder (default: %(default)s)")
+    an.add_argument("--out", default="springchain-out", metavar="DIR", help="output folder (default: %(default)s)")
     an.set_defaults(func=cmd_animate)
     return p
 
