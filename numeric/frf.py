@@ -388,9 +388,10 @@ def frequency_response(system: System, input: int, output: int, omega_min: float
         raise RunRefused(f"omega_min {lo:g} >= omega_max {hi:g}: accepted: omega_min < omega_max",
                          quantity="omega_min" if omega_min is not None else "omega_max")
     inside = [r for r in res if lo <= r.omega_d <= hi]
-    if not op.banded:
-        inside = [r if r.undamped or not r.participates else Resonance(r.omega_n, r.zeta, r.omega_d, *(_peak(op, r, input, output) or (None, None)))
-                  for r in inside]
+    if not op.banded:  # the exact peak of the lowest MAX_REFINED damped resonances
+        inside = [r if r.undamped or not r.participates or k >= MAX_REFINED
+                  else Resonance(r.omega_n, r.zeta, r.omega_d, *(_peak(op, r, input, output) or (None, None)))
+                  for k, r in enumerate(inside)]
     grid = _grid(lo, hi, points, inside)
     peaks = [r.peak_omega for r in inside if r.peak_omega is not None and lo <= r.peak_omega <= hi]
     if peaks:
