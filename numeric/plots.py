@@ -126,3 +126,35 @@ def frequency_response(drive: np.ndarray, amplitude: np.ndarray, names, natural:
     ax.grid(alpha=0.3, which="both")
     ax.legend(fontsize=8)
     return fig
+
+
+def bode(omega: np.ndarray, magnitude: np.ndarray, phase: np.ndarray, title: str, *,
+         peaks: tuple = (), infinite: tuple = (), hidden: tuple = ()):
+    """Bode plot of a receptance: |H| log-log and phase in degrees against ω [rad/s].
+
+    omega, magnitude, phase : ndarray, shape (W,)
+    peaks : (ω, |H|) pairs of damped resonance peaks (marked)
+    infinite : ω_j of undamped resonances (|H| = ∞ there; vertical lines)
+    hidden : ω_j of modes with a node at the input or output (no resonance in this H; thin lines)
+    """
+    fig, (ax, axp) = new_figure(2, 1, figsize=(9, 6.5), sharex=True)
+    ax.loglog(omega, magnitude, lw=1.3, color="C0", label="|H(iω)|")
+    axp.semilogx(omega, phase, lw=1.3, color="C0", label="∠H(iω)")
+    if peaks:
+        w, h = np.asarray(peaks, dtype=float).T
+        ax.plot(w, h, "v", color="C3", ms=7, label="resonance peak (exact max of |H|)")
+        for wk, hk in zip(w, h):
+            ax.annotate(f"{wk:.4g} rad/s", (wk, hk), textcoords="offset points", xytext=(4, 6), fontsize=8)
+    for k, w in enumerate(infinite):
+        for a in (ax, axp):
+            a.axvline(w, color="C3", ls=":", lw=1, label="undamped ω_j (|H| = ∞)" if k == 0 and a is ax else None)
+    for k, w in enumerate(hidden):
+        ax.axvline(w, color="0.7", ls="--", lw=0.8, label="ω_j with a node at input/output" if k == 0 else None)
+    ax.set_ylabel("|H| = |X_out / F_in| [m/N]")
+    axp.set_ylabel("phase ∠H [deg]")
+    axp.set_xlabel("angular frequency ω [rad/s]")
+    ax.set_title(title)
+    for a in (ax, axp):
+        a.grid(alpha=0.3, which="both")
+        a.legend(fontsize=8, loc="best" if omega.shape[0] < 20_000 else "upper right")
+    return fig

@@ -10,6 +10,8 @@ The public API (each name loads what it needs on first use, so ``import springch
     sc.plan(scene, tol=1e-6)           # the cheapest method and step for a tolerance
     sc.bench(scene, quick=True)        # work-precision benchmark
     sc.sweep("chain100k", disorder=["mass=uniform(0.5, 1.5)"], samples=100)  # ensembles on Dask
+    h = sc.frf("building", input="floor3", output="floor3")  # h.omega, h.magnitude, h.phase, h.plot()
+    sc.animate("seed", mode=2, out="springchain-out")          # a GIF of mode 2 oscillating
 
 Subpackages: :mod:`springchain.derive` (SymPy), :mod:`springchain.numeric` (NumPy/SciPy),
 :mod:`springchain.generated` (generated modules of the bundled scenes).
@@ -25,6 +27,7 @@ _LAZY = {
     "method_names": "._api", "Modes": "._api", "Simulation": "._api",
     "SceneError": ".derive.errors", "RunRefused": ".numeric.errors", "Scene": ".derive.scene",
     "bundled_scenes": "._scenes", "sweep": "._sweep", "SweepResult": "._sweep",
+    "frf": "._frf", "FrequencyResponse": "._frf", "animate": "._animate", "Animation": "._animate",
 }
 
 __all__ = ["__version__", *_LAZY]

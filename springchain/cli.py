@@ -265,6 +265,27 @@ def cmd_sweep(args) -> int:
     return 0
 
 
+def cmd_frf(args) -> int:
+    from ._frf import frf
+
+    result = frf(args.scene, args.input, args.output, args.omega_min, args.omega_max, args.points)
+    path = result.save(args.out)
+    if args.json:
+        print(json.dumps(result.to_json()))
+        return 0
+    print(result.to_text(), end="")
+    print(f"wrote {path}")
+    return 0
+
+
+def cmd_animate(args) -> int:
+    from ._animate import animate
+
+    result = animate(args.scene, mode=args.mode, method=args.method, out=args.out, frames=args.frames, fps=args.fps)
+    print(f"{result.describe()}\nwrote {result.path}")
+    return 0
+
+
 # -- parser ---------------------------------------------------------------------------------
 def build_parser() -> argparse.ArgumentParser:
     p = _Parser(prog="springchain",
@@ -395,12 +416,58 @@ def build_parser() -> argparse.ArgumentParser:
     sw.add_argument("--json", action="store_true", help="print one JSON object and nothing else")
     sw.add_argument("--no-progress", action="store_true", help="no progress lines on stderr")
     sw.set_defaults(func=cmd_sweep)
+
+    fr = sub.add_parser("frf", help="frequency response X_out/F_in: Bode figure, JSON, transfer function",
+                        description="The receptance H(iw) = X_out / F_in of (K - w^2 M + i w C) X = F (a dense "
+                                    "solve per frequency; a tridiagonal one for [chain] scenes) on a log grid "
+                                    "refined around every resonance, with the exact peak of |H| of each damped "
+                                    "one (undamped resonances are infinite: the grid stops 1e-4 short of them). "
+                                    "Prints the resonances and, for scenes of at most 6 masses, the transfer "
+                                    "function H(s) as a ratio of polynomials in s (text and LaTeX); writes the "
+                                    "Bode figure DIR/<scene>-frf-<in>-<out>.png.")
+    fr.add_argument("scene", help="a scene file (TOML) or the name of a bundled scene, e.g. building")
+    fr.add_argument("--input", required=True, metavar="MASS",
+                    help="the mass the unit harmonic force drives (a name; an index for [chain] scenes)")
+    fr.add_argument("--output", required=True, metavar="MASS",
+                    help="the mass whose displacement is measured (a name; an index for [chain] scenes)")
+    fr.add_argument("--omega-min", type=_positive_float("--omega-min"), metavar="W",
+                    help="lowest angular frequency [rad/s] (default: smallest nonzero natural frequency / 10)")
+    fr.add_argument("--omega-max", type=_positive_float("--omega-max"), metavar="W",
+                    help="highest angular frequency [rad/s] (default: largest natural frequency x 3)")
+    fr.add_argument("--points", type=_positive_int("--points"), default=400, metavar="P",
+                    help="log-spaced base points; each resonance adds its refinement (default: %(default)s)")
+    fr.add_argument("--json", action="store_true",
+                    help='print one JSON object {"omega", "magnitude", "phase" (deg), "resonances", '
+                         '"transfer_function", ...} and nothing else')
+    fr.add_argument("--out", default="springchain-out", metavar="DIR", help="folder for the Bode figure (default: %(default)s)")
+    fr.set_defaults(func=cmd_frf)
+
+    an = sub.add_parser("animate", help="a GIF of a mode shape oscillating or of a simulated trajectory",
+                        description="Write DIR/<scene>-mode<J>.gif (mode J, counted from 0 in ascending "
+                                    "frequency, rigid-body modes included) or DIR/<scene>-<method>.gif (the "
+                                    "scene simulated from its initial state by METHOD, a few frames recorded). "
+                                    "Masses are dots on a line joined by springs, displacements scaled to be "
+                                    "visible; [chain] scenes show a decimated displacement profile.")
+    an.add_argument("scene", help="a scene file (TOML) or the name of a bundled scene, e.g. seed")
+    what = an.add_mutually_exclusive_group()
+    what.add_argument("--mode", type=_whole("--mode"), metavar="J",
+                      help="animate mode J (0 = lowest frequency; default: the lowest elastic mode)")
+    what.add_argument("--method", metavar="NAME",
+                      help=f"animate the trajectory of method NAME ({', '.join(method_names())})")
+    an.add_argument("--frames", type=_positive_int("--frames"), default=48, metavar="F",
+                    help="frames in the GIF (default: %(default)s)")
+    an.add_argument("--fps", type=_positive_float("--fps"), default=16.0, metavar="R",
+                    help="frames per second (default: %(default)g)")
+    an.add_argument("--out", default="springchain-out", metavar="DIR", help="output folder (default: %(default)s)")
+    an.set_defaults(func=cmd_animate)
     return p
 
 
 #: The flag that sets each quantity a library error may name.
 FLAGS = {"dt": "--dt", "steps": "--steps", "record_every": "--record-every", "method": "--method",
-         "rtol": "--rtol", "atol": "--atol", "tol": "--tol", "spectrum": "--spectrum"}
+         "rtol": "--rtol", "atol": "--atol", "tol": "--tol", "spectrum": "--spectrum",
+         "input": "--input", "output": "--output", "omega_min": "--omega-min", "omega_max": "--omega-max",
+         "points": "--points", "mode": "--mode", "frames": "--frames", "fps": "--fps"}
 
 
 def _flag_for(args, quantity: str | None) -> str | None:

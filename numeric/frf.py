@@ -1,0 +1,399 @@
+"""Frequency response: the receptance ``H(iω) = X_out / F_in`` of a linear scene.
+
+``(K − ω²M + iωC) X = F`` is solved once per frequency with ``F`` the unit force on the input
+mass: a batched dense LU for ``[masses]`` scenes (small N), a tridiagonal ``solve_banded`` for
+``[chain]`` scenes (a ring's corner entries by one Sherman–Morrison correction), never an N × N
+matrix for a chain. Cubic springs enter by their linear part (the response of the linearisation
+about x = 0); gravity, forces and ground motion do not change H.
+
+The grid
+--------
+A log-spaced grid over ``[omega_min, omega_max]`` (default: the smallest nonzero ω / 10 to the
+largest ω · 3, from the accurate spectrum of :mod:`numeric.spectrum`), refined around every
+resonance in range (at most :data:`MAX_REFINED`, the lowest): points at ``ω_d (1 ± b g)`` for
+``g`` log-spaced over three decades around the half-power half-width ``b = ζ``. For a damped
+resonance the local maximum of ``|H|`` is then found by a bounded scalar search (each trial is
+one more exact solve) and added to the grid, so the printed peak is the exact peak of ``|H|``,
+not the nearest grid point.
+
+An **undamped** resonance (ζ = 0: no dampers, or a mode the dampers do not touch) has
+``|H| = ∞`` at ``ω_j``: no grid point is put closer to it than :data:`UNDAMPED_GAP` (relative),
+the grid approaches it from both sides, and the figure marks ``ω_j`` by a vertical line instead
+of a peak.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+import scipy.linalg
+
+from .errors import RunRefused
+from .system import System
+
+#: Resonances refined (the lowest in range); long chains have more modes than any grid.
+MAX_REFINED = 40
+#: Extra grid points per refined resonance.
+REFINE_POINTS = 24
+#: Closest relative distance of a grid point to an undamped ω_j (|H| ∝ 1/gap there).
+UNDAMPED_GAP = 1e-4
+#: Closest relative distance to an undamped ω_j of a mode with a node at the input or output
+#: (H is finite there, but the solve's error grows like 1/gap times |X|/|X_out|).
+SILENT_GAP = 1e-2
+#: Below this ζ a resonance counts as undamped.
+UNDAMPED_ZETA = 1e-9
+#: Frequencies solved at once by the dense path (bounds the (W, N, N) stack to ~32 MB).
+_DENSE_BYTES = 32 * 2**20
+
+
+@dataclass(frozen=True)
+class Operator:
+    """``K``, ``M``, ``C`` of a linear scene, as the solver needs them.
+
+    Dense scenes: ``K``, ``C`` of shape (N, N). Chains: ``K`` and ``C`` as tridiagonal bands
+    ``(diag (N,), off (N-1,), corner)`` with ``corner`` the coupling of masses 0 and N−1 (rings).
+    ``C`` is None without damping.
+    """
+
+    masses: np.ndarray = field(repr=False)
+    K: object = field(repr=False)
+    C: object = field(default=None, repr=False)
+    banded: bool = False
+
+    @property
+    def n(self) -> int:
+        return int(self.masses.shape[0])
+
+
+def _corner(n: int, ends: np.ndarray, values: np.ndarray) -> float:
+    """The coupling ``-Σ k`` of the elements joining masses 0 and n−1 of a ring (n > 2)."""
+    ends = np.asarray(ends, dtype=np.intp).reshape(-1, 2)
+    ring = (np.minimum(ends[:, 0], ends[:, 1]) == 0) & (np.maximum(ends[:, 0], ends[:, 1]) == n - 1) & (n > 2)
+    return -float(np.sum(np.asarray(values, dtype=float)[ring]))
+
+
+def _bands_of_dense(A: np.ndarray) -> tuple[np.ndarray, np.ndarray, float]:
+    """Tridiagonal bands and ring corner of a dense matrix that has no other entries."""
+    n = A.shape[0]
+    corner = float(A[0, n - 1]) if n > 2 else 0.0
+    rest = A - np.diag(np.diag(A)) - np.diag(np.diag(A, 1), 1) - np.diag(np.diag(A, -1), -1)
+    if n > 2:
+        rest[0, n - 1] = rest[n - 1, 0] = 0.0
+    if np.any(rest != 0):
+        raise RunRefused("frequency response of a chain: its damping couples masses further apart than "
+                         "neighbours (accepted: tridiagonal, ring corners)")
+    return np.diag(A).copy(), np.diag(A, 1).copy(), corner
+
+
+def operator(system: System) -> Operator:
+    """The matrices of ``system`` (bands for a ``[chain]``, dense otherwise)."""
+    mod, p = system.module, system.params
+    if not system.chain:
+        K = np.asarray(mod.stiffness_matrix(**p), dtype=float)
+        C = np.asarray(mod.damping_matrix(**p), dtype=float) if system.damped else None
+        return Operator(system.masses, K, C, False)
+    n = system.n
+    diag, off = (np.asarray(b, dtype=float) for b in mod.stiffness_bands(**p, n=n))
+    if n == 2 and system.spring_ends.shape[0] > 1:  # a two-mass ring: both springs join 0 and 1
+        inner = (system.spring_ends >= 0).all(axis=1)
+        off = np.array([-float(system.stiffness[inner].sum())])
+    K = (diag, off, _corner(n, system.spring_ends, system.stiffness))
+    C = None
+    if system.damped:
+        if hasattr(mod, "damping_bands"):
+            cd, co = (np.asarray(b, dtype=float) for b in mod.damping_bands(**p, n=n))
+            ends = np.asarray(mod.damper_ends(n=n)) if hasattr(mod, "damper_ends") else np.zeros((0, 2))
+            vals = np.asarray(mod.damper_constants(**p, n=n)) if hasattr(mod, "damper_constants") else np.zeros(0)
+            C = (cd, co, _corner(n, ends, vals))
+        else:
+            try:
+                C = _bands_of_dense(np.asarray(mod.damping_matrix(**p, n=n), dtype=float))
+            except ValueError as exc:
+                raise RunRefused(f"frequency response of a damped chain of {n} masses: {exc}") from None
+    return Operator(system.masses, K, C, True)
+
+
+# -- solves -------------------------------------------------------------------------------------------
+def receptance(op: Operator, omega: np.ndarray, input: int, output: int) -> np.ndarray:
+    """``H(iω) = X_output / F_input`` of ``(K − ω²M + iωC) X = e_input``.
+
+    Parameters
+    ----------
+    op : Operator
+    omega : ndarray, shape (W,)
+        Angular frequencies [rad/s], none exactly on an undamped ω_j.
+    input, output : int
+        Mass indices.
+
+    Returns
+    -------
+    ndarray, shape (W,), complex
+    """
+    omega = np.asarray(omega, dtype=float).reshape(-1)
+    if op.banded:
+        return _receptance_banded(op, omega, input, output)
+    n = op.n
+    M = np.diag(op.masses)
+    out = np.empty(omega.shape[0], dtype=complex)
+    chunk = max(1, _DENSE_BYTES // (16 * n * n))
+    rhs = np.zeros((n, 1), dtype=complex)
+    rhs[input] = 1.0
+    for lo in range(0, omega.shape[0], chunk):  # chunks of frequencies, not a loop over masses
+        w = omega[lo:lo + chunk]
+        Z = op.K[None].astype(complex) - (w**2)[:, None, None] * M[None]
+        if op.C is not None:
+            Z = Z + 1j * w[:, None, None] * op.C[None]
+        out[lo:lo + chunk] = np.linalg.solve(Z, np.broadcast_to(rhs, (w.shape[0], n, 1)))[:, output, 0]
+    return out
+
+
+def _receptance_banded(op: Operator, omega: np.ndarray, input: int, output: int) -> np.ndarray:
+    """Tridiagonal (LAPACK ``gbsv``) solve per frequency; a ring corner by Sherman–Morrison."""
+    kd, ko, kc = op.K
+    cd, co, cc = op.C if op.C is not None else (0.0 * kd, 0.0 * ko, 0.0)
+    n = op.n
+    b = np.zeros((n, 2), dtype=complex)
+    b[input, 0] = 1.0
+    gtsv = scipy.linalg.lapack.get_lapack_funcs("gtsv", dtype=complex)
+    out = np.empty(omega.shape[0], dtype=complex)
+    for j, w in enumerate(omega):  # one O(n) tridiagonal solve (LAPACK zgtsv, partial pivoting) per frequency
+        diag = kd - w * w * op.masses + 1j * w * cd
+        offd = ko + 1j * w * co
+        a = kc + 1j * w * cc
+        if a == 0:
+            yq = _gtsv(gtsv, offd, diag, b[:, :1])
+            out[j] = yq[output, 0]
+            continue
+        gamma = -diag[0]  # Z = T' + u vᵀ, u = (γ, 0, …, a), v = (1, 0, …, a/γ)
+        diag[0] -= gamma
+        diag[-1] -= a * a / gamma
+        b[:, 1] = 0.0
+        b[0, 1], b[-1, 1] = gamma, a
+        yq = _gtsv(gtsv, offd, diag, b)
+        y, q = yq[:, 0], yq[:, 1]
+        vy = y[0] + (a / gamma) * y[-1]
+        vq = q[0] + (a / gamma) * q[-1]
+        out[j] = y[output] - q[output] * vy / (1.0 + vq)
+    return out
+
+
+def _gtsv(gtsv, off: np.ndarray, diag: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Solve the symmetric tridiagonal system (off, diag, off) X = b; b shape (n, r)."""
+    if diag.shape[0] == 1:
+        return b / diag[0]
+    _, _, _, x, info = gtsv(off.copy(), diag, off.copy(), b.copy(), overwrite_dl=True, overwrite_d=True,
+                            overwrite_du=True, overwrite_b=True)
+    if info != 0:
+        raise np.linalg.LinAlgError(f"tridiagonal solve: exactly singular at pivot {info}")
+    return x
+
+
+# -- resonances -----------------------------------------------------------------------------------------
+@dataclass(frozen=True)
+class Resonance:
+    """One mode's resonance: undamped ω_n, ratio ζ, damped ω_d; the peak of |H| if damped and found."""
+
+    omega_n: float
+    zeta: float
+    omega_d: float
+    peak_omega: float | None = None
+    peak_magnitude: float | None = None
+    #: False for a mode with a node at the input or the output (no resonance in this H).
+    participates: bool = True
+
+    @property
+    def undamped(self) -> bool:
+        return self.zeta <= UNDAMPED_ZETA
+
+    def as_json(self) -> dict:
+        return {"omega_n": self.omega_n, "zeta": None if np.isnan(self.zeta) else self.zeta, "omega_d": self.omega_d,
+                "peak_omega": self.peak_omega, "peak_magnitude": self.peak_magnitude}
+
+
+def undamped_omegas(system: System, count: int | None = None) -> np.ndarray:
+    """Undamped ω ascending (rigid zeros first): the accurate spectrum for ``[masses]`` scenes, the
+    closed form or a tridiagonal bisection for chains (``count`` lowest plus the largest)."""
+    mod, p = system.module, system.params
+    if not system.chain:
+        from .spectrum import spectrum
+
+        return spectrum(system.masses, system.spring_ends, system.stiffness).omega
+    n = system.n
+    if bool(getattr(mod, "UNIFORM", False)) and hasattr(mod, "mode_omega"):
+        return np.sort(np.asarray(mod.mode_omega(**p, n=n), dtype=float))
+    op = operator(system)
+    kd, ko, kc = op.K
+    if kc != 0.0:
+        if n > getattr(mod, "MAX_DENSE", 4000):
+            raise RunRefused(f"an index-dependent ring of {n} masses has no closed-form spectrum here; "
+                             "give omega_min and omega_max", quantity="omega_min")
+        from .spectrum import spectrum
+
+        return spectrum(system.masses, system.spring_ends, system.stiffness).omega
+    r = 1 / np.sqrt(system.masses)
+    d, e = kd * r * r, ko * r[:-1] * r[1:]
+    if count is None or count + 1 >= n:
+        w2 = scipy.linalg.eigvalsh_tridiagonal(d, e)
+    else:
+        low = scipy.linalg.eigvalsh_tridiagonal(d, e, select="i", select_range=(0, count - 1))
+        top = scipy.linalg.eigvalsh_tridiagonal(d, e, select="i", select_range=(n - 1, n - 1))
+        w2 = np.concatenate([low, top])
+    w = np.sqrt(np.maximum(w2, 0.0))
+    w[: int(getattr(mod, "RIGID_MODES", 0))] = 0.0
+    return w
+
+
+def _participation(system: System, input: int, output: int) -> list[Resonance]:
+    """Undamped resonances of a ``[masses]`` scene with whether each appears in H(in → out):
+    the modal residue ``Σ φ_out φ_in`` over the (possibly repeated) ω_j is nonzero."""
+    from .spectrum import spectrum
+
+    spec = spectrum(system.masses, system.spring_ends, system.stiffness)
+    prod = spec.shapes[output] * spec.shapes[input]
+    scale = max(float(np.max(np.abs(prod), initial=0.0)), 1e-300)
+    out, j = [], spec.rigid
+    w = spec.omega
+    while j < w.shape[0]:
+        end = j + 1
+        while end < w.shape[0] and w[end] - w[j] <= 1e-12 * w[j]:
+            end += 1
+        residue = float(np.sum(prod[j:end]))
+        out.append(Resonance(float(w[j]), 0.0, float(w[j]), participates=abs(residue) > 1e-9 * scale))
+        j = end
+    return out
+
+
+def resonances(system: System, op: Operator, input: int, output: int,
+               omega: np.ndarray | None = None) -> list[Resonance]:
+    """Elastic resonances, ascending: undamped ω_j (ζ = 0) without damping; with damping the poles
+    of ``M s² + C s + K`` (the generalised eigenvalues of its first-order linearisation) for
+    ``[masses]`` scenes, the undamped ω_j for chains (their peaks are found by the search)."""
+    if op.C is None and not op.banded:
+        return _participation(system, input, output)
+    omega = undamped_omegas(system, MAX_REFINED) if omega is None else omega
+    elastic = omega[omega > 0]
+    if op.C is None or op.banded:  # a chain: its lowest MAX_REFINED (more than any grid resolves)
+        zeta = 0.0 if op.C is None else float("nan")  # a damped chain: ζ not computed (no dense solve)
+        return [Resonance(float(w), zeta, float(w)) for w in elastic[:MAX_REFINED]]
+    n = op.n
+    A = np.block([[np.zeros((n, n)), np.eye(n)], [-op.K, -op.C]])
+    B = np.block([[np.eye(n), np.zeros((n, n))], [np.zeros((n, n)), np.diag(op.masses)]])
+    lam = scipy.linalg.eigvals(A, B)
+    lam = lam[np.isfinite(lam)]
+    scale = max(float(np.max(np.abs(lam), initial=0.0)), 1e-300)
+    osc = sorted((l for l in lam if l.imag > 1e-12 * scale), key=lambda l: l.imag)
+    return [Resonance(float(abs(l)), float(max(-l.real / abs(l), 0.0)), float(l.imag)) for l in osc]
+
+
+def default_range(res: list[Resonance], omega: np.ndarray) -> tuple[float, float]:
+    """``(smallest nonzero ω / 10, largest ω · 3)`` of the undamped ``omega``; refused for a scene
+    without an elastic mode."""
+    elastic = omega[omega > 0]
+    if elastic.size == 0:
+        raise RunRefused("the scene has no elastic mode (every ω is 0), so there is no default frequency "
+                         "range; give omega_min and omega_max", quantity="omega_min")
+    lo = min(float(elastic[0]), min((r.omega_d for r in res if r.omega_d > 0), default=np.inf))
+    return lo / 10, float(elastic[-1]) * 3
+
+
+# -- the response -----------------------------------------------------------------------------------
+@dataclass(frozen=True)
+class Response:
+    """A receptance on a refined grid.
+
+    Attributes
+    ----------
+    omega : ndarray, shape (W,)
+        Angular frequencies [rad/s], ascending.
+    H : ndarray, shape (W,), complex
+        Receptance X_out / F_in [m/N].
+    resonances : list of Resonance
+        In range, ascending.
+    """
+
+    omega: np.ndarray = field(repr=False)
+    H: np.ndarray = field(repr=False)
+    resonances: list = field(default_factory=list, repr=False)
+
+    @property
+    def magnitude(self) -> np.ndarray:
+        """|H| [m/N], shape (W,)."""
+        return np.abs(self.H)
+
+    @property
+    def phase(self) -> np.ndarray:
+        """Phase of H in degrees, unwrapped along ω, shape (W,)."""
+        return np.degrees(np.unwrap(np.angle(self.H)))
+
+
+def _grid(lo: float, hi: float, points: int, res: list[Resonance]) -> np.ndarray:
+    base = np.geomspace(lo, hi, points)
+    extra = []
+    g = np.geomspace(0.03, 30.0, REFINE_POINTS // 2)
+    for r in [r for r in res if r.participates][:MAX_REFINED]:
+        width = r.zeta if r.zeta > UNDAMPED_GAP / g[0] else UNDAMPED_GAP / g[0]  # (NaN: the gap)
+        near = r.omega_d * np.concatenate([1 - width * g, 1 + width * g])
+        extra.append(near[(near > 0)])
+        if not r.undamped and not np.isnan(r.zeta):
+            extra.append([r.omega_d])
+    grid = np.union1d(base, np.concatenate(extra)) if extra else base
+    grid = grid[(grid >= lo) & (grid <= hi)]
+    for r in res:  # never on (or within the gap of) an undamped ω_j
+        if r.undamped:  # wider around a mode H does not see: Z is near-singular but H is not large
+            gap = UNDAMPED_GAP if r.participates else SILENT_GAP
+            grid = grid[np.abs(grid / r.omega_d - 1) >= gap * (1 - 1e-9)]
+    return grid
+
+
+def _peak(op: Operator, r: Resonance, input: int, output: int) -> tuple[float, float] | None:
+    """The local maximum of |H| near a damped resonance (bounded search), or None (none inside)."""
+    from scipy.optimize import minimize_scalar
+
+    half = min(3 * r.zeta, 0.5) * r.omega_d
+    a, b = r.omega_d - half, r.omega_d + half
+    f = lambda w: -abs(receptance(op, np.array([w]), input, output)[0])  # noqa: E731
+    sol = minimize_scalar(f, bounds=(a, b), method="bounded", options={"xatol": 1e-13 * r.omega_d})
+    w = float(sol.x)
+    if not (a + 1e-6 * half < w < b - 1e-6 * half) or -sol.fun <= max(-f(a), -f(b)):
+        return None
+    return w, float(-sol.fun)
+
+
+def frequency_response(system: System, input: int, output: int, omega_min: float | None = None,
+                       omega_max: float | None = None, points: int = 400) -> Response:
+    """The receptance ``X_output / F_input`` on a grid refined at every resonance.
+
+    Parameters
+    ----------
+    system : System
+    input, output : int
+        Mass indices (0-based).
+    omega_min, omega_max : float, optional
+        Range [rad/s]; default from the spectrum (see the module docstring).
+    points : int
+        Log-spaced base points (the refinement adds up to ``REFINE_POINTS + 2`` per resonance).
+
+    Returns
+    -------
+    Response
+    """
+    op = operator(system)
+    natural = undamped_omegas(system, MAX_REFINED)
+    res = resonances(system, op, input, output, natural)
+    lo, hi = default_range(res, natural) if omega_min is None or omega_max is None else (0.0, 0.0)
+    lo = omega_min if omega_min is not None else lo
+    hi = omega_max if omega_max is not None else hi
+    if not lo < hi:
+        raise RunRefused(f"omega_min {lo:g} >= omega_max {hi:g}: accepted: omega_min < omega_max",
+                         quantity="omega_min" if omega_min is not None else "omega_max")
+    inside = [r for r in res if lo <= r.omega_d <= hi]
+    if not op.banded:  # the exact peak of the lowest MAX_REFINED damped resonances
+        inside = [r if r.undamped or not r.participates or k >= MAX_REFINED
+                  else Resonance(r.omega_n, r.zeta, r.omega_d, *(_peak(op, r, input, output) or (None, None)))
+                  for k, r in enumerate(inside)]
+    grid = _grid(lo, hi, points, inside)
+    peaks = [r.peak_omega for r in inside if r.peak_omega is not None and lo <= r.peak_omega <= hi]
+    if peaks:
+        grid = np.union1d(grid, peaks)
+    return Response(grid, receptance(op, grid, input, output), inside)
