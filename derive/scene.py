@@ -29,6 +29,7 @@ from ..ends import END_WORDS, End
 from .errors import SceneError
 from .expr import CONSTANTS, FUNCTIONS, Expr, Num, accepted_form
 from .scene_loader import _CHUNK, Loader, did_you_mean
+from .damping import DampingModel, parse_damping
 from .loads import FORCE_KEYS, Ground, TableForce, parse_forces, parse_ground  # noqa: F401
 
 WALL = -1
@@ -53,7 +54,7 @@ MAX_STEPS = 10**12
 MAX_CHAIN = 10**7
 
 TOP_KEYS = ("name", "description", "parameters", "masses", "springs", "dampers", "forces",
-            "gravity", "ground", "chain", "initial", "simulation")
+            "gravity", "ground", "damping", "chain", "initial", "simulation")
 SPRING_KEYS = ("between", "k", "k3")
 DAMPER_KEYS = ("between", "c")
 GRAVITY_KEYS = ("g",)
@@ -137,6 +138,8 @@ class Scene:
     #: Tabulated forces (``[[forces]]`` with ``table``) and ground motion (``[ground]``).
     table_forces: tuple[TableForce, ...] = ()
     ground: Ground | None = None
+    #: ``[damping]``: Rayleigh or modal damping (None without the table).
+    damping: DampingModel | None = None
 
     @property
     def n(self) -> int:
@@ -333,6 +336,10 @@ def _build(ld: Loader, sha: str) -> Scene:
         c = ld.expression(f"{key}.c", d["c"], pnames, positive=True, bounded=True, env=env)
         dampers.append(Damper(a, b, c, key))
 
+    if chain is not None and "damping" in data:
+        raise ld.bad("damping", "[damping] with [chain]", "not yet supported", "[damping] with [masses]")
+    damping = parse_damping(ld, pnames, env, n, chain=chain is not None)
+
     times = np.linspace(0.0, dt * steps, 257)
     forces, table_forces = parse_forces(ld, ld.array_of_tables("forces"),
                                         chain_n=None if chain is None else chain.n, index=index,
@@ -354,7 +361,8 @@ def _build(ld: Loader, sha: str) -> Scene:
                  parameters=parameters, mass_names=mass_names, mass_exprs=mass_exprs,
                  springs=tuple(springs), dampers=tuple(dampers), forces=tuple(forces),
                  gravity=gravity, chain=chain, x0=x0, v0=v0, dt=dt, steps=steps,
-                 record_every=record_every, table_forces=table_forces, ground=ground)
+                 record_every=record_every, table_forces=table_forces, ground=ground,
+                 damping=damping)
 
 
 def _chain(ld: Loader, pnames: frozenset[str], env: dict) -> Chain:
