@@ -140,6 +140,8 @@ class Scene:
     ground: Ground | None = None
     #: ``[damping]``: Rayleigh or modal damping (None without the table).
     damping: DampingModel | None = None
+    #: ``[[dampers]]`` of a ``[chain]`` scene (families indexed by i, or single dashpots).
+    chain_dampers: tuple = ()
 
     @property
     def n(self) -> int:
@@ -327,17 +329,21 @@ def _build(ld: Loader, sha: str) -> Scene:
         springs.append(Spring(a, b, k, k3, key))
 
     dampers = []
-    for j, d in enumerate(ld.array_of_tables("dampers")):
+    chain_dampers = ()
+    if chain is not None:
+        from .chain_dampers import parse_chain_dampers
+
+        chain_dampers = parse_chain_dampers(ld, ld.array_of_tables("dampers"), chain.n, pnames, env)
+    for j, d in enumerate(ld.array_of_tables("dampers") if chain is None else ()):
         key = f"dampers[{j}]"
-        if chain is not None:
-            raise ld.bad(key, "[[dampers]] with [chain]", "not yet supported", "[[dampers]] with [masses]")
         ld.keys(d, DAMPER_KEYS, key, required=("between", "c"), what="a [[dampers]] entry")
         a, b = ends(f"{key}.between", d["between"])
         c = ld.expression(f"{key}.c", d["c"], pnames, positive=True, bounded=True, env=env)
         dampers.append(Damper(a, b, c, key))
 
-    if chain is not None and "damping" in data:
-        raise ld.bad("damping", "[damping] with [chain]", "not yet supported", "[damping] with [masses]")
+    if chain is not None and isinstance(data.get("damping"), dict) and "modal" in data["damping"]:
+        raise ld.bad("damping.modal", data["damping"]["modal"], "modal damping on a [chain] is not yet supported",
+                     "rayleigh = [ALPHA, BETA] or [[dampers]] on a [chain]; modal with [masses]")
     damping = parse_damping(ld, pnames, env, n, chain=chain is not None)
 
     times = np.linspace(0.0, dt * steps, 257)
@@ -362,7 +368,7 @@ def _build(ld: Loader, sha: str) -> Scene:
                  springs=tuple(springs), dampers=tuple(dampers), forces=tuple(forces),
                  gravity=gravity, chain=chain, x0=x0, v0=v0, dt=dt, steps=steps,
                  record_every=record_every, table_forces=table_forces, ground=ground,
-                 damping=damping)
+                 damping=damping, chain_dampers=chain_dampers)
 
 
 def _chain(ld: Loader, pnames: frozenset[str], env: dict) -> Chain:
