@@ -183,6 +183,10 @@ def render_text(model: Model, modes: ModeSet) -> str:
                 "K = d²V/dx² =", _indent(_pretty(model.K))]
         if model.C is not None:
             out += ["", "C = d²R/dv² =", _indent(_pretty(model.C))]
+        if model.modal_zeta is not None:
+            out += ["", ("C += " if model.C is not None else "C = ") + "M Φ diag(2 ζ_j ω_j) Φᵀ M  (modal damping, "
+                    "ζ = (" + ", ".join(sp.sstr(z) for z in model.modal_zeta) + "); Φ the M-orthonormal modes; "
+                    "numeric: damping_matrix() of the generated module)"]
         out += ["", "D = M^-1/2 K M^-1/2 =", _indent(_pretty(model.D))]
     else:
         out += ["", f"M, K, D: {n}x{n} (not printed; see the generated module)"]
