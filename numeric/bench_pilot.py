@@ -21,7 +21,7 @@ from .bench_records import BenchConfig, BenchRecord, BenchResult
 from .integrators import ADAPTIVE, INTEGRATORS
 from .integrators.base import Problem
 from .plan import adaptive_atol
-from .plan_pilot import REFERENCE_FLOATS, ExactReference, PilotPlanner, _grid, full_problem, wrapped
+from .plan_pilot import REFERENCE_FLOATS, adaptive_applies, ExactReference, PilotPlanner, _grid, full_problem, wrapped
 from .system import System
 from .timing import measure
 from .driver import integrate, step_grid
@@ -94,7 +94,7 @@ def run_pilot_bench(system: System, x0: np.ndarray, v0: np.ndarray, t_end: float
     size = max(float(np.max(np.abs(xr))), 1e-300)
     fp = full_problem(system)
     for name, cls_ in ADAPTIVE.items():
-        if methods and name not in methods:
+        if (methods and name not in methods) or not adaptive_applies(name, n):
             continue
         rtols = config.dop853_rtols if name == "dop853" else config.rtols
         for rtol in rtols:

@@ -100,6 +100,11 @@ class ExactReference:
         return self._cache[key]
 
 
+def adaptive_applies(name: str, n: int) -> bool:
+    """LSODA keeps a dense N × N Jacobian: left out above MAX_MASSES masses."""
+    return not (name == "lsoda" and n > MAX_MASSES)
+
+
 def wrapped(system: System, integ: Integrator) -> Integrator:
     """The integrator as runs use it: damping/forcing splitting around it where the scene needs it."""
     if system.damped or system.forced:
@@ -255,7 +260,8 @@ class PilotPlanner:
             integs[name] = integ
             laws[name] = _pilot_law(system, integ, problem, ref, x0, v0, t_end, dt_out, w_max)
             h_probe = min(dt_out, 0.5 * integ.stability_limit / max(w_max, 1e-300))
-            costs[name] = measure_step_cost(wrapped(system, cls_()), problem, x0, v0, h_probe)
+            short, long = (32, 288) if system.n <= MAX_MASSES else (2, max(4, min(288, int(PILOT_WORK // (8 * system.n)))))
+            costs[name] = measure_step_cost(wrapped(system, cls_()), problem, x0, v0, h_probe, short, long)
         # the exact method: its cost on the output grid (timed on a sample of it), rounding-level error
         grid = _grid(t_end, dt_out, 1)
         sample = min(grid.frames, max(2, int(REFERENCE_FLOATS // max(system.n, 1))), 2001)
@@ -276,7 +282,7 @@ class PilotPlanner:
                 return ref.at(t)[0]
 
             for name, cls_ in ADAPTIVE.items():
-                if methods and name not in methods:
+                if (methods and name not in methods) or not adaptive_applies(name, system.n):
                     continue
                 laws_a[name] = calibrate_adaptive(cls_(), fp, x0, v0, t_ad, g.spacing, reference, scale=size)
         return cls(float(t_end), float(dt_out), system.n, w_max, laws, integs, costs, laws_a, exact_seconds,
@@ -322,4 +328,5 @@ class PilotPlanner:
         return Plan(tol, self.t_end, min(ok, key=lambda c: c.predicted_seconds), ok, bad)
 
 
-__all__ = ["PilotPlanner", "PilotLaw", "ExactReference", "needs_pilot", "check_pilot", "wrapped", "full_problem"]
+__all__ = ["PilotPlanner", "PilotLaw", "ExactReference", "needs_pilot", "check_pilot", "wrapped", "full_problem",
+           "adaptive_applies"]
