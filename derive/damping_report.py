@@ -94,18 +94,39 @@ def _is_proportional(w2, G, dps: int) -> bool:
     return True
 
 
+def _cluster_diagonal(w2, G, dps: int) -> list:
+    """Diagonal of G after rotating inside each repeated ω (where any basis is a basis of modes):
+    the eigenvalues of each cluster's block, ascending; G's own diagonal elsewhere."""
+    n = len(w2)
+    tiny = mpmath.mpf(10) ** (-(dps // 2))
+    wscale = max([abs(w) for w in w2] + [mpmath.mpf(1)])
+    out = [G[j, j] for j in range(n)]
+    j = 0
+    while j < n:
+        k = j + 1
+        while k < n and abs(w2[k] - w2[j]) <= tiny * wscale:
+            k += 1
+        if k - j > 1:
+            block = mpmath.matrix([[G[a, b] for b in range(j, k)] for a in range(j, k)])
+            vals = sorted(mpmath.eigsy(block, eigvals_only=True))
+            out[j:k] = vals
+        j = k
+    return out
+
+
 def _rows_at(model: Model, dps: int) -> tuple[list[tuple], bool]:
     w2, G = _modal_damping(model, dps)
     n = len(w2)
     with mpmath.workdps(dps):
         if _is_proportional(w2, G, dps):
+            diag = _cluster_diagonal(w2, G, dps)
             rows = []
             for j in range(n):
                 w = mpmath.sqrt(w2[j])
                 if w2[j] == 0:
                     rows.append((0.0, None, 0.0, None))
                     continue
-                g = G[j, j]
+                g = diag[j]
                 wd2 = w2[j] - g * g / 4
                 rows.append((float(w), float(g / (2 * w)), float(mpmath.sqrt(wd2)) if wd2 > 0 else 0.0, None))
             return rows, True
