@@ -333,3 +333,17 @@ def test_bad_damping_is_refused_in_one_line(extra, expect, tmp_path, capsys):
     assert status == 2 and out == ""
     assert len(err.splitlines()) == 1 and str(path) in err and expect in err, err
     assert "accepted:" in err
+
+
+def test_repeated_frequency_with_proportional_dashpots(tmp_path, capsys):
+    """ring4 with a dashpot beside every spring: C = (c/k) K, so zeta_j = c*omega_j/(2k) also for the
+    repeated pair (whatever basis of it the eigen-solver picks); the rigid mode has no ratio."""
+    text = (ROOT / "scenes" / "ring4.toml").read_text().replace("k = 1.0\n", "k = 1.0\nc = 0.1\n", 1)
+    for a, b in (("m1", "m2"), ("m2", "m3"), ("m3", "m4"), ("m4", "m1")):
+        text = text.replace("[initial]", f'[[dampers]]\nbetween = ["{a}", "{b}"]\nc = "c"\n\n[initial]')
+    data = modes_json(text, tmp_path, capsys)
+    assert data["damping"]["proportional"] is True
+    ratios = [r["damping_ratio"] for r in data["modes"]]
+    assert ratios[0] is None
+    w = np.sqrt([r["omega2_value"] for r in data["modes"][1:]])
+    assert ratios[1:] == pytest.approx(0.1 * w / 2, rel=1e-13)
