@@ -67,6 +67,10 @@ class ChainModel:
         self.table_forces = tuple((tf.on, tf.key) for tf in scene.table_forces)
         self.ground = None if scene.ground is None or scene.ground.acceleration is None else \
             scene.ground.acceleration.to_sympy({**self.params, "t": self.t})
+        # damping: [[dampers]] families/single dashpots (c may use i) and [damping] rayleigh
+        self.dampers = tuple((d.kind, d.a, d.b, d.c.to_sympy(sym), d.key) for d in scene.chain_dampers)
+        self.rayleigh = None if scene.damping is None or scene.damping.rayleigh is None else \
+            tuple(e.to_sympy(self.params) for e in scene.damping.rayleigh)
 
     def mass_at(self, index: int) -> sp.Expr:
         """The mass of chain element ``index``."""
@@ -97,7 +101,9 @@ class ChainModel:
         return tuple(sorted({"spring", *(["cubic"] if self.k3 is not None else []),
                              *(["force"] if self.forces else []), *(["table"] if self.table_forces else []),
                              *(["ground"] if self.scene.ground is not None else []),
-                             *(["gravity"] if self.g is not None else [])}))
+                             *(["gravity"] if self.g is not None else []),
+                             *(["damper"] if self.dampers else []),
+                             *(["rayleigh"] if self.rayleigh is not None else [])}))
 
     @property
     def rigid_modes(self) -> int:
@@ -210,6 +216,10 @@ def chain_report(model: ChainModel, modes: ChainModes, omega2_values=None) -> tu
     from .loadgen import chain_load_lines
 
     lines += chain_load_lines(model)
+    from .chain_damping_code import chain_damping_report_lines
+
+    damping_lines, damping_data = chain_damping_report_lines(model, modes)
+    lines += damping_lines
     if modes.omega2 is not None:
         lo, hi = modes.j_range
         lines += ["", f"Normal modes ({modes.boundary}, closed form), j = {lo} ... {hi}:",
@@ -228,6 +238,8 @@ def chain_report(model: ChainModel, modes: ChainModes, omega2_values=None) -> tu
             "j_range": None if modes.j_range is None else list(modes.j_range),
             "family": {"omega2": None if modes.omega2 is None else sp.sstr(modes.omega2),
                        "shape": None if modes.shape is None else sp.sstr(modes.shape)}}
+    if damping_data is not None:
+        data["damping"] = damping_data
     return "\n".join(lines) + "\n", data
 
 
@@ -408,6 +420,9 @@ def render_chain_module(model: ChainModel, *, bundled: bool = True) -> str:
     from .loadgen import chain_load_code
 
     w_lines.extend(chain_load_code(model, sig, kw))
+    from .chain_damping_code import chain_damping_code
+
+    w_lines.extend(chain_damping_code(model, sig, kw))
     w("")
     w("")
     w(f"def stiffness_bands({sig}, n=N):")

@@ -293,7 +293,7 @@ def render_module(model: Model, modes: ModeSet, *, bundled: bool = True) -> str:
     w("")
     stable = stable_closed_forms(modes)
     w("import numpy as _np")
-    if stable is None:
+    if stable is None or model.modal_zeta is not None:
         w("import scipy.linalg as _linalg")
     w("")
     w(f"SCENE = {sc.name!r}")
@@ -350,15 +350,10 @@ def render_module(model: Model, modes: ModeSet, *, bundled: bool = True) -> str:
         w(f"    return {_matrix(model.K)}")
     else:
         w(f"    return _assemble(_SPRING_ENDS, spring_constants({kwcall}))")
-    if model.C is not None:
-        w("")
-        w("")
-        w(f"def damping_matrix({sig}):")
-        w('    """C = d²R/dv² (Rayleigh dissipation), shape (N, N)."""')
-        if dense:
-            w(f"    return {_matrix(model.C)}")
-        else:
-            w(f"    return _assemble(_DAMPER_ENDS, damper_constants({kwcall}))")
+    if model.damped:
+        from .damping_code import damping_matrix_lines
+
+        lines.extend(damping_matrix_lines(model, sig, kwcall, _matrix if dense else None))
     w("")
     w("")
     w(f"def dynamical_matrix({sig}):")
@@ -416,6 +411,7 @@ def render_module(model: Model, modes: ModeSet, *, bundled: bool = True) -> str:
         w(f"    Computed numerically ({why}) by _accurate_modes().")
         w('    """')
         w(f"    return _accurate_modes(masses({kwcall}), spring_constants({kwcall}))[1]")
+    if stable is None or model.modal_zeta is not None:
         lines.extend(_HELPER.rstrip("\n").split("\n")[1:])
     w("")
     w("")
@@ -481,12 +477,18 @@ def render_module(model: Model, modes: ModeSet, *, bundled: bool = True) -> str:
         w(f"        return acceleration(_y{', ' + kwcall if kwcall else ''})")
     w("")
     w("    return _bound")
-    if model.dampers:
-        damp = model.force_expressions(Effect.DAMPER)
+    if model.damped and model.modal_zeta is not None:
+        from .damping_code import matrix_damping_acceleration_lines
+
+        lines.extend(matrix_damping_acceleration_lines(kw, kwcall))
+    elif model.damped:
+        damp = model.force_expressions(Effect.DAMPER, Effect.RAYLEIGH)
+        what = " and ".join((["the dampers"] if model.dampers else [])
+                            + (["Rayleigh damping"] if model.rayleigh is not None else []))
         w("")
         w("")
         w(f"def damping_acceleration(_v{kw}):")
-        w('    """Acceleration -M^-1 C v from the dampers; v and result have shape (N, ...)."""')
+        w(f'    """Acceleration -M^-1 C v from {what}; v and result have shape (N, ...)."""')
         w(f"    {vs} = _v")
         w("    _out = numpy.empty(numpy.shape(_v))")
         for i in range(n):

@@ -29,6 +29,8 @@ class Effect(enum.Enum):
     GRAVITY = "gravity"
     TABLE = "table"
     GROUND = "ground"
+    RAYLEIGH = "rayleigh"
+    MODAL_DAMPING = "modal_damping"
 
 
 @dataclass(frozen=True)
@@ -119,6 +121,13 @@ class Model:
         #: Ground acceleration: the expression of t, or None for a table or without [ground].
         self.ground = None if scene.ground is None or scene.ground.acceleration is None else \
             scene.ground.acceleration.to_sympy(sym)
+        damping = scene.damping
+        #: ``(α, β)`` of Rayleigh damping C = αM + βK ([damping] rayleigh), else None.
+        self.rayleigh = None if damping is None or damping.rayleigh is None else \
+            tuple(e.to_sympy(sym) for e in damping.rayleigh)
+        #: Modal damping ratios ζⱼ, one per mode in ascending ω order ([damping] modal), else None.
+        self.modal_zeta = None if damping is None or damping.modal is None else \
+            tuple(e.to_sympy(sym) for e in damping.modal) * (scene.n if len(damping.modal) == 1 else 1)
 
     # -- energies ------------------------------------------------------------------
     def _ext(self, a: int, b: int, q) -> sp.Expr:
@@ -142,7 +151,18 @@ class Model:
 
     @cached_property
     def dissipation_terms(self) -> tuple[tuple[str, sp.Expr], ...]:
-        return tuple((key, c * self._ext(a, b, self.v) ** 2 / 2) for a, b, c, key in self.dampers)
+        """Rayleigh dissipation terms: one per dashpot and, for ``[damping] rayleigh``, one per mass
+        (α m v²/2) and per spring (β k (Δv)²/2), element by element. Modal damping has no
+        element form (its C is built from the modes, see :attr:`modal_zeta`)."""
+        terms = [(key, c * self._ext(a, b, self.v) ** 2 / 2) for a, b, c, key in self.dampers]
+        if self.rayleigh is not None:
+            alpha, beta = self.rayleigh
+            if alpha != 0:
+                terms += [("damping", alpha * m * v**2 / 2) for m, v in zip(self.masses, self.v)]
+            if beta != 0:
+                terms += [("damping", beta * k * self._ext(a, b, self.v) ** 2 / 2)
+                          for a, b, k, _, _ in self.springs]
+        return tuple(terms)
 
     @property
     def T(self) -> sp.Expr:
@@ -181,6 +201,7 @@ class Model:
             for i, sign in ((a, 1), (b, -1)):
                 if i != WALL:
                     out.append(Term(key, Effect.DAMPER, i, -sign * c * dv))
+        out.extend(self._damping_model_terms())
         for on, f, key in self.forces:
             out.append(Term(key, Effect.FORCE, on, f))
         for on, f, key in self.table_forces:
@@ -189,6 +210,29 @@ class Model:
             a_g = sp.Function("a_g")(self.t)
             out.extend(Term("ground", Effect.GROUND, i, -m * a_g) for i, m in enumerate(self.masses))
         return tuple(out)
+
+    def _damping_model_terms(self) -> list[Term]:
+        """``[damping]``: -(αM + βK)v per coordinate (Rayleigh), or -(C_modal v)_i shown as a symbol."""
+        n = self.scene.n
+        if self.rayleigh is not None:
+            alpha, beta = self.rayleigh
+            kv = [sp.Integer(0)] * n
+            for a, b, k, _, _ in self.springs:
+                dv = self._ext(a, b, self.v)
+                for i, sign in ((a, 1), (b, -1)):
+                    if i != WALL:
+                        kv[i] += sign * k * dv
+            return [Term("damping", Effect.RAYLEIGH, i, -(alpha * m * v + beta * sp.expand(kv[i])))
+                    for i, (m, v) in enumerate(zip(self.masses, self.v))]
+        if self.modal_zeta is not None:
+            return [Term("damping", Effect.MODAL_DAMPING, i, -sp.Symbol(f"(C_modal*v)_{name}", real=True))
+                    for i, name in enumerate(self.scene.mass_names)]
+        return []
+
+    @property
+    def damped(self) -> bool:
+        """Dashpots or a [damping] model: the generated module has a damping matrix."""
+        return self.C is not None or self.modal_zeta is not None
 
     def euler_lagrange(self) -> list[sp.Expr]:
         """``d/dt dL/dv_i - dL/dx_i + dR/dv_i - Q_i`` (= 0 on trajectories), element by element.
@@ -219,7 +263,7 @@ class Model:
         for on, f, _ in self.forces:
             lhs[on] -= f
         for term in self.terms:
-            if term.effect in (Effect.TABLE, Effect.GROUND):
+            if term.effect in (Effect.TABLE, Effect.GROUND, Effect.MODAL_DAMPING):
                 lhs[term.coordinate] -= term.force
         return lhs
 
@@ -250,10 +294,16 @@ class Model:
 
     @cached_property
     def C(self) -> sp.Matrix | None:
-        """Damping matrix ``d²R/dv²``; None for a scene without dampers."""
-        if not self.dampers:
+        """Damping matrix ``d²R/dv²`` of the dashpots and Rayleigh damping (αM + βK); None without
+        either. Modal damping is not in it (no closed form: the generated module builds it from
+        the accurate modes, see :attr:`modal_zeta`)."""
+        if not self.dampers and self.rayleigh is None:
             return None
-        return self._assemble([(a, b, c) for a, b, c, _ in self.dampers], self.v)
+        C = self._assemble([(a, b, c) for a, b, c, _ in self.dampers], self.v)
+        if self.rayleigh is not None:
+            alpha, beta = self.rayleigh
+            C = C + alpha * self.M + beta * self.K
+        return C
 
     @cached_property
     def D(self) -> sp.Matrix:

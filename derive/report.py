@@ -67,69 +67,14 @@ def mode_records(model: Model, modes: ModeSet) -> list[dict]:
     return out
 
 
-def _numeric_matrices(model: Model):
-    import numpy as np
-
-    subs = _values(model)
-    num = lambda m: np.array(m.subs(subs).evalf(17).tolist(), dtype=float)  # noqa: E731
-    return num(model.M), num(model.K), (num(model.C) if model.C is not None else None)
-
-
-def damping_table(model: Model) -> tuple[list[tuple[float, float | None, float]], bool]:
-    """Per mode (ω_n, ζ, ω_d) at the scene's values, sorted by ω_n, and whether C is proportional.
-
-    Proportional damping (ΦᵀCΦ diagonal for the M-orthonormal undamped modes Φ) keeps the
-    real modes: ζ_j = φ_jᵀCφ_j / (2ω_j). Otherwise the complex modes come from the
-    eigenvalues λ of the state-space matrix: ω_n = |λ|, ζ = -Re λ/|λ|, ω_d = |Im λ|
-    (overdamped real pairs r1, r2: ω_n = √(r1 r2), ζ = -(r1 + r2)/(2 ω_n)).
-    """
-    import numpy as np
-    import scipy.linalg
-
-    M, K, C = _numeric_matrices(model)
-    w2, Phi = scipy.linalg.eigh(K, M)
-    n_rigid = len(model.free_components)
-    w2[:n_rigid] = 0.0
-    w = np.sqrt(np.maximum(w2, 0.0))
-    Cm = Phi.T @ C @ Phi
-    off = Cm - np.diag(np.diag(Cm))
-    proportional = bool(np.max(np.abs(off), initial=0.0) <= 1e-10 * max(np.max(np.abs(Cm)), 1e-300))
-    rows: list[tuple[float, float | None, float]] = []
-    if proportional:
-        for wj, cj in zip(w, np.diag(Cm)):
-            zeta = cj / (2 * wj) if wj > 0 else None
-            rows.append((float(wj), None if zeta is None else float(zeta),
-                         float(np.sqrt(max(wj**2 - cj**2 / 4, 0.0)))))
-        return rows, True
-    n = M.shape[0]
-    A = np.block([[np.zeros((n, n)), np.eye(n)], [-np.linalg.solve(M, K), -np.linalg.solve(M, C)]])
-    lam = np.linalg.eigvals(A)
-    scale = max(np.max(np.abs(lam)), 1e-300)
-    cplx = sorted((l for l in lam if l.imag > 1e-12 * scale), key=abs)
-    real = sorted((l.real for l in lam if abs(l.imag) <= 1e-12 * scale), key=lambda r: -r)
-    for l in cplx:
-        rows.append((float(abs(l)), float(-l.real / abs(l)), float(abs(l.imag))))
-    # real eigenvalues: zeros (rigid) and overdamped pairs, slowest with fastest
-    zeros = [r for r in real if abs(r) <= 1e-12 * scale]
-    rest = [r for r in real if abs(r) > 1e-12 * scale]
-    for _ in range(len(zeros) // 2 or (1 if zeros else 0)):
-        rows.append((0.0, None, 0.0))
-    while len(rest) >= 2:
-        r1, r2 = rest.pop(0), rest.pop(-1)
-        wn = float(np.sqrt(r1 * r2))
-        rows.append((wn, float(-(r1 + r2) / (2 * wn)), 0.0))
-    rows.sort(key=lambda r: r[0])
-    return rows[:n], False
-
-
 def modes_json(model: Model, modes: ModeSet) -> dict:
     sc = model.scene
     records = mode_records(model, modes)
-    if model.C is not None:
-        table, _ = damping_table(model)
-        for rec, (_, zeta, wd) in zip(records, table):
-            rec["damping_ratio"] = zeta
-            rec["omega_damped"] = wd
+    extra = {}
+    if model.damped:
+        from .damping_report import damped_modes, json_fields
+
+        extra = json_fields(damped_modes(model, modes), records)
     return {
         "scene": sc.name,
         "parameters": {k: sc.parameters[k] for k in sorted(sc.parameters)},
@@ -137,6 +82,7 @@ def modes_json(model: Model, modes: ModeSet) -> dict:
         "modes": records,
         "closed_form": modes.closed_form,
         "notes": list(modes.notes) + effect_notes(model),
+        **extra,
     }
 
 
@@ -172,8 +118,10 @@ def effect_notes(model: Model) -> list[str]:
             notes.append("forces are constant + harmonic: exact solution = steady state "
                          "(K - Omega^2 M + i Omega C)^-1 F + transient")
     notes += _load_notes(model)
-    if model.C is not None:
-        _, prop = damping_table(model)
+    if model.damped:
+        from .damping_report import damped_modes
+
+        prop = damped_modes(model, None).proportional
         notes.append("damping is proportional (real modes, zeta_j = phi_j.C.phi_j / (2 omega_j))" if prop
                      else "damping is not proportional: complex modes (state-space eigenvalues)")
     return notes
@@ -219,9 +167,9 @@ def render_text(model: Model, modes: ModeSet) -> str:
            "",
            f"T = {sp.sstr(model.T)}",
            f"V = {sp.sstr(model.V)}"]
-    if model.dampers:
+    if model.dissipation_terms:
         out.append(f"R = {sp.sstr(model.R)}   (Rayleigh dissipation)")
-    lhs = "M x''" + (" + C x'" if model.C is not None else "") + " + K x" + (
+    lhs = "M x''" + (" + C x'" if model.damped else "") + " + K x" + (
         " + f_nl(x)" if Effect.CUBIC in model.effects else "")
     rhs = " + ".join([*(["F(t)"] if model.forces else []), *(["F_table(t)"] if model.table_forces else []),
                       *(["M g"] if model.g is not None else [])]) or "0"
@@ -235,6 +183,10 @@ def render_text(model: Model, modes: ModeSet) -> str:
                 "K = d²V/dx² =", _indent(_pretty(model.K))]
         if model.C is not None:
             out += ["", "C = d²R/dv² =", _indent(_pretty(model.C))]
+        if model.modal_zeta is not None:
+            out += ["", ("C += " if model.C is not None else "C = ") + "M Φ diag(2 ζ_j ω_j) Φᵀ M  (modal damping, "
+                    "ζ = (" + ", ".join(sp.sstr(z) for z in model.modal_zeta) + "); Φ the M-orthonormal modes; "
+                    "numeric: damping_matrix() of the generated module)"]
         out += ["", "D = M^-1/2 K M^-1/2 =", _indent(_pretty(model.D))]
     else:
         out += ["", f"M, K, D: {n}x{n} (not printed; see the generated module)"]
@@ -244,12 +196,10 @@ def render_text(model: Model, modes: ModeSet) -> str:
     out += ["", "Normal modes, K φ = ω² M φ (shapes in physical coordinates, any scale):"]
     out += ["    " + line for line in mode_lines(model, modes)]
     out += [f"    note: {note}" for note in modes.notes]
-    if model.C is not None:
-        table, _ = damping_table(model)
-        out += ["", "Damped modes at the scene's values:"]
-        for wn, zeta, wd in table:
-            z = "rigid (no restoring force)" if zeta is None else f"zeta = {zeta:.6g}"
-            out.append(f"    omega_n = {wn:.10g}   {z}   omega_d = {wd:.10g}")
+    if model.damped:
+        from .damping_report import damped_modes, damped_mode_lines
+
+        out += [""] + damped_mode_lines(model, damped_modes(model, modes))
     notes = effect_notes(model)
     if notes:
         out += [""] + [f"{n}" for n in notes]
@@ -262,7 +212,7 @@ def render_latex(model: Model, modes: ModeSet) -> str:
     lines = [r"\begin{align*}",
              rf"T &= {L(model.T)} \\",
              rf"V &= {L(model.V)} \\"]
-    if model.dampers:
+    if model.dissipation_terms:
         lines.append(rf"R &= {L(model.R)} \\")
     for i in range(len(model.scene.mass_names)):  # as the text: m_i a_i = the traced forces
         rhs = sp.Add(*(t.force for t in model.terms if t.coordinate == i))
@@ -272,5 +222,9 @@ def render_latex(model: Model, modes: ModeSet) -> str:
     for mode in modes.modes:
         for s in mode.shapes:
             lines.append(rf"\\ \omega^2 &= {L(mode.omega2)}, & \phi &= {L(sp.Matrix(s).T)}")
+    if model.damped:
+        from .damping_report import damped_modes, latex_lines
+
+        lines += latex_lines(damped_modes(model, modes))
     lines.append(r"\end{align*}")
     return "\n".join(lines) + "\n"

@@ -29,6 +29,7 @@ from ..ends import END_WORDS, End
 from .errors import SceneError
 from .expr import CONSTANTS, FUNCTIONS, Expr, Num, accepted_form
 from .scene_loader import _CHUNK, Loader, did_you_mean
+from .damping import DampingModel, parse_damping
 from .loads import FORCE_KEYS, Ground, TableForce, parse_forces, parse_ground  # noqa: F401
 
 WALL = -1
@@ -53,7 +54,7 @@ MAX_STEPS = 10**12
 MAX_CHAIN = 10**7
 
 TOP_KEYS = ("name", "description", "parameters", "masses", "springs", "dampers", "forces",
-            "gravity", "ground", "chain", "initial", "simulation")
+            "gravity", "ground", "damping", "chain", "initial", "simulation")
 SPRING_KEYS = ("between", "k", "k3")
 DAMPER_KEYS = ("between", "c")
 GRAVITY_KEYS = ("g",)
@@ -137,6 +138,10 @@ class Scene:
     #: Tabulated forces (``[[forces]]`` with ``table``) and ground motion (``[ground]``).
     table_forces: tuple[TableForce, ...] = ()
     ground: Ground | None = None
+    #: ``[damping]``: Rayleigh or modal damping (None without the table).
+    damping: DampingModel | None = None
+    #: ``[[dampers]]`` of a ``[chain]`` scene (families indexed by i, or single dashpots).
+    chain_dampers: tuple = ()
     #: Whether the file has an ``[initial]`` table (without one the scene starts at rest).
     initial_given: bool = True
 
@@ -336,14 +341,22 @@ def _build(ld: Loader, sha: str) -> Scene:
         springs.append(Spring(a, b, k, k3, key))
 
     dampers = []
-    for j, d in enumerate(ld.array_of_tables("dampers")):
+    chain_dampers = ()
+    if chain is not None:
+        from .chain_dampers import parse_chain_dampers
+
+        chain_dampers = parse_chain_dampers(ld, ld.array_of_tables("dampers"), chain.n, pnames, env)
+    for j, d in enumerate(ld.array_of_tables("dampers") if chain is None else ()):
         key = f"dampers[{j}]"
-        if chain is not None:
-            raise ld.bad(key, "[[dampers]] with [chain]", "not yet supported", "[[dampers]] with [masses]")
         ld.keys(d, DAMPER_KEYS, key, required=("between", "c"), what="a [[dampers]] entry")
         a, b = ends(f"{key}.between", d["between"])
         c = ld.expression(f"{key}.c", d["c"], pnames, positive=True, bounded=True, env=env)
         dampers.append(Damper(a, b, c, key))
+
+    if chain is not None and isinstance(data.get("damping"), dict) and "modal" in data["damping"]:
+        raise ld.bad("damping.modal", data["damping"]["modal"], "modal damping on a [chain] is not yet supported",
+                     "rayleigh = [ALPHA, BETA] or [[dampers]] on a [chain]; modal with [masses]")
+    damping = parse_damping(ld, pnames, env, n, chain=chain is not None)
 
     times = np.linspace(0.0, dt * steps, 257)
     forces, table_forces = parse_forces(ld, ld.array_of_tables("forces"),
@@ -370,7 +383,7 @@ def _build(ld: Loader, sha: str) -> Scene:
                  springs=tuple(springs), dampers=tuple(dampers), forces=tuple(forces),
                  gravity=gravity, chain=chain, x0=x0, v0=v0, dt=dt, steps=steps,
                  record_every=record_every, table_forces=table_forces, ground=ground,
-                 initial_given=bool(init))
+                 damping=damping, chain_dampers=chain_dampers, initial_given=bool(init))
 
 
 def _chain(ld: Loader, pnames: frozenset[str], env: dict) -> Chain:

@@ -230,12 +230,13 @@ def run_bench(system: System, x0: np.ndarray, v0: np.ndarray, t_end: float, dt_o
     v0 = np.asarray(v0, dtype=float)
     problem = Problem.from_system(system)
     exact = bool(system.exact_available and system.conservative)
-    if system.n > MAX_MASSES:
-        raise RunRefused(f"bench uses the dense modes of the chain: at most {MAX_MASSES} masses (this scene "
-                         f"has {system.n}); for long chains see `springchain scaling`")
-    if not system.conservative:
-        raise RunRefused("bench covers conservative scenes (springs, cubic springs); this scene has dampers, "
-                         "forces or gravity")
+    from .plan_pilot import check_pilot, needs_pilot
+
+    if needs_pilot(system):  # damped, forced, gravity, ground; long uniform chains: against the exact solution
+        check_pilot(system, "bench")
+        from .bench_pilot import run_pilot_bench
+
+        return run_pilot_bench(system, x0, v0, t_end, dt_out, scene, config, progress, methods)
     prog = _Progress(progress, 0)
     notes: list[str] = []
     prog.note(f"measuring costs and building models for {scene or 'the scene'} (t = 0 … {t_end:g})")

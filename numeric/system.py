@@ -137,10 +137,30 @@ class System:
         """
         return not (self.damped or self.forced or "gravity" in self.effects)
 
-    def damping_rate_matrix(self) -> np.ndarray | None:
-        """``-M⁻¹C``, shape (N, N); None without dampers."""
+    def damping_rate_matrix(self):
+        """``-M⁻¹C``, shape (N, N); None without dampers.
+
+        Dense, except for ``[chain]`` scenes of more than ``LOADED_CHAIN_EXACT_MAX`` masses: a
+        ``scipy.sparse`` CSR matrix assembled from the module's dashpot list (never N × N dense).
+        """
         if not self.damped:
             return None
+        if self.chain and self.n > LOADED_CHAIN_EXACT_MAX:
+            import scipy.sparse
+
+            mod, n = self.module, self.n
+            ends = np.asarray(mod.damper_ends(n), dtype=np.intp).reshape(-1, 2)
+            c = np.asarray(mod.damper_constants(**self.params, n=n), dtype=float)
+            rows, cols, vals = [], [], []
+            for ci, si in ((0, 1.0), (1, -1.0)):
+                for cj, sj in ((0, 1.0), (1, -1.0)):
+                    ok = (ends[:, ci] >= 0) & (ends[:, cj] >= 0)
+                    rows.append(ends[ok, ci])
+                    cols.append(ends[ok, cj])
+                    vals.append(si * sj * c[ok])
+            C = scipy.sparse.coo_matrix((np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))),
+                                        shape=(n, n)).tocsr()
+            return -(scipy.sparse.diags(1.0 / self.masses) @ C).tocsr()
         return -np.asarray(self.module.damping_matrix(**self.params), dtype=float) / self.masses[:, None]
 
     @property

@@ -411,11 +411,12 @@ def plan(scene: str | Path | Scene, tol: float, t_end: float | None = None):
     sc = load(scene)
     _check_motion(sc, "plan")
     system, _ = _system(sc)
-    if not system.conservative:
-        raise RunRefused(f"plan covers conservative scenes (springs, cubic springs); {sc.name!r} has "
-                         "dampers, forces or gravity")
+    from .numeric.plan_pilot import PilotPlanner, needs_pilot
+
     with single_threaded_blas():
-        planner = Planner.for_system(system, sc.x0, sc.v0, _horizon(sc, t_end), sc.dt * sc.record_every)
+        # damped, forced, gravity, ground scenes and long uniform chains: calibrated against the exact solution
+        planner = (PilotPlanner if needs_pilot(system) else Planner).for_system(
+            system, sc.x0, sc.v0, _horizon(sc, t_end), sc.dt * sc.record_every)
         try:
             return planner.plan(tol)
         except ValueError as exc:

@@ -128,16 +128,21 @@ EFFECT_MARKERS = {
     "force": ("def external_acceleration", "FORCING_HARMONIC"),
     "gravity": ("def gravity_forces",),
     "cubic": ("def cubic_constants", "**3"),
+    "rayleigh": ("def rayleigh_coefficients",),
+    "modal_damping": ("def modal_damping_ratios", "def _modal_damping_matrix"),
 }
 
 
 @pytest.mark.parametrize("name, effects", [("seed", set()), ("ring4", set()), ("building", {"damper", "force"}),
-                                           ("hanging", {"gravity"}), ("duffing", {"cubic"})])
+                                           ("hanging", {"gravity"}), ("duffing", {"cubic"}),
+                                           ("building_rayleigh", {"force", "rayleigh"})])
 def test_generated_source_has_exactly_the_declared_effects(name, effects):
     source = (ROOT / "generated" / f"{name}.py").read_text()
     for effect, markers in EFFECT_MARKERS.items():
         present = [mk in source for mk in markers]
-        if effect in effects:
+        if effect == "damper" and "rayleigh" in effects:  # the damping matrix, without dashpots
+            assert "DAMPER_ENDS" not in source and "def damping_matrix" in source
+        elif effect in effects:
             assert all(present), (effect, markers)
         else:
             assert not any(present), (effect, markers)
