@@ -175,6 +175,30 @@ def _accurate_modes(m, k):
 """
 
 
+def accurate_modes_function(n: int, spring_ends: tuple, rigid_pieces: tuple):
+    """``_accurate_modes(m, k)`` of a module with these N, SPRING_ENDS and RIGID_PIECES, as a callable.
+
+    The derive side's large-N numeric fallback (:func:`accurate.spring_factor_modes`) runs the
+    same code the generated module will run (our own constant text, never scene text).
+    """
+    import numpy
+    import scipy.linalg.lapack
+
+    namespace = {"numpy": numpy, "scipy": scipy, "N": n, "SPRING_ENDS": spring_ends, "RIGID_PIECES": rigid_pieces}
+    exec(_helper_code(), namespace)  # noqa: S102 - the constant _HELPER text above
+    return namespace["_accurate_modes"]
+
+
+def _helper_code():
+    global _HELPER_CODE
+    if _HELPER_CODE is None:
+        _HELPER_CODE = compile(_HELPER, "<springchain _accurate_modes>", "exec")
+    return _HELPER_CODE
+
+
+_HELPER_CODE = None
+
+
 def _sign_coherent(expr: sp.Expr) -> bool:
     """No sum of terms of both signs, no function: evaluates in float64 to a few ulps anywhere."""
     if expr.atoms(sp.Function):

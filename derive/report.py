@@ -23,8 +23,15 @@ def _values(model: Model) -> dict:
 
 def _num(expr, model: Model) -> float:
     """``expr`` at the scene's values, correctly rounded to float64 (:func:`accurate.value`)."""
+    if isinstance(expr, float):  # a numeric fallback's float64 shape component
+        return expr
     expr = sp.Integer(expr) if isinstance(expr, int) else expr
     return value(expr, _values(model))
+
+
+def _text(expr) -> str:
+    """``sstr`` of an expression; a Python float (a numeric fallback's shape) as its repr."""
+    return repr(expr) if isinstance(expr, float) else sp.sstr(expr)
 
 
 def _pretty(mat: sp.Matrix) -> str:
@@ -60,7 +67,7 @@ def mode_records(model: Model, modes: ModeSet) -> list[dict]:
                 "omega2": sp.sstr(mode.omega2),
                 "omega2_value": max(_num(mode.omega2, model), 0.0) if mode.rigid else _num(mode.omega2, model),
                 "multiplicity": mode.multiplicity,
-                "shape": [sp.sstr(c) for c in shape],
+                "shape": [_text(c) for c in shape],
                 "shape_value": [_num(c, model) for c in shape],
             })
     out.sort(key=lambda r: r["omega2_value"])
@@ -204,7 +211,7 @@ def mode_lines(model: Model, modes: ModeSet) -> list[str]:
         mult = f"  (multiplicity {mode.multiplicity})" if mode.multiplicity > 1 else ""
         lines.append(f"ω² = {sp.sstr(mode.omega2)}   (= {value:.10g} at the scene's values){mult}{tag}")
         for s in mode.shapes:
-            lines.append(f"    shape ({', '.join(sp.sstr(c) for c in s)})")
+            lines.append(f"    shape ({', '.join(_text(c) for c in s)})")
     return lines
 
 
