@@ -117,12 +117,14 @@ def markdown(work: list[dict], commands: list[dict]) -> str:
     for r in work:
         lag = "> budget" if r["lagrange"] is None else f"{r['lagrange']:.3g}"
         ratio = "–" if r["ratio"] is None else f"{r['ratio']:.1f}×"
-        lines.append(f"| {r['n']} | {r['springs']:.3g} | {r['springs_modes']:.3g} | {lag} | {ratio} | {yes[r['met']]} |")
+        lines.append(f"| {r['n']} | {r['springs']:.3g} | {r['springs_modes']:.3g} | {lag} | {ratio} "
+                     f"| {yes[r['met']]} |")
     if commands:
         base = commands[0]
         lines += ["", f"Whole command, fresh process (`python -c \"import sympy\"`: {base['sympy_import_wall']:.2f} s "
                       f"wall, {base['sympy_import_cpu']:.2f} s CPU):", "",
-                  f"| N | `modes` wall (s) | `modes` CPU (s) | `derive` wall (s) | `derive` CPU (s) | ≤ {COMMAND_TARGET:g} s |",
+                  "| N | `modes` wall (s) | `modes` CPU (s) | `derive` wall (s) | `derive` CPU (s) "
+                  f"| ≤ {COMMAND_TARGET:g} s |",
                   "|---|---|---|---|---|---|"]
         for r in commands:
             lines.append(f"| {r['n']} | {r['modes_wall']:.2f} | {r['modes_cpu']:.2f} | {r['derive_wall']:.2f} | "
