@@ -14,8 +14,13 @@ Two routes, both independent of float64 cancellation:
   ``mpmath.eigsy`` at 40, 80, 160, … digits until two successive spectra
   agree to 1e-18 relative (:func:`numeric_modes`). Rigid-body modes are
   removed by structure (their count), never by a threshold on a value.
+  Past :data:`MAX_MPMATH_MODES` masses (mpmath's dense eigensolver costs
+  O(N³) multiprecision operations: minutes at N = 200) the fallback is the
+  spring-factor route instead (:func:`spring_factor_modes`): the same code the
+  generated modules run (``_accurate_modes``), relatively accurate to a few
+  float64 ulps at any positive parameter values.
 
-SymPy and mpmath only (this is the derive side; it never imports ``numeric``).
+SymPy, mpmath, NumPy and SciPy only (this is the derive side; it never imports ``numeric``).
 """
 
 from __future__ import annotations
@@ -30,6 +35,8 @@ import sympy as sp
 AGREE = 1e-18
 #: Largest working precision (decimal digits) tried before giving up.
 MAX_DPS = 1280
+#: Most masses whose numeric fallback modes come from mpmath (beyond: the spring-factor route).
+MAX_MPMATH_MODES = 16
 
 
 class NotAccurate(ArithmeticError):
@@ -94,10 +101,12 @@ def value(expr, subs: dict) -> float:
     NotAccurate
         If successive precisions up to :data:`MAX_DPS` digits never agree.
     """
+    if isinstance(expr, float):  # a float64 already (numeric fallback shapes): its own value
+        return expr
     if isinstance(expr, int):
         expr = sp.Integer(expr)
-    elif isinstance(expr, float):
-        expr = sp.Float(expr)
+    if expr.is_Float and expr._prec >= 53:  # a float64 (or wider) number already: it is its own value
+        return float(expr)
     return _value(expr, tuple(sorted(subs.items(), key=lambda kv: str(kv[0]))))
 
 
@@ -157,3 +166,40 @@ def numeric_modes(masses: list, springs: list, n_rigid: int) -> list[tuple[float
         prev = cur
         dps *= 2
     raise NotAccurate(f"numeric modes did not converge to float64 accuracy within {MAX_DPS} digits")
+
+
+def spring_factor_modes(masses: list, springs: list, rigid_pieces: list) -> list[tuple[float, list[float]]]:
+    """Elastic modes ``(ω², physical shape)`` by the spring-factor route, in float64.
+
+    The subtraction-free LDLᵀ of ``K = Bᵀ diag(k) B`` and the one-sided Jacobi
+    SVD of its factor: the very code of the generated modules' ``_accurate_modes``
+    (:data:`codegen._HELPER`, run here on the scene's values), relatively accurate
+    to a few ulps at any positive parameter values, O(N³) float64 work.
+
+    Parameters
+    ----------
+    masses : list of sympy.Expr
+        Exact mass values, length N.
+    springs : list of (int, int, sympy.Expr)
+        Spring ends (mass indices, -1 = wall) and exact stiffness.
+    rigid_pieces : list of list of int
+        Mass indices of each free piece (one rigid-body mode each).
+
+    Returns
+    -------
+    list of (float, list of float)
+        As :func:`numeric_modes`: ascending elastic ω², shapes scaled so that the
+        largest component is 1.
+    """
+    import numpy as np
+
+    from .codegen import accurate_modes_function
+
+    ends = tuple((a, b) for a, b, _ in springs)
+    run = accurate_modes_function(len(masses), ends, tuple(tuple(sorted(p)) for p in rigid_pieces))
+    w2, shapes = run([float(m) for m in masses], [float(k) for _, _, k in springs])
+    r = len(rigid_pieces)
+    w2, shapes = w2[r:], shapes[:, r:]
+    piv = shapes[np.argmax(np.abs(shapes), axis=0), np.arange(shapes.shape[1])]
+    shapes = shapes / piv[None, :]
+    return [(float(w), shapes[:, j].tolist()) for j, w in enumerate(w2)]

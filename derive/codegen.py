@@ -175,6 +175,53 @@ def _accurate_modes(m, k):
 """
 
 
+def accurate_modes_function(n: int, spring_ends: tuple, rigid_pieces: tuple):
+    """``_accurate_modes(m, k)`` of a module with these N, SPRING_ENDS and RIGID_PIECES, as a callable.
+
+    The derive side's large-N numeric fallback (:func:`accurate.spring_factor_modes`) runs the
+    same code the generated module will run (our own constant text, never scene text).
+    """
+    import numpy
+    import scipy.linalg.lapack
+
+    namespace = {"numpy": numpy, "scipy": scipy, "N": n, "SPRING_ENDS": spring_ends, "RIGID_PIECES": rigid_pieces}
+    exec(_helper_code(), namespace)  # noqa: S102 - the constant _HELPER text above
+    return namespace["_accurate_modes"]
+
+
+def _helper_code():
+    global _HELPER_CODE
+    if _HELPER_CODE is None:
+        _HELPER_CODE = compile(_HELPER, "<springchain _accurate_modes>", "exec")
+    return _HELPER_CODE
+
+
+_HELPER_CODE = None
+
+
+def _incidence_lines(model: Model, kwcall: str, arg: str, ends: str, constants: str, *, cubic: bool,
+                     forces: bool = True) -> list[str]:
+    """Body lines that form the element extensions ``_d`` (shape (S, ...)) of ``arg`` over an element
+    list and, with ``forces``, the summed element forces ``_f`` (shape (N, ...)); ``_col`` reshapes a
+    per-mass or per-element vector against the batch axes. Used past MAX_PRINTED_MATRIX masses."""
+    out = [f"    {arg} = numpy.asarray({arg}, dtype=_float)",
+           f"    _col = (-1,) + (1,) * ({arg}.ndim - 1)",
+           f"    _ends = numpy.asarray({ends}, dtype=numpy.intp).reshape(-1, 2)",
+           "    _a, _b = _ends[:, 0], _ends[:, 1]",
+           f"    _xe = numpy.concatenate([{arg}, numpy.zeros((1,) + {arg}.shape[1:])])  # row -1 = wall",
+           "    _d = _xe[_a] - _xe[_b]"]
+    if not forces:
+        return out
+    out.append(f"    _s = {constants}({kwcall}).reshape(_col) * _d")
+    if cubic and any(k3 is not None for *_, k3, _ in model.springs):
+        out.append(f"    _s = _s + cubic_constants({kwcall}).reshape(_col) * _d**3")
+    out += [f"    _f = numpy.zeros({arg}.shape)",
+            "    _ia, _ib = numpy.flatnonzero(_a >= 0), numpy.flatnonzero(_b >= 0)",
+            "    numpy.add.at(_f, _a[_ia], -_s[_ia])",
+            "    numpy.add.at(_f, _b[_ib], _s[_ib])"]
+    return out
+
+
 def _sign_coherent(expr: sp.Expr) -> bool:
     """No sum of terms of both signs, no function: evaluates in float64 to a few ulps anywhere."""
     if expr.atoms(sp.Function):
@@ -275,8 +322,14 @@ def render_module(model: Model, modes: ModeSet, *, bundled: bool = True) -> str:
     # coordinates print under private names (_x_m1), so no parameter can shadow them
     private = {s: sp.Symbol("_" + s.name, **s.assumptions0) for s in (*model.x, *model.v)}
 
+    printed: dict = {}
+
     def _p(expr) -> str:
-        return _p_public(expr.xreplace(private) if isinstance(expr, sp.Basic) else expr)
+        """Print once per distinct expression (a long uniform chain repeats ``m`` and ``k``)."""
+        text = printed.get(expr)
+        if text is None:
+            text = printed[expr] = _p_public(expr.xreplace(private) if isinstance(expr, sp.Basic) else expr)
+        return text
 
     xs = ", ".join("_" + str(s) for s in model.x) + ("," if n == 1 else "")
     vs = ", ".join("_" + str(s) for s in model.v) + ("," if n == 1 else "")
@@ -428,11 +481,17 @@ def render_module(model: Model, modes: ModeSet, *, bundled: bool = True) -> str:
     w("    -------")
     w("    ndarray, shape (N, ...)")
     w('    """')
-    w(f"    {xs} = _x")
-    w("    _out = numpy.empty(numpy.shape(_x))")
-    for i in range(n):
-        w(f"    _out[{i}] = {_p(cons[i] / model.masses[i])}")
-    w("    return _out")
+    if dense:
+        w(f"    {xs} = _x")
+        w("    _out = numpy.empty(numpy.shape(_x))")
+        for i in range(n):
+            w(f"    _out[{i}] = {_p(cons[i] / model.masses[i])}")
+        w("    return _out")
+    else:  # incidence form: one pass over the spring list, no N expressions
+        lines.extend(_incidence_lines(model, kwcall, "_x", "_SPRING_ENDS", "spring_constants", cubic=True))
+        if model.g is not None:
+            w(f"    _f += gravity_forces({kwcall}).reshape(_col)")
+        w(f"    return _f / masses({kwcall}).reshape(_col)")
     w("")
     w("")
     w(f"def make_acceleration({sig}):")
@@ -489,11 +548,15 @@ def render_module(model: Model, modes: ModeSet, *, bundled: bool = True) -> str:
         w("")
         w(f"def damping_acceleration(_v{kw}):")
         w(f'    """Acceleration -M^-1 C v from {what}; v and result have shape (N, ...)."""')
-        w(f"    {vs} = _v")
-        w("    _out = numpy.empty(numpy.shape(_v))")
-        for i in range(n):
-            w(f"    _out[{i}] = {_p(damp[i] / model.masses[i])}")
-        w("    return _out")
+        if dense or model.rayleigh is not None:  # Rayleigh terms are per mass: one line each, no N x N
+            w(f"    {vs} = _v")
+            w("    _out = numpy.empty(numpy.shape(_v))")
+            for i in range(n):
+                w(f"    _out[{i}] = {_p(damp[i] / model.masses[i])}")
+            w("    return _out")
+        else:
+            lines.extend(_incidence_lines(model, kwcall, "_v", "_DAMPER_ENDS", "damper_constants", cubic=False))
+            w(f"    return _f / masses({kwcall}).reshape(_col)")
     if model.forces:
         ext = model.force_expressions(Effect.FORCE)
         w("")
@@ -548,7 +611,19 @@ def render_module(model: Model, modes: ModeSet, *, bundled: bool = True) -> str:
     w(f"def energy(_x, _v{kw}):")
     w('    """Total energy T + V' + (" (V includes gravity's potential)" if model.g is not None else "")
       + '; x, v shape (N, ...), result shape (...)."""')
-    w(f"    {xs} = _x")
-    w(f"    {vs} = _v")
-    w(f"    return {_p(model.energy)}")
+    if dense:
+        w(f"    {xs} = _x")
+        w(f"    {vs} = _v")
+        w(f"    return {_p(model.energy)}")
+    else:  # T + V summed over the mass and spring lists
+        lines.extend(_incidence_lines(model, kwcall, "_x", "_SPRING_ENDS", "spring_constants", cubic=True,
+                                      forces=False))
+        w("    _v = numpy.asarray(_v, dtype=_float)")
+        w(f"    _e = 0.5 * numpy.sum(masses({kwcall}).reshape(_col) * _v**2, axis=0)")
+        w(f"    _e = _e + 0.5 * numpy.sum(spring_constants({kwcall}).reshape(_col) * _d**2, axis=0)")
+        if any(k3 is not None for *_, k3, _ in model.springs):
+            w(f"    _e = _e + 0.25 * numpy.sum(cubic_constants({kwcall}).reshape(_col) * _d**4, axis=0)")
+        if model.g is not None:
+            w(f"    _e = _e - numpy.sum(gravity_forces({kwcall}).reshape(_col) * _x, axis=0)")
+        w("    return _e")
     return privatize("\n".join(lines) + "\n")

@@ -27,7 +27,7 @@ from dataclasses import dataclass, field
 
 import sympy as sp
 
-from .accurate import exact_values, numeric_modes, value
+from .accurate import MAX_MPMATH_MODES, exact_values, numeric_modes, spring_factor_modes, value
 from .model import Model
 
 DEFAULT_BUDGET = 20.0
@@ -68,7 +68,8 @@ class Mode:
 
     ``shapes`` are physical displacement patterns (columns of ``M^-1/2 e``), any
     scale; ``weighted`` the corresponding mass-weighted eigenvectors ``e = M^1/2 φ``.
-    ``exact`` is False for numeric fallbacks.
+    ``exact`` is False for numeric fallbacks (whose shape components are Python floats
+    past ``MAX_MPMATH_MODES`` masses).
     """
 
     omega2: sp.Expr
@@ -277,9 +278,9 @@ def closed_form_modes(model: Model, budget: float | None = DEFAULT_BUDGET,
     except BudgetExceeded:
         why = (f"{model.scene.n} masses: symmetry blocks larger than {MAX_SYMBOLIC_BLOCK}" if hopeless else
                f"a factor of degree > 3, an unreadably long root, or over the {budget:g} s budget")
-        notes.append(f"no closed form ({why}); "
-                     "eigenvalues below are numeric (mpmath eigensolver at increasing precision, correct to float64) "
-                     "at the scene's parameter values")
+        how = ("mpmath eigensolver at increasing precision, correct to float64" if model.scene.n <= MAX_MPMATH_MODES
+               else "spring-factor SVD, as the generated module's omega2(), relatively accurate to a few float64 ulps")
+        notes.append(f"no closed form ({why}); eigenvalues below are numeric ({how}) at the scene's parameter values")
         modes = [m for m in modes if m.rigid] + _numeric_modes(model, lam, len(rigid))
         closed = False
     subs = exact_values(model.params, model.scene.parameters)
@@ -320,12 +321,22 @@ def _numeric_modes(model: Model, lam: sp.Symbol, n_rigid: int) -> list[Mode]:
     parameter values as exact rationals and diagonalised by ``mpmath.eigsy``
     at increasing precision until the spectrum is correct to float64
     (:func:`accurate.numeric_modes`); the rigid-body modes were already taken
-    out by structure, so the lowest ``n_rigid`` eigenvalues are dropped.
+    out by structure, so the lowest ``n_rigid`` eigenvalues are dropped. Past
+    ``MAX_MPMATH_MODES`` masses (where mpmath's O(N³) multiprecision work takes
+    minutes) the spring-factor route of the generated modules is used instead
+    (:func:`accurate.spring_factor_modes`).
     """
     subs = exact_values(model.params, model.scene.parameters)
     masses = [m.subs(subs) for m in model.masses]
     springs = [(a, b, k.subs(subs)) for a, b, k, _, _ in model.springs]
+    if model.scene.n > MAX_MPMATH_MODES:
+        found = spring_factor_modes(masses, springs, model.free_components)
+    else:
+        found = numeric_modes(masses, springs, n_rigid)
     out = []
-    for w, shape in numeric_modes(masses, springs, n_rigid):
-        out.append(Mode(sp.Float(w, 17), 1, (tuple(sp.Float(c, 17) for c in shape),), exact=False))
+    for w, shape in found:
+        # the float64 shapes of the spring-factor route stay Python floats: 40 000 SymPy Floats
+        # cost a second at N = 200 and carry no more information
+        vec = tuple(shape) if model.scene.n > MAX_MPMATH_MODES else tuple(sp.Float(c, 17) for c in shape)
+        out.append(Mode(sp.Float(w, 17), 1, (vec,), exact=False))
     return out

@@ -6,19 +6,29 @@ written, cached or loaded is the application's business (:mod:`springchain._modu
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
+from functools import cached_property
+from typing import Callable
 
 from .scene import Scene
 
 
 @dataclass(frozen=True)
 class Derivation:
-    """A scene's symbolic model, its modes and the rendered module source."""
+    """A scene's symbolic model, its modes and the rendered module source.
+
+    ``source`` is rendered on first use (``springchain modes`` never needs it).
+    """
 
     scene: Scene
     model: object
     modes: object
-    source: str
+    render: Callable[[], str] = field(repr=False, compare=False)
+
+    @cached_property
+    def source(self) -> str:
+        """The generated module's text (rendered once, on first use)."""
+        return self.render()
 
 
 def derive(scene: Scene, budget: float | None = None, bundled: bool = False) -> Derivation:
@@ -37,14 +47,14 @@ def derive(scene: Scene, budget: float | None = None, bundled: bool = False) -> 
 
         model = ChainModel(scene)
         modes = chain_modes(model)
-        return Derivation(scene, model, modes, render_chain_module(model, bundled=bundled))
+        return Derivation(scene, model, modes, lambda: render_chain_module(model, bundled=bundled))
     from .codegen import render_module
     from .model import Model
     from .modes import DEFAULT_BUDGET, closed_form_modes
 
     model = Model(scene)
     modes = closed_form_modes(model, budget=DEFAULT_BUDGET if budget is None else budget)
-    return Derivation(scene, model, modes, render_module(model, modes, bundled=bundled))
+    return Derivation(scene, model, modes, lambda: render_module(model, modes, bundled=bundled))
 
 
 __all__ = ["Derivation", "derive"]

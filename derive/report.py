@@ -14,6 +14,8 @@ from .model import Effect, Model
 from .modes import ModeSet
 
 MAX_MATRIX = 8  # larger matrices are described, not printed
+#: Larger scenes print T, V, R as element sums (first ... last) and sums in stored order.
+MAX_FULL_SUMS = 16
 
 
 def _values(model: Model) -> dict:
@@ -23,8 +25,15 @@ def _values(model: Model) -> dict:
 
 def _num(expr, model: Model) -> float:
     """``expr`` at the scene's values, correctly rounded to float64 (:func:`accurate.value`)."""
+    if isinstance(expr, float):  # a numeric fallback's float64 shape component
+        return expr
     expr = sp.Integer(expr) if isinstance(expr, int) else expr
     return value(expr, _values(model))
+
+
+def _text(expr) -> str:
+    """``sstr`` of an expression; a Python float (a numeric fallback's shape) as its repr."""
+    return repr(expr) if isinstance(expr, float) else sp.sstr(expr)
 
 
 def _pretty(mat: sp.Matrix) -> str:
@@ -35,20 +44,62 @@ def _indent(text: str, pad: str = "    ") -> str:
     return "\n".join(pad + line for line in text.splitlines())
 
 
+def _printer(model: Model):
+    """``sstr`` for this scene's expressions. Past MAX_FULL_SUMS masses sums print in their stored
+    order (``order="none"``): SymPy's display sort costs more than the whole derivation there."""
+    if model.scene.n <= MAX_FULL_SUMS:
+        return sp.sstr
+    from sympy.printing.str import StrPrinter
+
+    return StrPrinter({"order": "none"}).doprint
+
+
 def equation_lines(model: Model) -> list[str]:
     """One line per mass: m ẍ = Σ forces, each traced to its scene entry."""
+    show = _printer(model)
+    by_mass: list[list] = [[] for _ in model.scene.mass_names]
+    for t in model.terms:
+        by_mass[t.coordinate].append(t)
     lines = []
-    for i, name in enumerate(model.scene.mass_names):
-        terms = [t for t in model.terms if t.coordinate == i]
+    for i, terms in enumerate(by_mass):
         parts = []
         for j, t in enumerate(terms):
-            text = sp.sstr(t.force)
+            text = show(t.force)
             if j:
                 text = f"- {text[1:]}" if text.startswith("-") else f"+ {text}"
             parts.append(f"{text}  [{t.key}]")
         rhs = "   ".join(parts)
-        lines.append(f"{sp.sstr(model.masses[i])}*{model.a[i]} = {rhs or '0'}")
+        lines.append(f"{show(model.masses[i])}*{model.a[i]} = {rhs or '0'}")
     return lines
+
+
+def _energy_line(name: str, model: Model, terms: list, what: str) -> str:
+    """``name = first + ... + last  (count terms: what)`` for a scene past MAX_FULL_SUMS masses."""
+    show = _printer(model)
+    if not terms:
+        return f"{name} = 0"
+    first, last = show(terms[0]), show(terms[-1])
+    last = f"- {last[1:]}" if last.startswith("-") else f"+ {last}"
+    return f"{name} = {first} + ... {last}   ({len(terms)} terms: {what})"
+
+
+def _energy_lines(model: Model) -> list[str]:
+    """The T, V (and R) lines of the text report: in full, or element sums past MAX_FULL_SUMS masses."""
+    if model.scene.n <= MAX_FULL_SUMS:
+        out = [f"T = {sp.sstr(model.T)}", f"V = {sp.sstr(model.V)}"]
+        if model.dissipation_terms:
+            out.append(f"R = {sp.sstr(model.R)}   (Rayleigh dissipation)")
+        return out
+    v_terms = [e for key, e in model.potential_terms if key != "gravity"]
+    if model.g is not None:
+        v_terms += [-m * model.g * x for m, x in zip(model.masses, model.x)]
+    out = [_energy_line("T", model, [e for _, e in model.kinetic_terms], "one per mass"),
+           _energy_line("V", model, v_terms, "one per spring" + (", one per mass for gravity"
+                                                                 if model.g is not None else ""))]
+    if model.dissipation_terms:
+        out.append(_energy_line("R", model, [e for _, e in model.dissipation_terms], "one per dissipation term")
+                   + "   (Rayleigh dissipation)")
+    return out
 
 
 def mode_records(model: Model, modes: ModeSet) -> list[dict]:
@@ -60,7 +111,7 @@ def mode_records(model: Model, modes: ModeSet) -> list[dict]:
                 "omega2": sp.sstr(mode.omega2),
                 "omega2_value": max(_num(mode.omega2, model), 0.0) if mode.rigid else _num(mode.omega2, model),
                 "multiplicity": mode.multiplicity,
-                "shape": [sp.sstr(c) for c in shape],
+                "shape": [_text(c) for c in shape],
                 "shape_value": [_num(c, model) for c in shape],
             })
     out.sort(key=lambda r: r["omega2_value"])
@@ -152,7 +203,7 @@ def mode_lines(model: Model, modes: ModeSet) -> list[str]:
         mult = f"  (multiplicity {mode.multiplicity})" if mode.multiplicity > 1 else ""
         lines.append(f"ω² = {sp.sstr(mode.omega2)}   (= {value:.10g} at the scene's values){mult}{tag}")
         for s in mode.shapes:
-            lines.append(f"    shape ({', '.join(sp.sstr(c) for c in s)})")
+            lines.append(f"    shape ({', '.join(_text(c) for c in s)})")
     return lines
 
 
@@ -164,11 +215,7 @@ def render_text(model: Model, modes: ModeSet) -> str:
            "Parameters: " + ", ".join(f"{k} = {sc.parameters[k]:g}" for k in sorted(sc.parameters)),
            "Coordinates: " + ", ".join(str(x) for x in model.x)
            + " (displacements from the springs' rest configuration)",
-           "",
-           f"T = {sp.sstr(model.T)}",
-           f"V = {sp.sstr(model.V)}"]
-    if model.dissipation_terms:
-        out.append(f"R = {sp.sstr(model.R)}   (Rayleigh dissipation)")
+           "", *_energy_lines(model)]
     lhs = "M x''" + (" + C x'" if model.damped else "") + " + K x" + (
         " + f_nl(x)" if Effect.CUBIC in model.effects else "")
     rhs = " + ".join([*(["F(t)"] if model.forces else []), *(["F_table(t)"] if model.table_forces else []),

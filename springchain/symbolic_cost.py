@@ -19,7 +19,8 @@ m, N−1 equal springs k, free ends):
 Python process (no SymPy cache shared between cases), which first imports
 what it needs (SymPy, ``sympy.physics.mechanics`` or ``derive``) and then
 times only the work with ``time.perf_counter`` — i.e. the command's time
-minus the time to start Python and import. The parent also records each
+minus the time to start Python and import (for ``elements`` that includes
+NumPy and ``scipy.linalg.lapack``, which the numeric mode fallback uses). The parent also records each
 process's wall time minus that of a process that only imports SymPy, as a
 cross-check (it then counts the extra imports as work).
 
@@ -170,6 +171,7 @@ def work(route: Route, n: int) -> dict:
         t3 = time.perf_counter()
         return {"scene": t1 - t0, "equations": t2 - t1, "codegen": t3 - t2, "total": t3 - t0,
                 "modes": 0.0, "closed_form": modes.closed_form, "source_lines": source.count("\n")}
+    import scipy.linalg.lapack  # noqa: F401 - the numeric mode fallback's import, not work
     from .derive.codegen import render_module
     from .derive.model import Model
     from .derive.modes import DEFAULT_BUDGET, closed_form_modes

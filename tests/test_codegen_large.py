@@ -58,3 +58,49 @@ def test_source_grows_linearly_not_quadratically():
     large = derive(load_scene("c.toml", text=scene_text(80, False)), budget=1.0).source
     # four times the masses: the text may grow about four times, never sixteen
     assert len(large) < 6 * len(small)
+
+
+def nonlinear_scene_text(n: int) -> str:
+    """n masses between walls: cubic springs on every other link, dampers, gravity."""
+    lines = [f'name = "nl{n}"', "[parameters]", "m = 1.5", "k = 2.0", "kappa = 0.3", "c = 0.05", "g = 9.8",
+             "[masses]"]
+    lines += [f'm{i} = "m*{1 + i % 3}"' for i in range(n)]
+    nodes = ["wall"] + [f"m{i}" for i in range(n)] + ["wall"]
+    for j, (a, b) in enumerate(zip(nodes[:-1], nodes[1:])):
+        lines += ["[[springs]]", f'between = ["{a}", "{b}"]', f'k = "k*{1 + j % 2}"']
+        if j % 2:
+            lines.append('k3 = "kappa"')
+    for j in range(0, n - 1, 3):
+        lines += ["[[dampers]]", f'between = ["m{j}", "m{j + 1}"]', 'c = "c"']
+    lines += ["[gravity]", 'g = "g"', "[initial]", f"x = {[0.0] * n}", f"v = {[0.0] * n}"]
+    return "\n".join(lines) + "\n"
+
+
+def test_large_scene_incidence_form_matches_the_symbolic_model(tmp_path):
+    """Past MAX_PRINTED_MATRIX masses acceleration, damping_acceleration and energy are generated in
+    incidence form (no per-mass expressions): they must equal the model's own expressions (lambdify)."""
+    n = 2 * MAX_PRINTED_MATRIX + 1
+    d = derive(load_scene("nl.toml", text=nonlinear_scene_text(n)), budget=1.0)
+    assert "_out[" not in d.source  # no expression per mass was printed
+    module = load(d.source, f"nl{n}", tmp_path)
+    p = dict(module.DEFAULTS)
+    model = d.model
+    from springchain.derive.model import Effect
+
+    params = [model.params[k] for k in sorted(p)]
+    vals = [p[k] for k in sorted(p)]
+    masses = sympy.Matrix(model.masses)
+    acc = sympy.lambdify([*model.x, *params], [f / m for f, m in zip(
+        model.force_expressions(Effect.SPRING, Effect.CUBIC, Effect.GRAVITY), masses)], "numpy")
+    damp = sympy.lambdify([*model.v, *params], [f / m for f, m in zip(model.force_expressions(Effect.DAMPER), masses)],
+                          "numpy")
+    energy = sympy.lambdify([*model.x, *model.v, *params], model.energy, "numpy")
+    rng = np.random.default_rng(5)
+    x, v = rng.standard_normal((n, 4)), rng.standard_normal((n, 4))
+    np.testing.assert_allclose(module.acceleration(x, **p), np.array(acc(*x, *vals)), rtol=1e-12, atol=1e-12)
+    np.testing.assert_allclose(module.damping_acceleration(v, **p),
+                               np.array([np.broadcast_to(r, (4,)) for r in damp(*v, *vals)]), rtol=1e-12,
+                               atol=1e-13)
+    np.testing.assert_allclose(module.energy(x, v, **p), energy(*x, *v, *vals), rtol=1e-12)
+    np.testing.assert_allclose(module.energy(x[:, 0], v[:, 0], **p), energy(*x[:, 0], *v[:, 0], *vals), rtol=1e-12)
+    np.testing.assert_allclose(module.make_acceleration(**p)(x), module.acceleration(x, **p), rtol=1e-14)

@@ -116,3 +116,15 @@ def test_named_case(case, tmp_path, monkeypatch):
     masses, stiffness, lw, rw = NAMED[case]
     errs = _check(tmp_path, monkeypatch, *_chain(masses, stiffness, lw, rw))
     _assert_ok(errs)
+
+
+def test_past_mpmath_bound_uses_spring_factor_route_accurately(tmp_path, monkeypatch):
+    """Past MAX_MPMATH_MODES masses the printed fallback comes from the spring-factor route (the generated
+    module's code): still within RTOL of the 60-digit reference, at 1e6 mass and 1e4 stiffness contrast."""
+    from springchain.derive.accurate import MAX_MPMATH_MODES
+
+    n = MAX_MPMATH_MODES + 4
+    masses = [1e6 if i % 5 == 2 else 1.0 + 0.1 * i for i in range(n)]
+    stiffness = [1e4 if j % 4 == 1 else 1.0 + 0.05 * j for j in range(n)]  # wall on the left, free right end
+    errs = _check(tmp_path, monkeypatch, *_chain(masses, stiffness, True, False))
+    _assert_ok(errs)
