@@ -343,7 +343,8 @@ def spectrum_from_closed_form(omega2: np.ndarray, shapes: np.ndarray, masses: np
     """A :class:`Spectrum` from generated closed forms (ω² and physical shapes, any scale).
 
     Each shape is scaled to unit M-norm; the shapes of one repeated ω² (equal to 1e-12
-    relative) get an orthonormal basis by a QR *within that group only*; the elastic
+    relative) that are not orthogonal (closed forms of a repeated root) get an orthonormal
+    basis by a QR *within that group only*; the elastic
     shapes are then made M-orthogonal to the rigid ones and given one Löwdin step, as on
     the SVD route. A QR over all modes at once would mix every mode with every other at
     the level of ε in the mass-weighted norm, which moves a light mass next to a heavy one
@@ -358,8 +359,12 @@ def spectrum_from_closed_form(omega2: np.ndarray, shapes: np.ndarray, masses: np
     start = 0
     for j in range(1, w2.shape[0] + 1):
         if j == w2.shape[0] or j == rigid or w2[j] - w2[start] > 1e-12 * w2[j]:
-            if j - start > 1 and start >= rigid:  # rigid shapes are disjoint: orthogonal already
-                q, r = np.linalg.qr(E[:, start:j])
+            G = E[:, start:j]
+            # rigid shapes are disjoint (orthogonal already); a group already orthonormal to 1e-8
+            # (the generated spring-factor route) is left to the Löwdin step, which keeps each
+            # component's relative accuracy where a QR would not
+            if j - start > 1 and start >= rigid and np.max(np.abs(G.T @ G - np.eye(j - start))) > 1e-8:
+                q, r = np.linalg.qr(G)
                 E[:, start:j] = q * np.sign(np.diag(r))[None, :]
             start = j
     E[:, rigid:] = _orthogonalise(E[:, rigid:], E[:, :rigid])

@@ -279,6 +279,15 @@ REGRESSIONS = {
         "mass": [[2, "S"], [1, "S"], [3, "S"], [3, "S"]],
         "springs": [["x0", "x1", 3, "N"], ["x1", "x2", 1, "N"], ["x2", "x3", 1, "gamma"]],
         "x0": [0.66, -0.66, 0.0, 0.31], "v0": [0.0, 0.97, 0.0, -0.075]},
+    # a near-degenerate pair (relative gap 4e-15) at a 1e7 mass ratio: the QR that orthogonalised the pair
+    # in the closed-form spectrum mixed components at eps, 2e-13 on the trajectory (SVD route: 6.5e-16)
+    "closed-form-pair-qr": {
+        "params": {"E": 2.0543735774957955e-05, "S": 589.4564716353688, "O": 1.0},
+        "mass": [[3, "E"], [1, "S"], [1, "S"], [3, "E"]],
+        "springs": [["wall", "x0", 2, "O"], ["x0", "x1", 2, "O"], ["x1", "x2", 3, "O"], ["x2", "x3", 2, "O"],
+                    ["x3", "wall", 2, "O"]],
+        "x0": [-0.7172225085060133, 1.0, -0.055878079663444824, 0.9090052558721999],
+        "v0": [0.0, 0.0, 0.5611629817751084, 0.0]},
 }
 
 
