@@ -174,3 +174,33 @@ def numeric_modes(masses: list, springs: list, n_rigid: int) -> list[tuple[float
         prev = cur
         dps *= 2
     raise NotAccurate(f"numeric modes did not converge to float64 accuracy within {MAX_DPS} digits")
+
+
+def float64_closed_form(exprs: list, params: dict):
+    """The *naive* route, for benchmarks only: ``exprs`` lambdified to NumPy float64.
+
+    This is how ω² were evaluated before issue 9 (cancelling in float64 on hard
+    scenes); :mod:`springchain.bench_modes` times it beside the generated
+    ``omega2()`` and reports its error.
+
+    Parameters
+    ----------
+    exprs : list of sympy.Expr
+        Closed forms (one per mode).
+    params : dict
+        Parameter name -> SymPy symbol.
+
+    Returns
+    -------
+    callable
+        ``f(**values) -> ndarray`` of shape (len(exprs),).
+    """
+    names = sorted(params)
+    f = sp.lambdify([params[k] for k in names], list(exprs), modules="numpy")
+
+    def naive(**values):
+        import numpy as np
+
+        return np.array(f(*[values[k] for k in names]), dtype=float)
+
+    return naive
