@@ -2,12 +2,13 @@
 
 Two routes, both independent of float64 cancellation:
 
-* **Closed forms** are evaluated with the parameter values substituted as
-  *exact rationals* (a float is a dyadic rational) and evaluated by SymPy's
-  ``evalf`` at increasing working precision (30, 60, 120, … digits) until
-  two successive results agree to 1e-18 relative (:func:`value`). A
-  casus-irreducibilis cubic or a quadratic root that cancels in float64 is
-  then correct to the last bit.
+* **Closed forms** are evaluated in mpmath with the parameter values as
+  *exact* binary fractions (a float is one) at increasing working precision
+  (30, 60, 120, … digits) until two successive results agree to 1e-18
+  relative (:func:`value`). A casus-irreducibilis cubic or a quadratic root
+  that cancels in float64 is then correct to the last bit. (SymPy's own
+  ``evalf`` is not used: on a Viète root with acos near -1 it converged,
+  at every precision, to a value 1.9e-11 off -- found by hypothesis.)
 * **No closed form**: the mass-weighted dynamical matrix ``D = M^-1/2 K M^-1/2``
   is assembled *exactly* from the element list (rational spring constants and
   masses, square roots at working precision) and diagonalised by
@@ -60,19 +61,35 @@ def _agree(a: float, b: float) -> bool:
     return abs(a - b) <= AGREE * max(abs(a), abs(b))
 
 
+@functools.lru_cache(maxsize=512)
+def _mp_function(expr: sp.Expr, symbols: tuple):
+    """``expr`` as an mpmath function of ``symbols`` (compiled once per expression)."""
+    return sp.lambdify(symbols, expr, modules="mpmath")
+
+
+def _mp_exact(r: sp.Rational):
+    """A rational at the current mpmath precision (exact for the binary fractions of float inputs)."""
+    return mpmath.mpf(r.p) / r.q
+
+
 @functools.lru_cache(maxsize=4096)
 def _value(expr: sp.Expr, subs: tuple) -> float:
-    e = expr.subs(dict(subs)) if subs else expr
-    if e.is_zero:
+    if (expr.subs(dict(subs)) if subs else expr).is_zero:
         return 0.0
+    symbols = tuple(s for s, _ in subs if expr.has(s))
+    values = [v for s, v in subs if expr.has(s)]
+    f = _mp_function(expr, symbols)
     prev = None
     prev_dps = None
     dps = 30
     while dps <= MAX_DPS:
-        z = sp.N(e, dps, maxn=4 * dps)
-        re = sp.re(z)
-        cur = float(re) if re.is_number else float("nan")
-        if prev is not None:
+        with mpmath.workdps(dps):
+            try:
+                z = f(*[_mp_exact(v) for v in values])
+                cur = float(mpmath.re(z))
+            except (ZeroDivisionError, ValueError, OverflowError):
+                cur = float("nan")
+        if prev is not None and cur == cur and prev == prev:
             if _agree(prev, cur):
                 return cur
             # a quantity that is exactly zero but not recognised as such: noise shrinks with precision
@@ -203,3 +220,33 @@ def spring_factor_modes(masses: list, springs: list, rigid_pieces: list) -> list
     piv = shapes[np.argmax(np.abs(shapes), axis=0), np.arange(shapes.shape[1])]
     shapes = shapes / piv[None, :]
     return [(float(w), shapes[:, j].tolist()) for j, w in enumerate(w2)]
+
+
+def float64_closed_form(exprs: list, params: dict):
+    """The *naive* route, for benchmarks only: ``exprs`` lambdified to NumPy float64.
+
+    This is how ω² were evaluated before issue 9 (cancelling in float64 on hard
+    scenes); :mod:`springchain.bench_modes` times it beside the generated
+    ``omega2()`` and reports its error.
+
+    Parameters
+    ----------
+    exprs : list of sympy.Expr
+        Closed forms (one per mode).
+    params : dict
+        Parameter name -> SymPy symbol.
+
+    Returns
+    -------
+    callable
+        ``f(**values) -> ndarray`` of shape (len(exprs),).
+    """
+    names = sorted(params)
+    f = sp.lambdify([params[k] for k in names], list(exprs), modules="numpy")
+
+    def naive(**values):
+        import numpy as np
+
+        return np.array(f(*[values[k] for k in names]), dtype=float)
+
+    return naive

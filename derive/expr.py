@@ -127,6 +127,8 @@ def parse_expression(
     file: str | None = None,
     key: str | None = None,
     functions: tuple[str, ...] = FUNCTIONS,
+    max_length: int = MAX_LENGTH,
+    max_nodes: int = MAX_NODES,
 ) -> Expr:
     """Parse untrusted scene text into an :class:`Expr`.
 
@@ -140,6 +142,9 @@ def parse_expression(
         Where the text came from, for error messages.
     functions : tuple of str
         Function names the expression may call.
+    max_length, max_nodes : int
+        Size limits (defaults :data:`MAX_LENGTH`, :data:`MAX_NODES`; reading back
+        springchain's own printed closed forms allows longer text).
 
     Returns
     -------
@@ -168,8 +173,8 @@ def parse_expression(
         return Num(Fraction(repr(float(text))) if isinstance(text, float) else Fraction(text))
     if not isinstance(text, str):
         raise fail(f"a {type(text).__name__}, not an expression", "a number or an expression string")
-    if len(text) > MAX_LENGTH:
-        raise fail(f"longer than {MAX_LENGTH} characters", f"expressions up to {MAX_LENGTH} characters")
+    if len(text) > max_length:
+        raise fail(f"longer than {max_length} characters", f"expressions up to {max_length} characters")
     if not text.isascii():
         bad = next(ch for ch in text if not ch.isascii())
         raise fail(f"non-ASCII character {bad!r} (look-alike letters are refused)", "ASCII text only")
@@ -193,8 +198,8 @@ def parse_expression(
     def walk(node: ast.AST, depth: int, power: float) -> Expr:
         nonlocal count, digits
         count += 1
-        if count > MAX_NODES:
-            raise fail(f"more than {MAX_NODES} parts", f"expressions of at most {MAX_NODES} parts")
+        if count > max_nodes:
+            raise fail(f"more than {max_nodes} parts", f"expressions of at most {max_nodes} parts")
         if depth > MAX_DEPTH:
             raise fail(f"nested deeper than {MAX_DEPTH} levels", f"at most {MAX_DEPTH} levels of nesting")
         if isinstance(node, ast.Expression):

@@ -136,8 +136,14 @@ def _blocks(model: Model) -> list[sp.Matrix]:
     return [sp.Matrix(sym).T, sp.Matrix(anti).T] if anti else [sp.Matrix(sym).T]
 
 
-def _cofactor_vector(A: sp.Matrix) -> list[sp.Expr] | None:
-    """A kernel vector of a rank n-1 matrix from signed minors of one row deletion."""
+def _cofactor_vector(A: sp.Matrix, fac: sp.Expr, lam: sp.Symbol) -> list[sp.Expr] | None:
+    """A kernel vector of ``A(λ)`` at the roots of ``fac`` from signed minors of one row deletion.
+
+    Deleting row r gives ``adj(A)`` column r, which is the kernel vector times its r-th
+    component: it vanishes at the root when the mode does not move mass r (e.g. a mode
+    of another free piece), although it is not zero as a polynomial in λ. So the row is
+    accepted only if the vector is non-zero modulo ``fac`` (at the root itself).
+    """
     n = A.shape[0]
     if n == 1:
         return [sp.Integer(1)]
@@ -149,7 +155,7 @@ def _cofactor_vector(A: sp.Matrix) -> list[sp.Expr] | None:
             minor = sub.copy()
             minor.col_del(j)
             vec.append((-1) ** j * minor.det(method="berkowitz"))
-        if any(sp.expand(c) != 0 for c in vec):
+        if any(sp.rem(sp.expand(c), fac, lam) != 0 for c in vec):
             return vec
     return None
 
@@ -202,7 +208,7 @@ def _solve_block(model: Model, B: sp.Matrix, lam: sp.Symbol, n_rigid_in_block: i
         for root in roots:
             root = sp.factor(sp.radsimp(root)) if fpoly.degree() == 1 else root
             if mult == 1:
-                vec = _cofactor_vector(A)
+                vec = _cofactor_vector(A, fac, lam)
                 if vec is None:
                     raise BudgetExceeded
                 if fpoly.degree() > 1:

@@ -92,10 +92,35 @@ class Run:
 def system_spectrum(system: System, source: str = "svd") -> Spectrum:
     """The system's modes: ``svd`` of the spring factor (accurate) or the generated ``closed-form``."""
     if source == "closed-form":
-        mod = system.module
-        return spectrum_from_closed_form(mod.omega2(**system.params), mod.mode_shapes(**system.params),
-                                         system.masses, int(mod.RIGID_MODES))
+        return _closed_form_spectrum(system)
     return spectrum(system.masses, system.spring_ends, system.stiffness)
+
+
+def _closed_form_spectrum(system: System) -> Spectrum:
+    """The generated module's ω² and shapes (closed forms where they are cancellation-free, else
+    its own spring-factor route), or a one-line refusal naming the first mode that is not finite,
+    not ≥ 0, or a rigid mode that is not exactly 0 (e.g. parameter values beyond float range)."""
+    mod = system.module
+    n, rigid = system.masses.shape[0], int(mod.RIGID_MODES)
+    try:
+        with np.errstate(all="ignore"):
+            w2 = np.asarray(mod.omega2(**system.params), dtype=float)
+            shapes = np.asarray(mod.mode_shapes(**system.params), dtype=float)
+    except (FloatingPointError, ArithmeticError, np.linalg.LinAlgError) as exc:
+        raise RunRefused(f"spectrum 'closed-form': the modes cannot be evaluated to float64 accuracy at these "
+                         f"parameter values ({exc}); accepted: spectrum 'svd'", quantity="spectrum") from None
+    if w2.shape != (n,) or shapes.shape != (n, n):
+        raise RunRefused(f"spectrum 'closed-form': the generated module returned {w2.shape[0]} modes for {n} "
+                         f"masses; accepted: spectrum 'svd'", quantity="spectrum")
+    order = np.argsort(w2, kind="stable")
+    for pos, j in enumerate(order):
+        bad = (not np.isfinite(w2[j]) or not np.all(np.isfinite(shapes[:, j])) or w2[j] < 0
+               or (pos < rigid) != (w2[j] == 0.0) or not np.any(shapes[:, j]))
+        if bad:
+            raise RunRefused(f"spectrum 'closed-form': mode {j} (omega2 = {w2[j]:.17g}) cannot be evaluated to "
+                             f"float64 accuracy at these parameter values; accepted: spectrum 'svd'",
+                             quantity="spectrum")
+    return spectrum_from_closed_form(w2, shapes, system.masses, rigid)
 
 
 def check_stable(omega_max: float, h: float, method: str, limit: float = 2.0) -> None:

@@ -24,7 +24,7 @@ __version__ = "0.2.0"
 #: Public names and the module that defines each (imported on first use).
 _LAZY = {
     "load": "._api", "modes": "._api", "simulate": "._api", "plan": "._api", "bench": "._api",
-    "method_names": "._api", "Modes": "._api", "Simulation": "._api",
+    "method_names": "._api", "Modes": "._api", "parse_expression": "._api", "Simulation": "._api",
     "SceneError": ".derive.errors", "RunRefused": ".numeric.errors", "Scene": ".derive.scene",
     "bundled_scenes": "._scenes", "sweep": "._sweep", "SweepResult": "._sweep",
     "frf": "._frf", "FrequencyResponse": "._frf", "animate": "._animate", "Animation": "._animate",

@@ -144,6 +144,16 @@ class Modes:
 
         return np.array([rec["omega2_value"] for rec in self.to_json().get("modes", [])], dtype=float)
 
+    def parse(self, text: str):
+        """An ``omega2`` or ``shape`` string of :meth:`to_json` back as a SymPy expression.
+
+        Built with the scene's own symbols (a parameter named ``E``, ``I``, ``S``, ``Q``,
+        ``beta``, ``gamma`` ... stays that parameter), through the scene-expression
+        whitelist; ``m.parse(m.to_json()["modes"][j]["omega2"]) == m.omega2[j]``.
+        See :func:`parse_expression`.
+        """
+        return parse_expression(text, self.scene)
+
     def __str__(self) -> str:
         return self.to_text()
 
@@ -153,6 +163,35 @@ class Modes:
     def _repr_latex_(self) -> str:
         text = self.to_latex()
         return text if text.lstrip().startswith(("$", "\\begin")) else f"$${text}$$"
+
+
+def parse_expression(text: str, scene: str | Path | Scene):
+    """Read an ``omega2`` or ``shape`` string printed by ``springchain modes --json`` back into SymPy.
+
+    Parameters
+    ----------
+    text : str
+        The printed string.
+    scene : str, Path or Scene
+        As for :func:`load`: its parameters are the only names accepted, as SymPy symbols
+        with the derivation's assumptions (``sympify``/``parse_expr`` would read ``E``, ``I``,
+        ``S``, ``Q``, ``beta``, ``gamma``, ``zeta`` as SymPy's own objects). The text goes
+        through the same whitelist as scene expressions (plus ``acos``); nothing is evaluated.
+
+    Returns
+    -------
+    sympy.Expr
+        Equal to the derivation's expression; printed decimals (numeric modes) read back as
+        the exact rationals of their text.
+
+    Raises
+    ------
+    SceneError
+        Naming the text and what is accepted.
+    """
+    from .derive.readback import parse_printed
+
+    return parse_printed(text, load(scene))
 
 
 def modes(scene: str | Path | Scene) -> Modes:

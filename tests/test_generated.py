@@ -242,6 +242,26 @@ def test_wall2_spectrum_hypothesis(rendered, values):
     np.testing.assert_array_equal(D, D.T)
 
 
+@pytest.mark.parametrize("name", ["seed", "wall2", "sym2", "four", "nonneigh", "one_wall", "one_free", "hanging",
+                                  "pairs"])
+def test_example_omega2_matches_mpmath_at_log_uniform_parameters(rendered, example_scene, seed_scene, name):
+    """The generated omega2() and mode_shapes() at parameters scaled by 10^u, u uniform in [-12, 12]
+    (not only near the scene's defaults), against a 130-digit mpmath solution of K φ = ω² M φ built
+    from the module's own masses() and spring_constants(): ω² within 1e-13 relative, rigid exactly 0."""
+    from modes_reference import reference, rel_err, shape_err
+
+    mod = rendered(name)
+    scene = seed_scene if name == "seed" else example_scene(name)
+    rng = np.random.default_rng(2024)
+    for _ in range(4):
+        p = {k: v * 10.0 ** float(rng.uniform(-12, 12)) for k, v in sorted(scene.parameters.items())}
+        masses = [float(m) for m in mod.masses(**p)]
+        ends = [(a, b, float(kv)) for (a, b), kv in zip(mod.SPRING_ENDS, mod.spring_constants(**p))]
+        w2, S = reference(masses, ends, dps=130)
+        assert rel_err(mod.omega2(**p), w2, mod.RIGID_MODES) <= 1e-13
+        assert shape_err(mod.mode_shapes(**p), masses, w2, S, mod.RIGID_MODES) <= 1e-13
+
+
 # -- (e) determinism ---------------------------------------------------------------------------------------
 def test_render_is_deterministic_in_process(seed_scene, example_scene):
     for scene in (seed_scene, example_scene("nonneigh"), example_scene("wall2")):
