@@ -46,6 +46,38 @@ SAFETY, FAC_MAX, FAC_MIN = 0.9, 4.0, 0.2
 BETA1, BETA2 = 0.7, 0.4
 
 
+def rkn_step(tab: dict, force, x: np.ndarray, v: np.ndarray, K: np.ndarray, t: float, h: float):
+    """One step of an RKN pair from ``(x, v)`` at ``t`` with step ``h``.
+
+    Parameters
+    ----------
+    tab : dict
+        :attr:`NystromTable.arrays` of the pair.
+    force : callable
+        ``force(x, t) -> a``, x and a of shape (N, B).
+    x, v : ndarray, shape (N, B)
+    K : ndarray, shape (s, N, B)
+        Stage forces; ``K[0]`` must hold ``force(x, t)`` on entry, the others are overwritten.
+    t, h : float
+
+    Returns
+    -------
+    x_new, v_new, err_x, err_v : ndarray, shape (N, B)
+        The order-``p`` solution and the local error estimates (solution minus embedded).
+    """
+    c, A = tab["c"], tab["A"]
+    s = c.shape[0]
+    shape = x.shape
+    K2 = K.reshape(s, -1)
+    h2 = h * h
+    for i in range(1, s):
+        xi = x + (c[i] * h) * v + h2 * (A[i, :i] @ K2[:i]).reshape(shape)
+        K[i] = force(xi, t + c[i] * h)
+    x_new = x + h * v + h2 * (tab["b"] @ K2).reshape(shape)
+    v_new = v + h * (tab["bp"] @ K2).reshape(shape)
+    return x_new, v_new, (h2 * (tab["e"] @ K2)).reshape(shape), (h * (tab["ep"] @ K2)).reshape(shape)
+
+
 class EmbeddedNystrom(AdaptiveMethod):
     """An embedded RKN pair (``table``) with error control; see the module docstring."""
 
@@ -91,8 +123,7 @@ class EmbeddedNystrom(AdaptiveMethod):
             x, v = x[:, None], v[:, None]
         shape = x.shape
         tab = self.table.arrays
-        c, A, b, bp, e, ep = tab["c"], tab["A"], tab["b"], tab["bp"], tab["e"], tab["ep"]
-        s = c.shape[0]
+        s = tab["c"].shape[0]
         fsal = self.table.fsal
         acc, ext = problem.acceleration, problem.external
         evals = [0]
@@ -108,7 +139,6 @@ class EmbeddedNystrom(AdaptiveMethod):
         vs = np.empty_like(xs)
         xs[0], vs[0] = x, v
         K = np.empty((s,) + shape)
-        K2 = K.reshape(s, -1)
         t = float(t_eval[0])
         K[0] = force(x, t)
         q_hat = self.table.embedded_order
@@ -124,14 +154,7 @@ class EmbeddedNystrom(AdaptiveMethod):
                 hs = target - t if clamped else h
                 if hs <= 1e-14 * max(abs(t), 1.0):
                     raise RunRefused(f"method {self.name!r}: step size underflow at t = {t:.6g}", quantity="rtol")
-                h2 = hs * hs
-                for i in range(1, s):
-                    xi = x + (c[i] * hs) * v + h2 * (A[i, :i] @ K2[:i]).reshape(shape)
-                    K[i] = force(xi, t + c[i] * hs)
-                x_new = x + hs * v + h2 * (b @ K2).reshape(shape)
-                v_new = v + hs * (bp @ K2).reshape(shape)
-                ex = (h2 * (e @ K2)).reshape(shape)
-                ev = (hs * (ep @ K2)).reshape(shape)
+                x_new, v_new, ex, ev = rkn_step(tab, force, x, v, K, t, hs)
                 sx = atol + rtol * np.maximum(np.abs(x), np.abs(x_new))
                 sv = atol + rtol * np.maximum(np.abs(v), np.abs(v_new))
                 err = math.sqrt(0.5 * (float(np.mean((ex / sx) ** 2)) + float(np.mean((ev / sv) ** 2))))
@@ -175,4 +198,4 @@ class EmbeddedNystrom(AdaptiveMethod):
         return min(100 * h0, h1, span)
 
 
-__all__ = ["EmbeddedNystrom", "SAFETY", "FAC_MAX", "FAC_MIN", "BETA1", "BETA2"]
+__all__ = ["EmbeddedNystrom", "rkn_step", "SAFETY", "FAC_MAX", "FAC_MIN", "BETA1", "BETA2"]
