@@ -225,3 +225,26 @@ def test_simulate_command_runs_the_pairs(tmp_path, name):
         assert f"x_{name}" in data.files
         x = data[f"x_{name}"]
     assert np.all(np.isfinite(x)) and np.allclose(x[0], [0.8, 0.0, -0.4])
+
+
+def test_simulate_refuses_the_pairs_on_damped_scenes(tmp_path):
+    from springchain.cli import main
+
+    damped = [p for p in sorted(SCENES.glob("*.toml")) if "damp" in p.read_text(encoding="utf-8")]
+    assert damped
+    assert main(["simulate", str(damped[0]), "--method", "dprkn8", "--no-figures", "--out", str(tmp_path / "o")]) == 2
+
+
+def test_plan_covers_the_pairs():
+    import springchain.generated.seed as seed_module
+    from springchain.numeric.plan import Planner
+    from springchain.numeric.system import System
+
+    system = System.from_module(seed_module)
+    planner = Planner.for_system(system, np.array([0.3, -0.1, 0.2]), np.array([0.0, 0.4, -0.2]), 20.0, 0.1)
+    plan = planner.plan(1e-6)
+    names = {c.name for c in (*plan.candidates, *plan.unreachable)}
+    assert {"dprkn6", "dprkn8", "dprkn12", "dop853"} <= names
+    for name in ("dprkn8", "dprkn12"):
+        law = planner.adaptive[name]
+        assert law.error(1e-8, 20.0) < law.error(1e-5, 20.0)  # calibrated: tighter rtol, smaller error
