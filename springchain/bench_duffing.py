@@ -21,8 +21,8 @@ interleaved (at each sweep index every method once) so that changes of machine l
 methods alike; *seconds* is the minimum of at least two timed repeats of the whole run; *evals* counts force evaluations.
 
 For each accuracy 1e-3 … 1e-10 the cost of each method to reach it is read off its sweep by
-log–log interpolation between the two runs that bracket it (on the lower envelope: a run
-counts with the smallest error of any cheaper-or-equal run), and divided into DOP853's. The
+log–log interpolation between the two runs that bracket it on the sweep's Pareto front (runs
+beaten by a cheaper-or-equal run are dropped), and divided into DOP853's. The
 target (issue 13): the best method ≥ 3× DOP853 in force evaluations and in seconds at every
 accuracy.
 """
@@ -68,12 +68,11 @@ def reference(problem, x0, v0, t_end: float, frames: int, h: float, progress=pri
 
 
 def _envelope(runs: list[dict], key: str) -> list[tuple[float, float]]:
-    """(cost, error) pairs sorted by cost, with each error the smallest of any cheaper-or-equal run."""
-    pts = sorted((r[key], r["error"]) for r in runs)
-    out, best = [], math.inf
-    for cost, err in pts:
-        best = min(best, err)
-        out.append((cost, best))
+    """The Pareto front (cost, error), sorted by cost: runs beaten by a cheaper-or-equal run are dropped."""
+    out: list[tuple[float, float]] = []
+    for cost, err in sorted((r[key], r["error"]) for r in runs):
+        if not out or err < out[-1][1]:
+            out.append((cost, err))
     return out
 
 
@@ -82,7 +81,7 @@ def cost_at(runs: list[dict], accuracy: float, key: str) -> float | None:
     env = _envelope(runs, key)
     for i, (cost, err) in enumerate(env):
         if err <= accuracy:
-            if i == 0 or env[i - 1][1] <= err:
+            if i == 0:
                 return cost
             c0, e0 = env[i - 1]
             f = (math.log(accuracy) - math.log(e0)) / (math.log(err) - math.log(e0))

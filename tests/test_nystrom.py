@@ -248,3 +248,20 @@ def test_plan_covers_the_pairs():
     for name in ("dprkn8", "dprkn12"):
         law = planner.adaptive[name]
         assert law.error(1e-8, 20.0) < law.error(1e-5, 20.0)  # calibrated: tighter rtol, smaller error
+
+
+def test_bench_duffing_interpolates_costs_on_the_lower_envelope():
+    from springchain.bench_duffing import TARGET, cost_at, ratio_table
+
+    runs = [{"error": 1e-3, "evals": 100, "seconds": 1.0}, {"error": 2e-3, "evals": 150, "seconds": 1.5},
+            {"error": 1e-5, "evals": 400, "seconds": 4.0}]
+    # 1e-4 lies half-way (in log) between the 100-eval and 400-eval runs: cost √(100·400) = 200
+    assert cost_at(runs, 1e-4, "evals") == pytest.approx(200.0)
+    assert cost_at(runs, 1e-3, "evals") == 100 and cost_at(runs, 1e-6, "evals") is None
+    dop = [{"error": 10.0 ** -k, "evals": 1000 * k, "seconds": float(k)} for k in range(2, 12)]
+    fast = [{"error": 10.0 ** -k, "evals": 250 * k, "seconds": k / 2.0} for k in range(2, 12)]
+    rows = ratio_table({"dop853": dop, "dprkn12": fast})
+    assert all(r["best"] == "dprkn12" for r in rows)
+    assert all(r["methods"]["dprkn12"]["evals_ratio"] == pytest.approx(4.0) for r in rows)
+    # 4× in evaluations but only 2× in seconds: the target needs both
+    assert TARGET == 3.0 and not any(r["met"] for r in rows)
