@@ -8,7 +8,7 @@ EXACT = "modal"
 #: Fixed-step integrators, in the order of ``integrators.INTEGRATORS``.
 FIXED_STEP = ("verlet", "verlet-kahan", "yoshida4", "blanes-moan4", "blanes-moan6", "kahan-li8", "rk4",
               "expm", "chebyshev")
-#: Adaptive SciPy methods, in the order of ``integrators.ADAPTIVE``.
-ADAPTIVE = ("rk45", "dop853", "lsoda")
+#: Adaptive methods (SciPy's, then the Runge–Kutta–Nyström pairs), in the order of ``integrators.ADAPTIVE``.
+ADAPTIVE = ("rk45", "dop853", "lsoda", "dprkn6", "dprkn8", "dprkn12")
 #: Every method selectable by name, the exact one first.
 METHOD_NAMES = (EXACT, *FIXED_STEP, *ADAPTIVE)

@@ -210,12 +210,22 @@ class StepMethod(Method):
 
 @dataclass(frozen=True)
 class AdaptiveRunner(Method):
-    """SciPy's ``solve_ivp`` (rk45, dop853, lsoda) on the whole first-order system, evaluated on the grid."""
+    """An adaptive method (SciPy's rk45, dop853, lsoda on the first-order system; the RKN pairs
+    dprkn6/8/12 on ``ẍ = f(t, x)``, stepping onto every recorded time), evaluated on the grid."""
+
+    def refusal(self, system: System) -> str | None:
+        from .integrators import ADAPTIVE
+
+        if system.damped and not ADAPTIVE[self.name].supports_damping:
+            return ("a Runge–Kutta–Nyström pair integrates x'' = f(t, x) and this scene has dampers; "
+                    "use dop853, rk45 or lsoda")
+        return None
 
     def run(self, ctx, x0, v0, grid, recorder) -> int:
         from .integrators import ADAPTIVE
         from .integrators.base import Problem
 
+        self.check(ctx.system)
         system = ctx.system
         Ad = system.damping_rate_matrix()
         problem = Problem(system.acceleration_fn, damping=None if Ad is None else (lambda v: Ad @ v),

@@ -40,6 +40,8 @@ class AdaptiveMethod:
     scipy_method: ClassVar[str]
     order: ClassVar[float]
     symplectic: ClassVar[bool] = False
+    #: Whether the method integrates velocity-dependent (damping) forces.
+    supports_damping: ClassVar[bool] = True
     #: Not a constant: counted per run.
     evals_per_step: ClassVar[float] = math.nan
 
