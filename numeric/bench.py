@@ -288,7 +288,8 @@ def run_bench(system: System, x0: np.ndarray, v0: np.ndarray, t_end: float, dt_o
         if use(integ.name):
             jobs.append((integ.name, lambda integ=integ: _run_step(ctx, integ, step_grid(t_end, dt_out)[1])))
     adaptive_jobs = [(name, cls_(), config.dop853_rtols if name == "dop853" else config.rtols)
-                     for name, cls_ in ADAPTIVE.items() if use(name)]
+                     for name, cls_ in ADAPTIVE.items()
+                     if use(name) and (cls_.supports_damping or not system.damped)]
     prog.total = len(jobs) + sum(len(r) for _, _, r in adaptive_jobs)
     records = [job() for _, job in jobs]
     for name, method, rtols in adaptive_jobs:

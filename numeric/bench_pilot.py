@@ -94,7 +94,7 @@ def run_pilot_bench(system: System, x0: np.ndarray, v0: np.ndarray, t_end: float
     size = max(float(np.max(np.abs(xr))), 1e-300)
     fp = full_problem(system)
     for name, cls_ in ADAPTIVE.items():
-        if (methods and name not in methods) or not adaptive_applies(name, n):
+        if (methods and name not in methods) or not adaptive_applies(name, system):
             continue
         rtols = config.dop853_rtols if name == "dop853" else config.rtols
         for rtol in rtols:

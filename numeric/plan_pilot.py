@@ -100,9 +100,13 @@ class ExactReference:
         return self._cache[key]
 
 
-def adaptive_applies(name: str, n: int) -> bool:
-    """LSODA keeps a dense N × N Jacobian: left out above MAX_MASSES masses."""
-    return not (name == "lsoda" and n > MAX_MASSES)
+def adaptive_applies(name: str, system: System) -> bool:
+    """Whether an adaptive method takes part in pilot plans and benches of ``system``: LSODA keeps
+    a dense N × N Jacobian (left out above MAX_MASSES masses); the Runge–Kutta–Nyström pairs
+    integrate x'' = f(t, x) and so leave out damped scenes."""
+    if name == "lsoda" and system.n > MAX_MASSES:
+        return False
+    return ADAPTIVE[name].supports_damping or not system.damped
 
 
 def wrapped(system: System, integ: Integrator) -> Integrator:
@@ -282,7 +286,7 @@ class PilotPlanner:
                 return ref.at(t)[0]
 
             for name, cls_ in ADAPTIVE.items():
-                if (methods and name not in methods) or not adaptive_applies(name, system.n):
+                if (methods and name not in methods) or not adaptive_applies(name, system):
                     continue
                 laws_a[name] = calibrate_adaptive(cls_(), fp, x0, v0, t_ad, g.spacing, reference, scale=size)
         return cls(float(t_end), float(dt_out), system.n, w_max, laws, integs, costs, laws_a, exact_seconds,
