@@ -190,7 +190,7 @@ def spring_factor_modes(masses: list, springs: list, rigid_pieces: list) -> list
 
     The subtraction-free LDLᵀ of ``K = Bᵀ diag(k) B`` and the one-sided Jacobi
     SVD of its factor: the very code of the generated modules' ``_accurate_modes``
-    (:data:`codegen._HELPER`, run here on the scene's values), relatively accurate
+    (:func:`spring_factor._accurate_modes`, run here on the scene's values), relatively accurate
     to a few ulps at any positive parameter values, O(N³) float64 work.
 
     Parameters
@@ -210,7 +210,7 @@ def spring_factor_modes(masses: list, springs: list, rigid_pieces: list) -> list
     """
     import numpy as np
 
-    from .codegen import accurate_modes_function
+    from .spring_factor import accurate_modes_function
 
     ends = tuple((a, b) for a, b, _ in springs)
     run = accurate_modes_function(len(masses), ends, tuple(tuple(sorted(p)) for p in rigid_pieces))

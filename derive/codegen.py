@@ -16,6 +16,8 @@ from sympy.printing.numpy import NumPyPrinter
 
 from .model import Effect, Model
 from .modes import ModeSet
+from .spring_factor import accurate_modes_function, helper_source  # noqa: F401 (re-exported)
+from .stable_forms import stable_closed_forms
 
 #: Scenes with more masses get matrices assembled from the spring list, not printed entry by entry.
 MAX_PRINTED_MATRIX = 12
@@ -106,97 +108,6 @@ def _matrix(mat: sp.Matrix) -> str:
     return "numpy.array([\n        " + ",\n        ".join(rows) + ",\n    ], dtype=float)"
 
 
-_HELPER = """
-
-def _accurate_modes(m, k):
-    \"\"\"ω² (ascending, rigid modes exactly 0 first) and M-orthonormal physical shapes (columns).
-
-    The spring-factor route, accurate to float64 in the relative sense at any
-    positive parameter values: a subtraction-free LDLᵀ of K = Bᵀ diag(k) B
-    (eliminating in the diagonally dominant parts, pivoting on D = M^-1/2 K M^-1/2),
-    then the one-sided Jacobi SVD (LAPACK dgejsv) of F = M^-1/2 L Λ^1/2 (F Fᵀ = D).
-    Rigid-body modes come from the structure (RIGID_PIECES), never from a threshold.
-    \"\"\"
-    _m = numpy.asarray(m, dtype=float)
-    _k = numpy.asarray(k, dtype=float)
-    _ends = numpy.asarray(SPRING_ENDS, dtype=numpy.intp).reshape(-1, 2)
-    _a, _b = _ends[:, 0], _ends[:, 1]
-    _W = numpy.zeros((N, N))
-    _in = (_a >= 0) & (_b >= 0) & (_a != _b)
-    numpy.add.at(_W, (_a[_in], _b[_in]), _k[_in])
-    numpy.add.at(_W, (_b[_in], _a[_in]), _k[_in])
-    _wall = numpy.zeros(N)
-    _one = (_a >= 0) != (_b >= 0)
-    numpy.add.at(_wall, numpy.where(_a[_one] >= 0, _a[_one], _b[_one]), _k[_one])
-    _d = _wall + _W.sum(axis=1)
-    _alive = numpy.ones(N, dtype=bool)
-    _rm = numpy.sqrt(_m)
-    _F = numpy.zeros((N, N), order="F")
-    _c = 0
-    for _ in range(N):
-        _score = numpy.where(_alive, _d / _m, -1.0)
-        _p = int(numpy.argmax(_score))
-        if not _score[_p] > 0.0:
-            break
-        _dp = _d[_p]
-        _alive[_p] = False
-        _nb = numpy.flatnonzero(_W[_p])
-        _w = _W[_p, _nb]
-        _F[_p, _c] = numpy.sqrt(_dp) / _rm[_p]
-        _F[_nb, _c] = -(_w / numpy.sqrt(_dp)) / _rm[_nb]
-        _c += 1
-        _W[_p, :] = 0.0
-        _W[:, _p] = 0.0
-        if _nb.size:
-            _W[numpy.ix_(_nb, _nb)] += numpy.outer(_w, _w / _dp)
-            _W[_nb, _nb] = 0.0
-            _wall[_nb] += _w * (_wall[_p] / _dp)
-            _d[_nb] = _wall[_nb] + _W[_nb].sum(axis=1)
-    _R = numpy.zeros((N, len(RIGID_PIECES)))
-    for _j, _idx in enumerate(RIGID_PIECES):
-        _R[list(_idx), _j] = _rm[list(_idx)] / numpy.linalg.norm(_rm[list(_idx)])
-    if _c != N - len(RIGID_PIECES):
-        raise FloatingPointError("parameter values outside the float range of the accurate mode route")
-    if _c:
-        _sva, _u, _, _work, _, _info = scipy.linalg.lapack.dgejsv(numpy.asfortranarray(_F[:, :_c]),
-                                                                 joba=2, jobu=0, jobv=3, jobr=0, jobt=0, jobp=0)
-        if _info != 0:
-            raise numpy.linalg.LinAlgError(f"dgejsv failed to converge (info = {_info})")
-        _s = _sva * (_work[0] / _work[1])
-        _o = numpy.argsort(_s, kind="stable")
-        _s, _V = _s[_o], _u[:, :_c][:, _o]
-        if _R.shape[1]:
-            _V = _V - _R @ (_R.T @ _V)
-        _V = _V - 0.5 * (_V @ (_V.T @ _V - numpy.eye(_c)))
-    else:
-        _s, _V = numpy.zeros(0), numpy.zeros((N, 0))
-    _w2 = numpy.concatenate([numpy.zeros(_R.shape[1]), _s * _s])
-    return _w2, numpy.hstack([_R, _V]) / _rm[:, None]
-"""
-
-
-def accurate_modes_function(n: int, spring_ends: tuple, rigid_pieces: tuple):
-    """``_accurate_modes(m, k)`` of a module with these N, SPRING_ENDS and RIGID_PIECES, as a callable.
-
-    The derive side's large-N numeric fallback (:func:`accurate.spring_factor_modes`) runs the
-    same code the generated module will run (our own constant text, never scene text).
-    """
-    import numpy
-    import scipy.linalg.lapack
-
-    namespace = {"numpy": numpy, "scipy": scipy, "N": n, "SPRING_ENDS": spring_ends, "RIGID_PIECES": rigid_pieces}
-    exec(_helper_code(), namespace)  # noqa: S102 - the constant _HELPER text above
-    return namespace["_accurate_modes"]
-
-
-def _helper_code():
-    global _HELPER_CODE
-    if _HELPER_CODE is None:
-        _HELPER_CODE = compile(_HELPER, "<springchain _accurate_modes>", "exec")
-    return _HELPER_CODE
-
-
-_HELPER_CODE = None
 
 
 def _incidence_lines(model: Model, kwcall: str, arg: str, ends: str, constants: str, *, cubic: bool,
@@ -220,53 +131,6 @@ def _incidence_lines(model: Model, kwcall: str, arg: str, ends: str, constants: 
             "    numpy.add.at(_f, _a[_ia], -_s[_ia])",
             "    numpy.add.at(_f, _b[_ib], _s[_ib])"]
     return out
-
-
-def _sign_coherent(expr: sp.Expr) -> bool:
-    """No sum of terms of both signs, no function: evaluates in float64 to a few ulps anywhere."""
-    if expr.atoms(sp.Function):
-        return False
-    for node in sp.preorder_traversal(expr):
-        if node.is_Add:
-            signs = {t.could_extract_minus_sign() for t in node.args}
-            if len(signs) > 1:
-                return False
-    return True
-
-
-def _stable(expr) -> sp.Expr | None:
-    """A float64-stable form of ``expr`` (itself, or numerator/denominator expanded), or None."""
-    if isinstance(expr, int):
-        expr = sp.Integer(expr)
-    elif isinstance(expr, float):
-        expr = sp.Float(expr)
-    if expr.is_Number or _sign_coherent(expr):
-        return expr
-    n, d = sp.fraction(sp.together(expr))
-    alt = sp.expand(n) / sp.expand(d)
-    return alt if _sign_coherent(alt) else None
-
-
-def stable_closed_forms(modes: ModeSet):
-    """ω² and shape expressions of every mode if all of them evaluate stably in float64, else None.
-
-    Returns
-    -------
-    (list of Expr, list of tuple of Expr) or None
-        One ω² and one shape per independent mode, in the ModeSet's order.
-    """
-    if not modes.closed_form:
-        return None
-    w2, shapes = [], []
-    for mode in modes.modes:
-        for s in mode.shapes:
-            e = _stable(mode.omega2)
-            cs = [_stable(c) for c in s]
-            if e is None or any(c is None for c in cs):
-                return None
-            w2.append(e)
-            shapes.append(tuple(cs))
-    return w2, shapes
 
 
 def forcing_harmonics(model: Model):
@@ -465,7 +329,7 @@ def render_module(model: Model, modes: ModeSet, *, bundled: bool = True) -> str:
         w('    """')
         w(f"    return _accurate_modes(masses({kwcall}), spring_constants({kwcall}))[1]")
     if stable is None or model.modal_zeta is not None:
-        lines.extend(_HELPER.rstrip("\n").split("\n")[1:])
+        lines.extend(["", *helper_source().rstrip("\n").split("\n")])
     w("")
     w("")
     cons = model.force_expressions(Effect.SPRING, Effect.CUBIC, Effect.GRAVITY)
