@@ -15,18 +15,29 @@ centre of mass of a free piece.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from functools import cached_property
+from functools import cached_property, lru_cache
 
 import numpy as np
 
 from .special import tsinc
 from .spectrum import Spectrum
 
-__all__ = ["ModalSolution", "cos_sin", "tsinc"]
+__all__ = ["ModalSolution", "cos_tsinc", "tsinc"]
 
 
 #: Below this many times the direct evaluation is as cheap as the split one.
 _SPLIT_MIN = 64
+
+
+_EPS = float(np.finfo(float).eps)
+
+
+@lru_cache(maxsize=8)
+def _steps(s: int) -> np.ndarray:
+    """0, 1, …, s−1 as floats (read-only; a grid's length repeats across runs)."""
+    out = np.arange(s, dtype=float)
+    out.flags.writeable = False
+    return out
 
 
 def _uniform_split(t: np.ndarray) -> tuple[int, float] | None:
@@ -34,39 +45,61 @@ def _uniform_split(t: np.ndarray) -> tuple[int, float] | None:
     s = t.shape[0]
     if s < _SPLIT_MIN:
         return None
-    h = (t[-1] - t[0]) / (s - 1)
+    t0, t1 = float(t[0]), float(t[-1])
+    h = (t1 - t0) / (s - 1)
     if not h > 0:
         return None
-    dev = np.max(np.abs(t - (t[0] + np.arange(s) * h)))
-    if dev > 4.0 * np.finfo(float).eps * max(abs(t[0]), abs(t[-1])):
+    dev = t - _steps(s) * h
+    dev -= t0
+    if max(dev.max(), -dev.min()) > 4.0 * _EPS * max(abs(t0), abs(t1)):
         return None
     return int(np.sqrt(s)) + 1, float(h)
 
 
-def cos_sin(t: np.ndarray, w: np.ndarray) -> np.ndarray:
-    """``[cos(ωt); sin(ωt)]``, shape (2N, S) (modes along the rows), for t (S,) and ω (N,).
+def _tsinc_table(tau: np.ndarray, w: np.ndarray, sin: np.ndarray) -> np.ndarray:
+    """``τ·sinc(ωτ) = sin(ωτ)/ω`` (N, T) from sines (N, T), ``τ`` (T,) itself where ω = 0 (rigid modes)."""
+    zero = w == 0.0
+    if not zero.any():
+        return sin / w[:, None]
+    out = sin / np.where(zero, 1.0, w)[:, None]
+    out[zero] = tau
+    return out
 
-    On a uniform grid ``t_i = t_0 + i·h`` (the simulation's grid) the S × N pairs come from two
-    short tables by the angle-addition formulas, ``i = jB + r`` with B ≈ √S:
-    ``cos(ω t_{jB} + ω r h)`` and ``sin(...)`` from the cosines and sines of the ⌈S/B⌉ block
-    starts and of the B offsets — 2√S·N sine/cosine pairs and 4·S·N multiplications instead
-    of S·N pairs. Each phase is rounded as the direct ``ω t_i`` is, and each entry is a sum of
-    two products of numbers ≤ 1, so the result stays within a few ulps (absolute) of the
-    direct one. Other grids take the direct route.
+
+def cos_tsinc(t: np.ndarray, w: np.ndarray) -> np.ndarray:
+    """``[cos(ωt); t·sinc(ωt)]``, shape (2N, S) (modes along the rows), for t (S,) and ω (N,) ≥ 0.
+
+    ``t·sinc(ωt) = sin(ωt)/ω``, and exactly ``t`` for a rigid mode (ω = 0 by structure): the
+    two functions of the modal solution. On a uniform grid ``t_i = t_0 + i·h`` (the
+    simulation's grid) the S × N pairs come from two short tables by the angle-addition
+    formulas, ``t_i = a + b`` with ``a = t_{jB}``, ``b = r·h``, ``i = jB + r``, B ≈ √S:
+
+        cos(ωt)     = cos(ωa) cos(ωb) − sin(ωa) sin(ωb)
+        t·sinc(ωt)  = [a·sinc(ωa)] cos(ωb) + cos(ωa) [b·sinc(ωb)]
+
+    (the second stays exact at ω = 0: a + b). That is 2√S·N sine/cosine pairs and a few S·N
+    multiplications instead of S·N pairs. Each phase is rounded as the direct ``ω t_i`` is and
+    each entry is a sum of two products, so the result stays within a few ulps of the direct
+    one (absolute, in units of 1 and of t). Other grids take the direct route.
     """
     n, s = w.shape[0], t.shape[0]
     split = _uniform_split(t)
     if split is None:
-        z = np.exp(1j * np.multiply.outer(w, t))
-        return np.concatenate((z.real, z.imag))
+        ph = np.multiply.outer(w, t)
+        z = np.exp(1j * ph)
+        return np.concatenate((z.real, _tsinc_table(t, w, z.imag)))
     b, h = split
     blocks = -(-s // b)
-    head = np.multiply.outer(w, t[::b])[:, :, None]                   # (N, blocks, 1)
-    tail = np.multiply.outer(w, np.arange(b) * h)[:, None, :]         # (N, 1, B)
-    hc, hs, tc, ts = np.cos(head), np.sin(head), np.cos(tail), np.sin(tail)
+    a = t[::b]                                                        # (blocks,)
+    r = _steps(s)[:b] * h                                             # (B,)
+    ha, hb = np.multiply.outer(w, a), np.multiply.outer(w, r)
+    hc, tc, sa, sb = np.cos(ha), np.cos(hb), np.sin(ha), np.sin(hb)
+    hs = _tsinc_table(a, w, sa)[:, :, None]   # (N, blocks, 1)
+    ts = _tsinc_table(r, w, sb)[:, None, :]   # (N, 1, B)
+    hc, tc = hc[:, :, None], tc[:, None, :]
     out = np.empty((2, n, blocks, b))
     np.multiply(hc, tc, out=out[0])
-    out[0] -= hs * ts
+    out[0] -= sa[:, :, None] * sb[:, None, :]  # the sines themselves: ω² would overflow at huge ω
     np.multiply(hs, tc, out=out[1])
     out[1] += hc * ts
     return out.reshape(2 * n, blocks * b)[:, :s]
@@ -156,19 +189,12 @@ class ModalSolution:
         return g
 
     def _trajectory(self, t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """x, v of shape (S, N) at times t (S,): the cosines and sines of :func:`cos_sin` and one matrix product.
+        """x, v of shape (S, N) at times t (S,): the cos and t·sinc of :func:`cos_tsinc` and one matrix product.
 
         t·sinc(ωt) = sin(ωt)/ω for ω > 0; rigid modes (ω = 0 exactly, by structure) get t.
         """
-        w = self.spectrum.omega
-        n = w.shape[0]
-        cs = cos_sin(t, w)  # (2N, S)
-        elastic = w > 0.0
-        if elastic.all():
-            cs[n:] /= w[:, None]
-        else:
-            cs[n:] /= np.where(elastic, w, 1.0)[:, None]
-            cs[n:][~elastic] = t  # rigid modes: t·sinc(0·t) = t
+        cs = cos_tsinc(t, self.spectrum.omega)  # (2N, S)
+        n = self.spectrum.omega.shape[0]
         xv = cs.T @ self._maps
         return xv[:, :n], xv[:, n:]
 

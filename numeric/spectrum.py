@@ -356,9 +356,9 @@ def spectrum_from_closed_form(omega2: np.ndarray, shapes: np.ndarray, masses: np
     w2[:rigid] = 0.0
     E = np.sqrt(masses)[:, None] * np.asarray(shapes, dtype=float)[:, order]
     E = E / np.linalg.norm(E, axis=0)[None, :]
-    start = 0
-    for j in range(1, w2.shape[0] + 1):
-        if j == w2.shape[0] or j == rigid or w2[j] - w2[start] > 1e-12 * w2[j]:
+    start, wl = 0, w2.tolist()
+    for j in range(1, len(wl) + 1):
+        if j == len(wl) or j == rigid or wl[j] - wl[start] > 1e-12 * wl[j]:
             G = E[:, start:j]
             # rigid shapes are disjoint (orthogonal already); a group already orthonormal to 1e-8
             # (the generated spring-factor route) is left to the Löwdin step, which keeps each
