@@ -114,7 +114,7 @@ def _closed_form_spectrum(system: System) -> Spectrum:
                          f"masses; accepted: spectrum 'svd'", quantity="spectrum")
     order = np.argsort(w2, kind="stable")
     ws = w2[order].tolist()  # a few scalar tests (this is on the exact method's timed path)
-    fine = (bool(np.isfinite(shapes).all()) and all((shapes != 0.0).any(axis=0).tolist())
+    fine = (bool(np.isfinite(w2).all() and np.isfinite(shapes).all()) and all((shapes != 0.0).any(axis=0).tolist())
             and all(w >= 0 and (pos < rigid) == (w == 0.0) for pos, w in enumerate(ws)))  # NaN fails w >= 0
     if not fine:  # name the first mode (in ascending order) that is not right
         ss = shapes[:, order]
