@@ -19,7 +19,7 @@ Subpackages: :mod:`springchain.derive` (SymPy), :mod:`springchain.numeric` (NumP
 
 from __future__ import annotations
 
-__version__ = "0.2.0"
+__version__ = "0.3.0"
 
 #: Public names and the module that defines each (imported on first use).
 _LAZY = {
