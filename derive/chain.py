@@ -477,10 +477,24 @@ def render_chain_module(model: ChainModel, *, bundled: bool = True) -> str:
         w(f"    _j = numpy.arange({lo}, n + {lo}, dtype=float)")
         w(f"    return numpy.sqrt(numpy.broadcast_to({_p(expr)}, (n,)))")
     elif ch.left is End.RING:
-        w('    """Squared angular frequencies (non-uniform ring: dense, n <= MAX_DENSE), shape (n,)."""')
-        w(f"    _w = scipy.linalg.eigh(stiffness_matrix({kw}, n=n), mass_matrix({kw}, n=n), eigvals_only=True)")
-        w("    _w[:_RIGID_MODES] = 0.0")
-        w("    return numpy.maximum(_w, 0.0)")
+        import textwrap
+
+        from .spring_factor import helper_source
+
+        w('    """Squared angular frequencies (index-dependent ring), ascending, shape (n,).')
+        w("")
+        w("    The spring-factor route (subtraction-free LDLᵀ of K, one-sided Jacobi SVD of its factor), as")
+        w("    the dense modules run it: accurate to float64 in the relative sense at any positive masses")
+        w('    and springs; the rigid mode exactly 0. Cost O(n³)."""')
+        w(f"    return _ring_omega2(masses({kw}, n=n), spring_constants({kw}, n=n), spring_ends(n=n), n)")
+        w("")
+        w("")
+        w("def _ring_omega2(_m, _k, _ends, n):")
+        w('    """ω² of a ring of n masses by the spring-factor helper below (its globals bound here)."""')
+        w("    N, SPRING_ENDS, RIGID_PIECES = n, _ends, (tuple(range(n)),)")
+        w(textwrap.indent(helper_source().rstrip("\n"), "    "))
+        w("")
+        w("    return _accurate_modes(_m, _k)[0]")
     else:
         _bidiagonal_omega2(w, ch, kw)
     return privatize("\n".join(w_lines) + "\n")
