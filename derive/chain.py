@@ -114,9 +114,12 @@ def chain_modes(model: ChainModel) -> ChainModes:
     ch = model.chain
     left, right = ch.left, ch.right
     if not ch.uniform:
+        route = ("the spring-factor route (LDLᵀ of K, one-sided Jacobi SVD; dense, n <= MAX_DENSE)"
+                 if left is End.RING else
+                 "the singular values of the bidiagonal spring factor (bisection on its Golub–Kahan form)")
         return ChainModes(None, None, None, f"{left}-{right}",
-                          ("non-uniform chain: no closed form; ω² from the tridiagonal eigen-problem "
-                           "(scipy.linalg.eigh_tridiagonal) in the generated module",), closed_form=False)
+                          (f"non-uniform chain: no closed form; ω² from {route} in the generated module, "
+                           "accurate to float64 in the relative sense",), closed_form=False)
     k, m, i, j, n = model.k, model.mass, model.i, model.j, model.n
     c = 4 * k / m
     if left is End.RING:
