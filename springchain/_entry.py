@@ -14,7 +14,7 @@ EXIT_INTERRUPTED = 130
 #: If a KeyboardInterrupt is swallowed (CPython ignores exceptions raised in finalizers, and
 #: some libraries catch everything), the process still ends this many seconds after Ctrl-C.
 GRACE_SECONDS = 10.0
-_state = {"handled": False}
+_state = {"handled": False, "signalled": False}
 
 
 def _hard_exit() -> None:
@@ -30,6 +30,7 @@ def _hard_exit() -> None:
 def _on_sigint(signum, frame):
     import threading
 
+    _state["signalled"] = True
     timer = threading.Timer(GRACE_SECONDS, _hard_exit)
     timer.daemon = True
     timer.start()
@@ -48,6 +49,17 @@ def _interrupted() -> int:
     return EXIT_INTERRUPTED
 
 
+def _from_interrupt(exc: BaseException) -> bool:
+    """Whether a KeyboardInterrupt is in the exception's chain of causes."""
+    seen = set()
+    while exc is not None and id(exc) not in seen:
+        if isinstance(exc, KeyboardInterrupt):
+            return True
+        seen.add(id(exc))
+        exc = exc.__cause__ or exc.__context__
+    return False
+
+
 def main(argv=None) -> int:
     if signal.getsignal(signal.SIGINT) is not signal.SIG_IGN:  # a background job keeps ignoring it
         signal.signal(signal.SIGINT, _on_sigint)
@@ -57,6 +69,12 @@ def main(argv=None) -> int:
         status = cli_main(argv)
     except KeyboardInterrupt:
         return _interrupted()
+    except BaseException as exc:  # noqa: BLE001 - re-raised unless Ctrl-C caused it
+        # Ctrl-C during an extension module's initialisation surfaces as another exception
+        # (matplotlib: "ImportError: initialization failed" from the KeyboardInterrupt)
+        if _state["signalled"] or _from_interrupt(exc):
+            return _interrupted()
+        raise
     signal.signal(signal.SIGINT, signal.SIG_IGN)  # interpreter shutdown: no traceback either
     return status
 
