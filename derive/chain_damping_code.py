@@ -15,6 +15,7 @@ import sympy as sp
 
 from .chain_dampers import ALONG, GROUND, SINGLE
 from .codegen import _p
+from .damping_code import rayleigh_coefficients_lines
 
 
 def chain_damping_code(model, sig: str, kw: str) -> list[str]:
@@ -25,12 +26,7 @@ def chain_damping_code(model, sig: str, kw: str) -> list[str]:
     head = f"{sig}, " if sig else ""
     out: list[str] = []
     w = out.append
-    if model.rayleigh is not None:
-        w("")
-        w("")
-        w(f"def rayleigh_coefficients({sig}):")
-        w('    """(alpha, beta) of Rayleigh damping C = alpha*M + beta*K ([damping] rayleigh), shape (2,)."""')
-        w("    return numpy.array([" + ", ".join(_p(e) for e in model.rayleigh) + "], dtype=float)")
+    out.extend(rayleigh_coefficients_lines(model, sig))
     ends, consts = [], []
     for kind, a, b, c, key in model.dampers:
         expr = _p(c.subs(model.i, i))

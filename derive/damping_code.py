@@ -28,6 +28,17 @@ def _array(entries: list[str]) -> str:
     return "numpy.array([" + ", ".join(entries) + "], dtype=float)"
 
 
+def rayleigh_coefficients_lines(model, sig: str) -> list[str]:
+    """Lines of ``rayleigh_coefficients()`` (empty without ``[damping] rayleigh``); dense and chain modules."""
+    from .codegen import _p
+
+    if model.rayleigh is None:
+        return []
+    return ["", "", f"def rayleigh_coefficients({sig}):",
+            '    """(alpha, beta) of Rayleigh damping C = alpha*M + beta*K ([damping] rayleigh), shape (2,)."""',
+            f"    return {_array([_p(e) for e in model.rayleigh])}"]
+
+
 def damping_matrix_lines(model: Model, sig: str, kwcall: str, matrix=None) -> list[str]:
     """Lines of ``rayleigh_coefficients``/``modal_damping_ratios`` (when declared) and ``damping_matrix``.
 
@@ -43,12 +54,7 @@ def damping_matrix_lines(model: Model, sig: str, kwcall: str, matrix=None) -> li
 
     out: list[str] = []
     w = out.append
-    if model.rayleigh is not None:
-        w("")
-        w("")
-        w(f"def rayleigh_coefficients({sig}):")
-        w('    """(alpha, beta) of Rayleigh damping C = alpha*M + beta*K ([damping] rayleigh), shape (2,)."""')
-        w(f"    return {_array([_p(e) for e in model.rayleigh])}")
+    out.extend(rayleigh_coefficients_lines(model, sig))
     if model.modal_zeta is not None:
         w("")
         w("")
