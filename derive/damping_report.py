@@ -56,13 +56,54 @@ class DampedModes:
     model: str  # "dashpots", "rayleigh", "modal" or a combination joined by " + "
 
 
+def _pieces(model: Model) -> list[list[int]]:
+    """Mass indices of the pieces joined by springs or dashpots (walls join nothing)."""
+    n = model.scene.n
+    parent = list(range(n))
+
+    def root(i: int) -> int:
+        while parent[i] != i:
+            parent[i] = parent[parent[i]]
+            i = parent[i]
+        return i
+
+    for a, b, *_ in list(model.springs) + list(model.dampers):  # one pass over elements, not masses
+        if a >= 0 and b >= 0:
+            parent[root(a)] = root(b)
+    groups: dict[int, list[int]] = {}
+    for i in range(n):
+        groups.setdefault(root(i), []).append(i)
+    return list(groups.values())
+
+
+def _eig_by_piece(masses: list, springs: list, pieces: list[list[int]], dps: int):
+    """``_eig_dynamical`` piece by piece: ω² ascending and shapes that are exactly zero outside
+    their piece, so a piece without damping has exactly zero rows in G = ΦᵀCΦ (its modes are
+    undamped by structure, not by a value that shrinks with the precision)."""
+    n = len(masses)
+    where = {i: (p, j) for p, piece in enumerate(pieces) for j, i in enumerate(piece)}
+    found = []
+    for p, piece in enumerate(pieces):
+        local = [(where[a][1] if a >= 0 else -1, where[b][1] if b >= 0 else -1, k)
+                 for a, b, k in springs if (a >= 0 and where[a][0] == p) or (b >= 0 and where[b][0] == p)]
+        w, shapes = _eig_dynamical([masses[i] for i in piece], local, len(piece), dps)
+        with mpmath.workdps(dps):
+            for wj, sj in zip(w, shapes):
+                full = [mpmath.mpf(0)] * n
+                for j, i in enumerate(piece):
+                    full[i] = sj[j]
+                found.append((wj, full))
+    found.sort(key=lambda r: r[0])
+    return [w for w, _ in found], [s for _, s in found]
+
+
 def _modal_damping(model: Model, dps: int):
     """(ω² list, G matrix) in modal coordinates at working precision ``dps``."""
     subs = exact_values(model.params, model.scene.parameters)
     n = model.scene.n
     masses = [m.subs(subs) for m in model.masses]
     springs = [(a, b, k.subs(subs)) for a, b, k, _, _ in model.springs]
-    w2, shapes = _eig_dynamical(masses, springs, n, dps)
+    w2, shapes = _eig_by_piece(masses, springs, _pieces(model), dps)
     with mpmath.workdps(dps):
         n_rigid = len(model.free_components)
         w2 = [mpmath.mpf(0) if j < n_rigid else w for j, w in enumerate(w2)]
@@ -130,18 +171,26 @@ def _rows_at(model: Model, dps: int) -> tuple[list[tuple], bool]:
                 wd2 = w2[j] - g * g / 4
                 rows.append((float(w), float(g / (2 * w)), float(mpmath.sqrt(wd2)) if wd2 > 0 else 0.0, None))
             return rows, True
-        A = mpmath.zeros(2 * n, 2 * n)
-        for i in range(n):
-            A[i, n + i] = 1
-            A[n + i, i] = -w2[i]
-            for j in range(n):
-                A[n + i, n + j] = -G[i, j]
-        lam = mpmath.eig(A, left=False, right=False)
+        # modes with an exactly zero row of G (a piece without damping) are undamped by structure:
+        # λ = ±iω, left out of the eigenvalue problem (whose QR would give them a real part of noise)
+        free = [j for j in range(n) if all(G[j, i] == 0 for i in range(n))]
+        kept = [j for j in range(n) if j not in free]
+        m = len(kept)
+        A = mpmath.zeros(2 * m, 2 * m)
+        for a, i in enumerate(kept):
+            A[a, m + a] = 1
+            A[m + a, a] = -w2[i]
+            for b, j in enumerate(kept):
+                A[m + a, m + b] = -G[i, j]
+        lam = list(mpmath.eig(A, left=False, right=False)) if m else []
+        lam += [mpmath.mpc(0, mpmath.sqrt(w2[j])) for j in free if w2[j] > 0]
+        lam += [mpmath.mpc(0, 0)] * (2 * sum(1 for j in free if w2[j] == 0))
         scale = max(abs(l) for l in lam) or mpmath.mpf(1)
         tiny = mpmath.mpf(10) ** (-(dps // 2)) * scale
         cplx = sorted((l for l in lam if mpmath.im(l) > tiny), key=abs)
+        undamped = {id(l) for l in lam if mpmath.re(l) == 0}
         real = sorted((mpmath.re(l) for l in lam if abs(mpmath.im(l)) <= tiny), key=lambda r: -r)
-        rows = [(float(abs(l)), float(-mpmath.re(l) / abs(l)), float(mpmath.im(l)),
+        rows = [(float(abs(l)), 0.0 if id(l) in undamped else float(-mpmath.re(l) / abs(l)), float(mpmath.im(l)),
                  complex(float(mpmath.re(l)), float(mpmath.im(l)))) for l in cplx]
         zeros = [r for r in real if abs(r) <= tiny]
         rest = [r for r in real if abs(r) > tiny]
@@ -154,14 +203,34 @@ def _rows_at(model: Model, dps: int) -> tuple[list[tuple], bool]:
         return rows[:n], False
 
 
-def _settled(a: list[tuple], b: list[tuple]) -> bool:
+def _zero_noise(x: float, y: float, dps: int) -> bool:
+    """Both precisions put ``x`` (at ``dps`` digits) and ``y`` (at 2·dps) below 10^(−dps/2) and
+    ``y`` shrank by 1e-10 or more: a quantity that is exactly zero (a node of a mode at every
+    dashpot), not a value — the absolute floor near ζ = 0."""
+    floor = 10.0 ** (-dps / 2)
+    return abs(x) < floor and abs(y) <= 1e-10 * max(abs(x), 1e-300) + 10.0 ** (-dps)
+
+
+def _settled(a: list[tuple], b: list[tuple], dps: int = 40) -> bool:
+    """Rows at ``dps`` and at 2·dps digits agree: relative 4e-16, or both noise around an exact zero."""
     def close(x, y):
         if x is None or y is None:
             return x is y
         if isinstance(x, complex):
             return abs(x - y) <= _SETTLED * max(abs(x), abs(y))
-        return abs(x - y) <= _SETTLED * max(abs(x), abs(y))
+        return abs(x - y) <= _SETTLED * max(abs(x), abs(y)) or _zero_noise(x, y, dps)
     return len(a) == len(b) and all(close(x, y) for ra, rb in zip(a, b) for x, y in zip(ra, rb))
+
+
+def _clean(rows: list[tuple], prev: list[tuple], dps: int) -> list[tuple]:
+    """Rows with a damping ratio that settled to an exact zero (see :func:`_zero_noise`) made
+    undamped: ζ = 0, ω_d = ω_n, λ = iω_n."""
+    out = []
+    for (wn, zeta, wd, lam), old in zip(rows, prev):
+        if zeta is not None and zeta != 0.0 and old[1] is not None and _zero_noise(old[1], zeta, dps):
+            zeta, wd, lam = 0.0, wn, (None if lam is None else complex(0.0, wn))
+        out.append((wn, zeta, wd, lam))
+    return out
 
 
 def _closed_forms(model: Model, modes: ModeSet) -> list[sp.Expr | None]:
@@ -222,7 +291,8 @@ def _damped_modes(model: Model, modes: ModeSet | None) -> DampedModes:
     dps = 40
     while dps <= 640:
         rows, prop = _rows_at(model, dps)
-        if prev is not None and prev[1] == prop and _settled(prev[0], rows):
+        if prev is not None and prev[1] == prop and _settled(prev[0], rows, dps // 2):
+            rows = _clean(rows, prev[0], dps // 2)
             break
         prev = (rows, prop)
         dps *= 2
