@@ -1,7 +1,9 @@
 """Damped modes for the report: ζ per mode (closed form where one exists) or complex modes.
 
 Everything is computed in the **modal coordinates** of the undamped problem, at the scene's
-values and at high precision (mpmath, successive precisions until float64 is settled):
+values and at high precision (mpmath, successive precisions until float64 is settled; past
+:data:`accurate.MAX_MPMATH_MODES` masses, where mpmath's eigensolvers take minutes, in float64 by
+the spring-factor route, :func:`_rows_float`):
 
 * Φ, ω² — M-orthonormal modes from the exactly assembled dynamical matrix
   (:func:`accurate._eig_dynamical`; rigid-body modes are the lowest ``RIGID_MODES``, set to 0
@@ -23,7 +25,7 @@ from dataclasses import dataclass
 import mpmath
 import sympy as sp
 
-from .accurate import NotAccurate, _eig_dynamical, _mp, exact_values, value
+from .accurate import MAX_MPMATH_MODES, NotAccurate, _eig_dynamical, _mp, exact_values, value
 from .model import Model
 from .modes import BudgetExceeded, ModeSet, time_budget
 
@@ -203,6 +205,104 @@ def _rows_at(model: Model, dps: int) -> tuple[list[tuple], bool]:
         return rows[:n], False
 
 
+def _rows_float(model: Model) -> tuple[list[tuple], bool]:
+    """The rows of :func:`_rows_at` in float64, for scenes past :data:`accurate.MAX_MPMATH_MODES`
+    masses (mpmath's eigensolvers take minutes there): the modes of each piece by the spring-factor
+    route (relatively accurate, the generated modules' own code), G = ΦᵀCΦ from the elements
+    (Rayleigh and modal damping diagonal by definition), and LAPACK's eigenvalues of the state
+    matrix in the balanced form ``[[0, Ω], [−Ω, −G]]``; modes of a piece without damping undamped by
+    structure, as at high precision."""
+    import numpy as np
+
+    from .spring_factor import accurate_modes_function
+
+    vals = model.scene.parameters
+    subs = exact_values(model.params, vals)
+    n = model.scene.n
+    masses = np.array([float(m.subs(subs)) for m in model.masses])
+    springs = [(a, b, float(k.subs(subs))) for a, b, k, _, _ in model.springs]
+    w2, Phi = np.zeros(n), np.zeros((n, n))
+    found = []
+    for piece in _pieces(model):  # a loop over pieces, not masses
+        where = {i: j for j, i in enumerate(piece)}
+        local = [(where.get(a, -1), where.get(b, -1), k) for a, b, k in springs if a in where or b in where]
+        rigid = [] if any(a < 0 or b < 0 for a, b, _ in local) else [tuple(range(len(piece)))]
+        run = accurate_modes_function(len(piece), tuple((a, b) for a, b, _ in local), tuple(rigid))
+        pw2, pshapes = run(masses[piece], [k for *_, k in local])
+        for j in range(len(piece)):
+            found.append((float(pw2[j]), piece, pshapes[:, j]))
+    found.sort(key=lambda r: r[0])
+    for j, (wj, piece, shape) in enumerate(found):
+        w2[j] = wj
+        Phi[piece, j] = shape
+    w = np.sqrt(np.maximum(w2, 0.0))
+    G = np.zeros((n, n))
+    if model.dampers:
+        B = np.zeros((len(model.dampers), n))
+        c = np.array([float(cc.subs(subs)) for _, _, cc, _ in model.dampers])
+        for r, (a, b, _, _) in enumerate(model.dampers):
+            if a >= 0:
+                B[r, a] += 1.0
+            if b >= 0:
+                B[r, b] -= 1.0
+        P = B @ Phi
+        G = P.T @ (c[:, None] * P)
+        G = 0.5 * (G + G.T)
+    if model.rayleigh is not None:
+        alpha, beta = (float(e.subs(subs)) for e in model.rayleigh)
+        G[np.arange(n), np.arange(n)] += alpha + beta * w2
+    if model.modal_zeta is not None:
+        G[np.arange(n), np.arange(n)] += 2 * np.array([float(z.subs(subs)) for z in model.modal_zeta]) * w
+    d = np.sqrt(np.abs(np.diag(G)))
+    off = np.abs(G - np.diag(np.diag(G))) > 1e-12 * np.outer(d, d) + 1e-300
+    same = np.abs(w2[:, None] - w2[None, :]) <= 1e-12 * max(float(np.max(w2, initial=0.0)), 1e-300)
+    if not np.any(off & ~same):
+        diag = np.diag(G).copy()
+        j = 0
+        while j < n:  # within a repeated ω, the eigenvalues of G's block (any basis is one of modes)
+            k = j + 1
+            while k < n and same[j, k]:
+                k += 1
+            if k - j > 1:
+                diag[j:k] = np.linalg.eigvalsh(G[j:k, j:k])
+            j = k
+        rows = []
+        for j in range(n):
+            if w2[j] == 0:
+                rows.append((0.0, None, 0.0, None))
+                continue
+            wd2 = w2[j] - diag[j] ** 2 / 4
+            rows.append((float(w[j]), float(diag[j] / (2 * w[j])), float(np.sqrt(wd2)) if wd2 > 0 else 0.0, None))
+        return rows, True
+    free = [j for j in range(n) if not np.any(G[j])]
+    kept = [j for j in range(n) if np.any(G[j])]
+    m = len(kept)
+    scale = np.where(w[kept] > 0, w[kept], 1.0)
+    A = np.zeros((2 * m, 2 * m))
+    A[np.arange(m), m + np.arange(m)] = scale
+    A[m + np.arange(m), np.arange(m)] = -w[kept]
+    A[m:, m:] = -G[np.ix_(kept, kept)]
+    import scipy.linalg
+
+    lam = list(scipy.linalg.eigvals(A)) if m else []
+    undamped = [complex(0.0, float(w[j])) for j in free if w2[j] > 0]
+    top = max([abs(l) for l in lam + undamped] + [1.0])
+    tiny = 1e-12 * top
+    cplx = sorted([l for l in lam if l.imag > tiny], key=abs)
+    rows = [(float(abs(l)), float(-l.real / abs(l)), float(l.imag), complex(l)) for l in cplx]
+    rows += [(float(l.imag), 0.0, float(l.imag), l) for l in undamped]
+    real = sorted((l.real for l in lam if abs(l.imag) <= tiny), key=lambda r: -r)
+    zeros = [r for r in real if abs(r) <= tiny] + [0.0] * (2 * sum(1 for j in free if w2[j] == 0))
+    rest = [r for r in real if abs(r) > tiny]
+    rows += [(0.0, None, 0.0, None)] * (len(zeros) // 2 or (1 if zeros else 0))
+    while len(rest) >= 2:  # overdamped: real pairs, slowest with fastest
+        r1, r2 = rest.pop(0), rest.pop(-1)
+        wn = float(np.sqrt(r1 * r2))
+        rows.append((wn, float(-(r1 + r2) / (2 * wn)), 0.0, None))
+    rows.sort(key=lambda r: r[0])
+    return rows[:n], False
+
+
 def _zero_noise(x: float, y: float, dps: int) -> bool:
     """Both precisions put ``x`` (at ``dps`` digits) and ``y`` (at 2·dps) below 10^(−dps/2) and
     ``y`` shrank by 1e-10 or more: a quantity that is exactly zero (a node of a mode at every
@@ -284,20 +384,26 @@ def damped_modes(model: Model, modes: ModeSet | None) -> DampedModes:
     return cache[key]
 
 
-def _damped_modes(model: Model, modes: ModeSet | None) -> DampedModes:
-    parts = (["dashpots"] if model.dampers else []) + (
-        [model.scene.damping.kind] if model.scene.damping is not None else [])
+def _settled_rows(model: Model) -> tuple[list[tuple], bool]:
+    """:func:`_rows_at` at 40, 80, … digits until two successive precisions agree (float64 settled)."""
     prev = None
     dps = 40
     while dps <= 640:
         rows, prop = _rows_at(model, dps)
         if prev is not None and prev[1] == prop and _settled(prev[0], rows, dps // 2):
-            rows = _clean(rows, prev[0], dps // 2)
-            break
+            return _clean(rows, prev[0], dps // 2), prop
         prev = (rows, prop)
         dps *= 2
+    raise NotAccurate("damped modes did not settle to float64 accuracy within 640 digits")
+
+
+def _damped_modes(model: Model, modes: ModeSet | None) -> DampedModes:
+    parts = (["dashpots"] if model.dampers else []) + (
+        [model.scene.damping.kind] if model.scene.damping is not None else [])
+    if model.scene.n > MAX_MPMATH_MODES:  # float64 spring-factor route (mpmath takes minutes here)
+        rows, prop = _rows_float(model)
     else:
-        raise NotAccurate("damped modes did not settle to float64 accuracy within 640 digits")
+        rows, prop = _settled_rows(model)
     exprs = _closed_forms(model, modes) if prop and modes is not None else [None] * len(rows)
     subs = exact_values(model.params, model.scene.parameters)
     out = []
