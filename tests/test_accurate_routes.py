@@ -402,3 +402,20 @@ def test_long_chain_json_bisects_only_the_listed_modes(tmp_path, monkeypatch):
     masses, springs = _chain_reference(20000, "wall", "free", 1e6, 1e4, "0")
     low = data["modes"][0]["omega2_value"]
     assert 0 < low < data["modes"][1]["omega2_value"]
+
+
+@settings(max_examples=EXAMPLES, **_SETTINGS)
+@given(n=st.integers(3, 14), ends=st.sampled_from([("free", "free"), ("wall", "free"), ("free", "wall"), ("wall", "wall")]),
+       a=st.floats(-6, 12), b=st.floats(-6, 12), io=st.tuples(st.integers(0, 13), st.integers(0, 13)))
+def test_chain_frf_matches_60_digit_solve(tmp_path, n, ends, a, b, io):
+    """Open [chain] frf by dynamic stiffness (O(n) per frequency) at contrasts up to 1e12."""
+    a, b = 10.0**a, 10.0**b
+    i, o = io[0] % n, io[1] % n
+    path = _write(tmp_path, _chain_text(n, *ends, a, b, "0", 0.1, 2), "ichain")
+    r = sc.frf(path, input=i, output=o)
+    masses, springs = _chain_reference(n, *ends, a, b, "0")
+    scene = ref.Scene([str(j) for j in range(n)], masses, springs, [], {}, {})
+    idx = np.unique(np.linspace(0, r.omega.shape[0] - 1, 40).round().astype(int))
+    H = r.magnitude * np.exp(1j * np.radians(r.phase))
+    want = ref.receptance(scene, r.omega[idx], i, o)
+    assert np.max(np.abs(H[idx] - want) / np.abs(want)) <= FRF_REL
