@@ -94,7 +94,7 @@ def bench_frf(tmp: Path) -> list[dict]:
         modes = [(x.omega_n, x.zeta, x.omega_d) for x in r.resonances]
         t_after = _best(lambda: frequency_response(system, 3, 3, r.omega[0], r.omega[-1], 400, modes))
         t_before = _best(lambda: _plain_frf(system, r.omega, 3, 3))
-        rows.append({"output": "frf |H|, phase", "contrast": c, "points": int(r.omega.shape[0]),
+        rows.append({"output": "frf H (magnitude and phase)", "contrast": c, "points": int(r.omega.shape[0]),
                      "before": _rel(before, want), "after": _rel(H, want),
                      "seconds_before": t_before, "seconds_after": t_after})
     return rows

@@ -76,8 +76,9 @@ def _frf_case(tmp_path, case, pick: int = 40):
     r = sc.frf(path, input=f"x{i}", output=f"x{o}", transfer=False)
     H = r.magnitude * np.exp(1j * np.radians(r.phase))
     idx = np.unique(np.linspace(0, r.omega.shape[0] - 1, pick).round().astype(int))
-    near = [int(np.argmin(np.abs(r.omega - res.omega_d))) for res in r.resonances if res.omega_d > 0]
-    idx = np.unique(np.concatenate([idx, near, np.clip(np.array(near, dtype=int) + 1, 0, r.omega.shape[0] - 1)]))
+    near = np.array([int(np.argmin(np.abs(r.omega - res.omega_d))) for res in r.resonances if res.omega_d > 0],
+                    dtype=int)
+    idx = np.unique(np.concatenate([idx, near, np.clip(near + 1, 0, r.omega.shape[0] - 1)]))
     want = ref.receptance(scene, r.omega[idx], i, o)
     err = np.abs(H[idx] - want) / np.abs(want)
     assert np.max(err) <= FRF_REL, (float(np.max(err)), float(r.omega[idx][np.argmax(err)]))
