@@ -23,14 +23,15 @@ DEFAULT_OUT = "springchain-out"
 
 
 # -- scenes -----------------------------------------------------------------------------------------
-def load(source: str | Path | Scene) -> Scene:
+def load(source: str | Path | Scene | dict) -> Scene:
     """Read and validate a scene.
 
     Parameters
     ----------
-    source : str, Path or Scene
+    source : str, Path, Scene or dict
         A path to a TOML scene file, or the name of a bundled scene (``"seed"``,
-        ``"building"``, ...). A :class:`Scene` is returned as it is.
+        ``"building"``, ...). A :class:`Scene` is returned as it is; a dict goes through
+        :func:`scene_from_dict`.
 
     Returns
     -------
@@ -43,6 +44,10 @@ def load(source: str | Path | Scene) -> Scene:
     """
     if isinstance(source, Scene):
         return source
+    if isinstance(source, dict):
+        from .derive.scene_edit import scene_from_dict
+
+        return scene_from_dict(source)
     from .derive.scene import load_scene
 
     from .numeric.progress import phase
@@ -57,8 +62,8 @@ def _system(scene: Scene):
     from ._modules import load_module
     from .numeric.system import System
 
-    module, origin = load_module(scene)
-    return System.from_module(module, **load_tables(scene)), origin
+    module, origin = load_module(scene)  # keyed by the scene's whole content: a changed scene has its own
+    return System.from_module(module, scene.parameters, **load_tables(scene)), origin
 
 
 def load_tables(scene: Scene) -> dict:

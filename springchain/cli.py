@@ -61,6 +61,44 @@ def _whole(flag):
     return conv
 
 
+#: The commands that take a SCENE, and so ``--set NAME=VALUE``.
+SCENE_COMMANDS = ("derive", "modes", "simulate", "bench", "plan", "sweep", "frf", "animate")
+
+
+def _set_values(items: list[str]) -> dict[str, float]:
+    """``--set NAME=VALUE`` options as {name: number} (names are checked against the scene later)."""
+    values = {}
+    for item in items:
+        name, eq, text = item.partition("=")
+        name = name.strip()
+        try:
+            value = float(text) if eq and name else None
+        except ValueError:
+            value = None
+        if value is None or not math.isfinite(value):
+            raise SceneError(None, "--set", f"{item!r}: not NAME=NUMBER; accepted: a parameter and a finite "
+                                            "number, e.g. --set k=4 (repeatable)")
+        if name in values:
+            raise SceneError(None, "--set", f"{item!r}: {name} given twice; accepted: each parameter once")
+        values[name] = value
+    return values
+
+
+def _apply_set(args) -> None:
+    """Replace ``args.scene`` by the scene(s) with the ``--set`` parameter values (validated as a file)."""
+    from ._api import load
+    from ._scenes import bundled_scenes
+    from .derive.scene_edit import with_parameters
+
+    values = _set_values(args.set)
+    how = "with --set " + " ".join(f"{k}={v:g}" for k, v in values.items())
+    one = lambda source: with_parameters(load(source), values, how)  # noqa: E731
+    if isinstance(args.scene, list):  # derive: several scenes, default every bundled one
+        args.scene = [one(s) for s in (args.scene or bundled_scenes())]
+    else:
+        args.scene = one(args.scene if args.scene is not None else "seed")
+
+
 # -- commands: parse, call the API, print -------------------------------------------------------
 def cmd_derive(args) -> int:
     from . import _modules
@@ -460,6 +498,11 @@ def build_parser() -> argparse.ArgumentParser:
                     help="frames per second (default: %(default)g)")
     an.add_argument("--out", default="springchain-out", metavar="DIR", help="output folder (default: %(default)s)")
     an.set_defaults(func=cmd_animate)
+    for name in SCENE_COMMANDS:  # one option, the same on every command that takes a SCENE
+        sub.choices[name].add_argument(
+            "--set", action="append", metavar="NAME=VALUE",
+            help="use VALUE for the scene's parameter NAME instead of the file's, repeatable (e.g. --set k=4 "
+                 "--set m=2); checked like the scene file")
     return p
 
 
@@ -485,6 +528,8 @@ def main(argv: list[str] | None = None) -> int:
         sys.stderr.write("springchain: interrupted\n")
         return 130
     try:
+        if getattr(args, "set", None):
+            _apply_set(args)
         return args.func(args)
     except SceneError as exc:
         sys.stderr.write(f"springchain: error: {exc}\n")
