@@ -295,7 +295,7 @@ def cmd_sweep(args) -> int:
         return 0
     r = result.run
     print(f"sweep of {result.summary['scene']!r}: {result.rows} samples x {result.summary['modes']} modes; "
-          f"{r['computed']} batches computed, {r['skipped']} already done, {r['seconds']:.2f} s")
+          f"{r['computed']} batches computed, {r['skipped']} already done, {r['seconds']:.2f} s ({r['scheduler']})")
     print(f"  wrote {result.parquet}")
     print(f"  wrote {result.out / 'summary.json'}")
     for p in result.figures:

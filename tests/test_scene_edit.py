@@ -288,3 +288,14 @@ def test_set_option_on_every_scene_command(tmp_path, capsys):
         assert main(["modes", str(tmp_path / "a" / "user.toml"), *argv]) == 2
         err = capsys.readouterr().err.strip().splitlines()
         assert len(err) == 1 and part in err[0], err
+
+
+def test_sweep_honours_the_change(scenes, tmp_path):
+    base, changed, ref = scenes
+    kw = dict(vary=["m=grid(1, 3, 3)"], samples=2, workers=1, progress=False)
+    got = sc.sweep(changed, out=tmp_path / "a", **kw).table(["omega2"]).column("omega2").to_pylist()
+    want = sc.sweep(ref, out=tmp_path / "b", **kw).table(["omega2"]).column("omega2").to_pylist()
+    old = sc.sweep(base, out=tmp_path / "c", **kw).table(["omega2"]).column("omega2").to_pylist()
+    np.testing.assert_allclose(got, want, rtol=1e-14)
+    np.testing.assert_allclose(np.asarray(got)[:2, 1], 4.0, rtol=1e-14)  # k = 4 at m = 1: omega2 = k/m
+    assert not np.allclose(got, old)
