@@ -159,6 +159,13 @@ class Modes:
         """
         return parse_expression(text, self.scene)
 
+    def to_dataframe(self):
+        """A ``pandas.DataFrame``, one row per listed mode: ``omega2`` (text), ``omega2_value``, ``omega``,
+        ``multiplicity``, ``shape`` and ``shape_<mass>`` columns. Needs ``pip install "springchain[data]"``."""
+        from ._data import modes_dataframe
+
+        return modes_dataframe(self)
+
     def __str__(self) -> str:
         return self.to_text()
 
@@ -266,13 +273,23 @@ class Simulation:
         return path
 
     def plot(self, quantity: str = "x"):
-        """A matplotlib Figure of every mass's position (``"x"``) or velocity (``"v"``), all methods."""
+        """A matplotlib Figure of every mass's position (``"x"``) or velocity (``"v"``), all methods
+        (the first 12 masses; ``[chain]`` scenes: the profile at a few times)."""
+        import numpy as np
+
         from .numeric import plots
 
         if quantity not in ("x", "v"):
             raise ValueError(f"quantity {quantity!r}: accepted: 'x' or 'v'")
         series = self.x if quantity == "x" else self.v
         label, unit = ("position x", "m") if quantity == "x" else ("velocity v", "m/s")
+        if self.scene.chain is not None:  # a chain: its profile at a few recorded times (first method)
+            first = next(iter(series.values()))
+            rows = sorted({int(r) for r in np.linspace(0, first.shape[0] - 1, min(5, first.shape[0])).round()})
+            fig = plots.profiles({float(self.t[r]): np.asarray(first[r]) for r in rows},
+                                 "displacement x" if quantity == "x" else "velocity v", unit)
+            fig.axes[0].set_title(f"{self.scene.name}: profile ({next(iter(series))}, {self.scene.n} masses)")
+            return fig
         names = self.scene.mass_names if len(self.scene.mass_names) <= 12 else self.scene.mass_names[:12]
         cut = {m: s[:, : len(names)] for m, s in series.items()}
         return plots.trajectories(self.t, cut, names, label, unit,
@@ -281,6 +298,31 @@ class Simulation:
     def __repr__(self) -> str:
         return (f"Simulation(scene={self.scene.name!r}, methods={self.methods}, samples={len(self.t)}, "
                 f"masses={self.scene.n})")
+
+    # data out and notebook display (springchain._data, springchain._display)
+    def to_xarray(self):
+        """An ``xarray.Dataset``: dims ``time``, ``mass`` (mass names; indices for ``[chain]``), one variable per
+        quantity and method (``x_modal``, ``v_verlet``, ...), attributes ``scene``, ``dt``, ``units``.
+        Needs ``pip install "springchain[data]"``."""
+        from ._data import simulation_xarray
+
+        return simulation_xarray(self)
+
+    def to_dataframe(self):
+        """A long ``pandas.DataFrame``: columns ``method, quantity, time, mass, value, unit``."""
+        from ._data import simulation_dataframe
+
+        return simulation_dataframe(self)
+
+    def _repr_html_(self) -> str:
+        from ._display import simulation_html
+
+        return simulation_html(self)
+
+    def _repr_png_(self) -> bytes:
+        from ._display import simulation_png
+
+        return simulation_png(self)
 
 
 def _check_memory(scene: Scene, steps: int, record_every: int, methods: int, key: str) -> None:

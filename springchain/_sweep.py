@@ -52,6 +52,18 @@ class SweepResult:
 
         return read(self.out, columns)
 
+    def to_pandas(self, columns: list[str] | None = None):
+        """The rows as a ``pandas.DataFrame`` (sample order; list columns hold one array per sample).
+        Needs ``pip install "springchain[data]"``."""
+        from ._data import sweep_pandas
+
+        return sweep_pandas(self, columns)
+
+    def _repr_html_(self) -> str:  # the summary table
+        from ._display import sweep_html
+
+        return sweep_html(self)
+
     def to_json(self) -> dict:
         """What ``springchain sweep --json`` prints."""
         return {"out": str(self.out), "parquet": str(self.parquet), "rows": self.rows,
