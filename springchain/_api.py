@@ -121,7 +121,7 @@ class Modes:
         if self.chain:
             from .derive.chain import chain_report
 
-            return chain_report(self.model, self.modes)[0]
+            return chain_report(self.model, self.modes, _chain_omega2(self.scene, self.modes))[0]
         from .derive.report import render_text
 
         return render_text(self.model, self.modes)
@@ -129,9 +129,9 @@ class Modes:
     def to_latex(self) -> str:
         """What ``springchain modes SCENE --latex`` prints (amsmath)."""
         if self.chain:
-            import sympy as sp
+            from .derive.printing import latex
 
-            return "\\begin{align*}\n\\omega_j^2 &= " + sp.latex(self.modes.omega2) + "\n\\end{align*}\n" \
+            return "\\begin{align*}\n\\omega_j^2 &= " + latex(self.modes.omega2) + "\n\\end{align*}\n" \
                 if self.modes.omega2 is not None else self.to_text()
         from .derive.report import render_latex
 

@@ -72,7 +72,7 @@ def sweep_html(r) -> str:
                      *(html.number(q[k][j]) for k in sorted(q, key=float)), html.number(None if pr is None else pr[j])])
     run = r.run
     caption = (f"sweep of {s['scene']}: {s['samples']} samples × {modes} modes"
-               + (f" (10 lowest and 10 highest shown)" if modes > 20 else "")
+               + (" (10 lowest and 10 highest shown)" if modes > 20 else "")
                + f"; {run['computed']} batches computed, {run['skipped']} already done, {run['seconds']:.3g} s, "
                f"{run.get('scheduler', '')}; {r.out}")
     quant = [f"ω² q{float(k) * 100:g}%" for k in sorted(q, key=float)]
