@@ -185,6 +185,15 @@ def run(spec: SweepSpec, out: Path, batch: int, client=None, progress: bool = Tr
             "seconds": time.perf_counter() - t0}
 
 
+def seconds_per_sample(spec: SweepSpec) -> float:
+    """Seconds one sample takes in this process: sample 0 computed twice (the first pays the imports and
+    the module's compilation), the second timed; nothing is written."""
+    compute_batch(spec, 0, 1)
+    t0 = time.perf_counter()
+    compute_batch(spec, 0, 1)
+    return time.perf_counter() - t0
+
+
 def run_in_process(spec: SweepSpec, out: Path, batch: int, progress: bool = True,
                    max_batches: int | None = None) -> dict:
     """Compute unfinished batches here, on Dask's synchronous scheduler (no worker process, no thread),
@@ -221,5 +230,5 @@ def read(out: Path, columns: list[str] | None = None):
     return pa.concat_tables([pq.read_table(p, columns=columns) for p in parts])
 
 
-__all__ = ["run", "run_in_process", "read", "batches", "finished", "check_manifest", "write_part", "local_cluster", "part_path",
+__all__ = ["run", "run_in_process", "seconds_per_sample", "read", "batches", "finished", "check_manifest", "write_part", "local_cluster", "part_path",
            "Progress", "PARTS", "MANIFEST"]

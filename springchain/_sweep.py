@@ -12,8 +12,8 @@ from .numeric.errors import RunRefused
 
 #: Default output folder of a sweep.
 DEFAULT_SWEEP_OUT = "springchain-sweep"
-#: A sweep whose remaining batches would take less than this (predicted from the first batch, run
-#: in-process) stays in-process: starting worker processes costs seconds of its own.
+#: A sweep whose remaining samples would take less than this in-process (predicted from two probe
+#: samples) runs in-process: starting worker processes costs seconds of its own.
 IN_PROCESS_SECONDS = 10.0
 RESERVED = ("sample", "omega2", "participation_ratio", "inverse_localisation_length")
 
@@ -150,8 +150,8 @@ def sweep(scene: str | Path | Scene, vary=(), disorder=(), samples: int = 100, *
         Realisations per Dask task (default: about 64 batches in all).
     workers : int, optional
         Processes of the embedded LocalCluster (default: the cores). ``workers=1`` runs in this
-        process (Dask's synchronous scheduler), and so does a small study: the first batch runs
-        here, and the rest too when it would take less than ``IN_PROCESS_SECONDS``. A script that
+        process (Dask's synchronous scheduler), and so does a small study: one predicted (from two
+        probe samples) to take less than ``IN_PROCESS_SECONDS`` here. A script that
         starts worker processes needs ``if __name__ == "__main__":`` around its work (the workers
         import the script again); without it the sweep is refused at once, in one line.
     scheduler : str, optional
@@ -212,15 +212,12 @@ def sweep(scene: str | Path | Scene, vary=(), disorder=(), samples: int = 100, *
     runs = []
     try:
         if client is None and scheduler is None and left:
-            # in-process first (Dask's synchronous scheduler): all of it for workers=1, else two batches
-            # (the first pays the imports) whose time predicts whether worker processes are worth starting
-            for _ in range(1 if workers == 1 else 2):
-                if left:
-                    runs.append(sweep_driver.run_in_process(spec, out, batch, progress,
-                                                            None if workers == 1 else 1))
-                    left -= runs[-1]["computed"]
-            per_batch = runs[-1]["seconds"] / max(runs[-1]["computed"], 1)
-            if left and per_batch * left < IN_PROCESS_SECONDS:
+            # here, on Dask's synchronous scheduler: workers=1, or a study that two probe samples (the
+            # first pays the imports) predict to be cheaper than starting worker processes
+            done = sweep_driver.finished(out, n_batches)
+            todo = sum(e - s for b, s, e in sweep_driver.batches(total, batch) if b not in done)
+            predicted = 0.0 if workers == 1 else sweep_driver.seconds_per_sample(spec) * todo
+            if predicted < IN_PROCESS_SECONDS:
                 runs.append(sweep_driver.run_in_process(spec, out, batch, progress))
                 left = 0
         if left and client is None:
@@ -234,7 +231,7 @@ def sweep(scene: str | Path | Scene, vary=(), disorder=(), samples: int = 100, *
                                      "of a running `dask scheduler`, e.g. tcp://127.0.0.1:8786") from None
                 own.append(client)
             else:
-                _refuse_unguarded(workers or os.cpu_count() or 1, left * per_batch)
+                _refuse_unguarded(workers or os.cpu_count() or 1, predicted)
                 cluster = sweep_driver.local_cluster(workers or os.cpu_count() or 1)
                 own.append(cluster)
                 client = Client(cluster)
