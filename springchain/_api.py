@@ -324,6 +324,11 @@ class Simulation:
 
         return simulation_png(self)
 
+    def _repr_mimebundle_(self, include=None, exclude=None) -> dict:  # both, from one drawing
+        from ._display import simulation_bundle
+
+        return simulation_bundle(self)
+
 
 def _check_memory(scene: Scene, steps: int, record_every: int, methods: int, key: str) -> None:
     frames = steps // record_every + 1

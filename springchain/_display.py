@@ -27,16 +27,28 @@ def simulation_table(sim) -> str:
     return html.table(["method", "ms", "max |x − x_exact| [m]", "max |v − v_exact| [m/s]", energy], rows, caption)
 
 
-def simulation_html(sim) -> str:
-    return (simulation_table(sim) + "<br/>"
-            + html.image(simulation_png(sim), "image/png", f"{sim.scene.name}: positions"))
+def simulation_html(sim, png: bytes | None = None) -> str:
+    png = simulation_png(sim) if png is None else png
+    return simulation_table(sim) + "<br/>" + html.image(png, "image/png", f"{sim.scene.name}: positions")
+
+
+def simulation_bundle(sim) -> dict:
+    """HTML and PNG from one drawing of the figure (IPython asks for every format it can show)."""
+    png = simulation_png(sim)
+    return {"text/html": simulation_html(sim, png), "image/png": png, "text/plain": repr(sim)}
 
 
 def frf_png(h) -> bytes:
     return html.figure_png(h.plot())
 
 
-def frf_html(h) -> str:
+def frf_bundle(h) -> dict:
+    """HTML and PNG from one drawing of the Bode figure."""
+    png = frf_png(h)
+    return {"text/html": frf_html(h, png), "image/png": png, "text/plain": repr(h)}
+
+
+def frf_html(h, png: bytes | None = None) -> str:
     rows = []
     for r in h.resonances:
         if not r.participates:
@@ -48,7 +60,8 @@ def frf_html(h) -> str:
                        f"{h.scene.name}: receptance X_{h.output} / F_{h.input}, {len(h.omega)} frequencies "
                        f"{h.omega[0]:.4g} … {h.omega[-1]:.4g} rad/s")
     notes = "".join(f"<br/><i>note: {html.escape(n)}</i>" for n in h.notes)
-    return table + notes + "<br/>" + html.image(frf_png(h), "image/png", f"{h.scene.name}: Bode figure")
+    png = frf_png(h) if png is None else png
+    return table + notes + "<br/>" + html.image(png, "image/png", f"{h.scene.name}: Bode figure")
 
 
 def animation_html(a) -> str:
@@ -79,4 +92,5 @@ def sweep_html(r) -> str:
     return html.table(["mode", "ω² mean", "ω² std", *quant, "participation ratio (mean)"], rows, caption)
 
 
-__all__ = ["simulation_html", "simulation_png", "frf_html", "frf_png", "animation_html", "sweep_html"]
+__all__ = ["simulation_html", "simulation_png", "simulation_bundle", "frf_html", "frf_png", "frf_bundle",
+           "animation_html", "sweep_html"]

@@ -133,6 +133,11 @@ class FrequencyResponse:
 
         return frf_png(self)
 
+    def _repr_mimebundle_(self, include=None, exclude=None) -> dict:  # both, from one drawing
+        from ._display import frf_bundle
+
+        return frf_bundle(self)
+
 
 def mass_index(scene: Scene, value, what: str) -> int:
     """The 0-based index of the mass ``value`` names (a name; an index for ``[chain]`` scenes)."""

@@ -131,3 +131,14 @@ def test_display_uses_no_pyplot_and_warns_nothing(tmp_path):
     """)
     res = subprocess.run([sys.executable, "-c", code, str(tmp_path)], capture_output=True, text=True, timeout=600)
     assert res.returncode == 0 and res.stdout.strip() == "ok", res.stderr
+
+
+def test_mimebundle_draws_the_figure_once(building_run, monkeypatch):
+    from springchain import _display
+
+    calls = []
+    real = _display.simulation_png
+    monkeypatch.setattr(_display, "simulation_png", lambda sim: calls.append(1) or real(sim))
+    bundle = building_run._repr_mimebundle_()
+    assert len(calls) == 1 and set(bundle) == {"text/html", "image/png", "text/plain"}
+    assert _images(bundle["text/html"], "image/png")[0] == bundle["image/png"]
