@@ -108,7 +108,13 @@ def animate(scene: str | Path | Scene, mode: int | None = None, method: str | No
                 len(free_pieces(system.n, system.spring_ends))
             mode = min(rigid, system.n - 1)  # the lowest elastic mode
         omega, shape, rigid = anim.mode_shape(system, int(mode))
-        disp, labels = anim.mode_frames(shape if not chain else shape[:1], frames)  # chains: envelopes below
+        if chain:  # the envelope of the shape once; each frame scales it by cos(phase): never F × N
+            centre, lo, hi = anim.profile_envelopes([shape])
+            c = np.cos(2 * np.pi * np.arange(frames) / frames)[:, None]
+            envelopes = (centre, np.minimum(c * lo, c * hi), np.maximum(c * lo, c * hi))
+            disp, labels = envelopes[2], anim.mode_frames(shape[:1], frames)[1]
+        else:
+            disp, labels = anim.mode_frames(shape, frames)
         kind, what = "mode", f"mode {mode}"
         label = ("rigid-body mode (ω = 0): a uniform translation, shown back and forth" if rigid
                  else f"ω = {omega:.6g} rad/s, period {2 * math.pi / omega:.4g} s")
@@ -137,10 +143,6 @@ def animate(scene: str | Path | Scene, mode: int | None = None, method: str | No
         title = f"{sc.name}: {method}, t = 0 ... {t[min(frames, t.shape[0]) - 1]:.4g} s"
         path = out / f"{sc.name}-{method}.gif"
     if chain:
-        if kind == "mode":  # envelope of the shape once; each frame scales it by cos(phase)
-            centre, lo, hi = anim.profile_envelopes([shape])
-            c = np.cos(2 * np.pi * np.arange(frames) / frames)[:, None]
-            envelopes = (centre, np.minimum(c * lo, c * hi), np.maximum(c * lo, c * hi))
         ylabel = "mode shape (largest component 1) [-]" if kind == "mode" else "displacement x [m]"
         anim.profile_animation(path, *envelopes, labels[:envelopes[1].shape[0]], title, ylabel, fps, system.n)
         scale = 1.0
