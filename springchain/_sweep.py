@@ -242,7 +242,8 @@ def sweep(scene: str | Path | Scene, vary=(), disorder=(), samples: int = 100, *
             obj.close()
     run = {"batches": n_batches, "computed": sum(r["computed"] for r in runs), "skipped": runs[0]["skipped"],
            "seconds": sum(r["seconds"] for r in runs),
-           "scheduler": ("an existing client" if client is not None and not own else
+           "scheduler": ("none: every batch was already done" if not any(r["computed"] for r in runs) else
+                         "an existing client" if client is not None and not own else
                          f"Dask scheduler {scheduler}" if scheduler is not None else
                          f"LocalCluster, {workers or os.cpu_count() or 1} worker processes" if own else
                          "in-process (Dask's synchronous scheduler)")}
