@@ -305,11 +305,12 @@ def _rows_float(model: Model) -> tuple[list[tuple], bool]:
 
 
 def _zero_noise(x: float, y: float, dps: int) -> bool:
-    """Both precisions put ``x`` (at ``dps`` digits) and ``y`` (at 2·dps) below 10^(−dps/2) and
-    ``y`` shrank by 1e-10 or more: a quantity that is exactly zero (a node of a mode at every
-    dashpot), not a value — the absolute floor near ζ = 0."""
-    floor = 10.0 ** (-dps / 2)
-    return abs(x) < floor and abs(y) <= 1e-10 * max(abs(x), 1e-300) + 10.0 ** (-dps)
+    """``x`` (at ``dps`` digits) is below 10^(−dps/2) and ``y`` (at 2·dps) below 10^(−1.8·dps): noise
+    that shrinks with the precision, i.e. a quantity that is exactly zero (a node of a mode at every
+    dashpot) — the absolute floor near ζ = 0. A true ζ of 1e-61 is noise at 40 digits but stays
+    1e-61 at 80 (above 1e-72), so it is not taken for zero: the precision keeps doubling until it
+    settles."""
+    return abs(x) < 10.0 ** (-dps / 2) and abs(y) <= 10.0 ** (-1.8 * dps)
 
 
 def _settled(a: list[tuple], b: list[tuple], dps: int = 40) -> bool:
