@@ -209,7 +209,6 @@ def test_sag_of_a_tree_is_sums_of_forces_over_spring_constants():
     k = np.array([1e-12, 1e12, 3e-7, 5e9])
     m = np.array([1e6, 2.0, 3e-6, 7e-3])
     g = 9.81
-    F = m * g + np.array([0.0, -1.0, 0.0, 2e-3])
     eq = equilibrium(m, ends, k, [m * g, np.array([0.0, -1.0, 0.0, 2e-3])])
     Fx = [Fraction(float(a)) + Fraction(float(b)) for a, b in zip(m * g, [0.0, -1.0, 0.0, 2e-3])]
     K = [Fraction(float(v)) for v in k]
@@ -220,7 +219,6 @@ def test_sag_of_a_tree_is_sums_of_forces_over_spring_constants():
     exact = np.array([float(v) for v in (x0, x1, x2, x3)])
     assert np.all(np.abs(eq.x - exact) <= 8 * np.finfo(float).eps * np.abs(exact))
     assert not np.any(eq.acceleration)
-    del F
 
 
 def test_sag_of_a_ring_and_a_free_piece():
@@ -321,7 +319,6 @@ def test_hanging_chain_of_the_issue(tmp_path):
     run = sc.simulate(path, methods=["modal"])
     scene = ref.read(text)
     t = run.t[::5]
-    want = ref.modal_trajectory(scene.masses, scene.springs, [0.0] * 4, [0.0] * 4, [0.0])  # warm-up check
     want = ref.trajectory(scene, [0.0] * 4, [0.0] * 4, t, const=np.array(scene.masses) * 9.81, dps=60)
     assert np.max(np.abs(run.x["modal"][::5] - want)) <= TRAJ_REL * np.max(np.abs(want))
 
@@ -400,7 +397,6 @@ def test_long_chain_json_bisects_only_the_listed_modes(tmp_path, monkeypatch):
     path = _write(tmp_path, _chain_text(20000, "wall", "free", 1e6, 1e4, "0", 0.1, 2), "ichain")
     data = sc.modes(path).to_json()
     assert calls == [(10, 10)] and len(data["modes"]) == 20
-    masses, springs = _chain_reference(20000, "wall", "free", 1e6, 1e4, "0")
     low = data["modes"][0]["omega2_value"]
     assert 0 < low < data["modes"][1]["omega2_value"]
 
