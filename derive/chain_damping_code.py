@@ -14,7 +14,7 @@ from __future__ import annotations
 import sympy as sp
 
 from .chain_dampers import ALONG, GROUND, SINGLE
-from .codegen import _p
+from .codeprint import p
 from .damping_code import rayleigh_coefficients_lines
 
 
@@ -29,7 +29,7 @@ def chain_damping_code(model, sig: str, kw: str) -> list[str]:
     out.extend(rayleigh_coefficients_lines(model, sig))
     ends, consts = [], []
     for kind, a, b, c, key in model.dampers:
-        expr = _p(c.subs(model.i, i))
+        expr = p(c.subs(model.i, i))
         if kind == ALONG:
             ends.append(f"numpy.stack([numpy.arange(n - 1), numpy.arange(1, n)], axis=1)  # {key}")
             consts.append(f"(lambda i: numpy.broadcast_to(numpy.asarray({expr}, dtype=float), (n - 1,)))"

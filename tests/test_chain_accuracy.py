@@ -15,7 +15,8 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from springchain.derive.chain import ChainModel, render_chain_module
+from springchain.derive.chain import ChainModel
+from springchain.derive.chain_codegen import render_chain_module
 from springchain.derive.scene import load_scene
 
 OPEN_ENDS = [("free", "free"), ("wall", "free"), ("free", "wall"), ("wall", "wall")]

@@ -18,7 +18,8 @@ import numpy as np
 import pytest
 import scipy.linalg
 
-from springchain.derive.chain import ChainModel, render_chain_module
+from springchain.derive.chain import ChainModel
+from springchain.derive.chain_codegen import render_chain_module
 from springchain.derive.scene import load_scene
 from springchain.numeric.chain_modal import Basis, ChainModal
 from springchain.numeric.errors import RunRefused

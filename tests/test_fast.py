@@ -18,7 +18,8 @@ import importlib
 import numpy as np
 import pytest
 
-from springchain.derive.chain import ChainModel, render_chain_module
+from springchain.derive.chain import ChainModel
+from springchain.derive.chain_codegen import render_chain_module
 from springchain.derive.scene import load_scene
 from springchain.numeric import fast
 from springchain.numeric.errors import RunRefused
