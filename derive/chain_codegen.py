@@ -332,19 +332,10 @@ SECTIONS = (_constants, _masses, _spring_coefficients, _spring_lists, _stencil, 
 
 
 def render_chain_module(model: ChainModel, *, bundled: bool = True) -> str:
-    """Stencil module for a chain; its size does not depend on n.
+    """Stencil module for a chain (``model``: its template derivation); its size does not depend on n.
 
-    Parameters
-    ----------
-    model : ChainModel
-        The chain's template derivation.
-    bundled : bool
-        Whether the scene is one of ``scenes/`` (affects only the regenerate line).
-
-    Returns
-    -------
-    str
-        Python source; byte-identical for the same scene.
+    Like :func:`derive.codegen.render_module`: ``bundled`` changes only the regenerate line, and
+    the source is byte-identical for the same scene.
     """
     c = _Context(model, chain_modes(model))
     head = module_head(model.scene, c.params, _doc(c), scipy=True, bundled=bundled)

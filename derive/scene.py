@@ -175,6 +175,7 @@ def load_scene(path: str | Path, text: str | None = None) -> Scene:
     Returns
     -------
     Scene
+        Validated and immutable; expressions parsed, not evaluated as code.
 
     Raises
     ------
@@ -370,12 +371,18 @@ class _Ends:
         return idx[0], idx[1]
 
 
+def _entries(ld: Loader, ends: _Ends, table: str, allowed: tuple[str, ...], required: tuple[str, ...]):
+    """``(key, entry, (a, b))`` of each ``[[table]]`` entry between two ends, its keys checked."""
+    for j, entry in enumerate(ld.array_of_tables(table)):
+        key = f"{table}[{j}]"
+        ld.keys(entry, allowed, key, required=required, what=f"a [[{table}]] entry")
+        yield key, entry, ends(f"{key}.between", entry["between"])
+
+
 def _springs(ld: Loader, ends: _Ends, pnames: frozenset[str], env: dict) -> tuple[Spring, ...]:
+    """``[[springs]]``: linear stiffness k > 0 and an optional cubic k3 != 0."""
     springs = []
-    for j, s in enumerate(ld.array_of_tables("springs")):
-        key = f"springs[{j}]"
-        ld.keys(s, SPRING_KEYS, key, required=("between", "k"), what="a [[springs]] entry")
-        a, b = ends(f"{key}.between", s["between"])
+    for key, s, (a, b) in _entries(ld, ends, "springs", SPRING_KEYS, ("between", "k")):
         k = ld.expression(f"{key}.k", s["k"], pnames, positive=True, bounded=True, env=env)
         k3 = (ld.expression(f"{key}.k3", s["k3"], pnames, nonzero=True, bounded=True, env=env)
               if "k3" in s else None)
@@ -389,14 +396,9 @@ def _dampers(ld: Loader, ends: _Ends, chain: Chain | None, pnames: frozenset[str
         from .chain_dampers import parse_chain_dampers
 
         return (), parse_chain_dampers(ld, ld.array_of_tables("dampers"), chain.n, pnames, env)
-    dampers = []
-    for j, d in enumerate(ld.array_of_tables("dampers")):
-        key = f"dampers[{j}]"
-        ld.keys(d, DAMPER_KEYS, key, required=("between", "c"), what="a [[dampers]] entry")
-        a, b = ends(f"{key}.between", d["between"])
-        c = ld.expression(f"{key}.c", d["c"], pnames, positive=True, bounded=True, env=env)
-        dampers.append(Damper(a, b, c, key))
-    return tuple(dampers), ()
+    dampers = tuple(Damper(a, b, ld.expression(f"{key}.c", d["c"], pnames, positive=True, bounded=True, env=env), key)
+                    for key, d, (a, b) in _entries(ld, ends, "dampers", DAMPER_KEYS, ("between", "c")))
+    return dampers, ()
 
 
 def _gravity(ld: Loader, pnames: frozenset[str], env: dict) -> Expr | None:
