@@ -51,6 +51,14 @@ class _Context:
         """The parameters passed on: ``k=k, m=m``."""
         return ", ".join(f"{q}={q}" for q in self.params)
 
+    def sig_and(self, *more: str) -> str:
+        """The signature followed by more parameters: ``k, m, n=N`` (``n=N`` without parameters)."""
+        return ", ".join([*self.params, *more])
+
+    def kw_and(self, *more: str) -> str:
+        """The parameters passed on, then more arguments: ``k=k, m=m, n=n``."""
+        return ", ".join([*(f"{q}={q}" for q in self.params), *more])
+
     @property
     def chain(self):
         return self.model.chain
@@ -83,7 +91,7 @@ def _constants(c: _Context) -> list[str]:
 
 def _masses(c: _Context) -> list[str]:
     """masses(n): m(i) for i = 0 … n−1."""
-    return function(f"masses({c.sig}, n=N)", "Masses m(i), shape (n,).",
+    return function(f"masses({c.sig_and('n=N')})", "Masses m(i), shape (n,).",
                     ["    i = numpy.arange(n, dtype=float)",
                      f"    return numpy.broadcast_to(numpy.asarray({c.of_i(c.model.mass)}, dtype=float), (n,)).copy()"])
 
@@ -121,13 +129,13 @@ def _per_spring(c: _Context, name: str, coefficient: str, what: str) -> list[str
         body.append(f"    _parts.insert(0, numpy.broadcast_to({coefficient}(numpy.array([-1.0]), {c.kw}), (1,)))")
     if c.chain.right.has_spring:
         body.append(f"    _parts.append(numpy.broadcast_to({coefficient}(numpy.array([n - 1.0]), {c.kw}), (1,)))")
-    return function(f"{name}({c.sig}, n=N)", f"{what} of each spring in spring_ends() order, shape (S,).",
+    return function(f"{name}({c.sig_and('n=N')})", f"{what} of each spring in spring_ends() order, shape (S,).",
                     body + ["    return numpy.concatenate(_parts).astype(float)"])
 
 
 def _stencil(c: _Context) -> list[str]:
     """make_acceleration(n): coefficients formed once, then an O(n) stencil closure."""
-    return function(f"make_acceleration({c.sig}, n=N)",
+    return function(f"make_acceleration({c.sig_and('n=N')})",
                     "A function a(x) for this chain with coefficients precomputed; x shape (n, ...).\n\n"
                     "The stencil: the spring between i and i+1 pulls with s_i = k_i d_i [+ k3_i d_i³],\n"
                     "d_i = x_{i+1} − x_i; mass i feels s_i − s_{i−1}; walls and the ring closure act at the ends.",
@@ -137,7 +145,7 @@ def _stencil(c: _Context) -> list[str]:
 def _stencil_coefficients(c: _Context) -> list[str]:
     """make_acceleration()'s set-up: 1/m, the spring coefficients (scalars for a uniform chain), ends."""
     ch, kw, cubic = c.chain, c.kw, c.cubic
-    out = ["    i = numpy.arange(n - 1, dtype=float)", f"    _inv_m = 1.0 / masses({kw}, n=n)"]
+    out = ["    i = numpy.arange(n - 1, dtype=float)", f"    _inv_m = 1.0 / masses({c.kw_and('n=n')})"]
     if c.model.g is not None:  # m_i g / m_i: the same acceleration on every mass
         out.append(f"    _g_acc = _float({p(c.model.g)})")
     if ch.uniform:
@@ -184,7 +192,7 @@ def _stencil_body(c: _Context) -> list[str]:
 def _acceleration(c: _Context) -> list[str]:
     """acceleration(x): the stencil for x's length."""
     return function(f"acceleration(_x, {c.sig})", "Acceleration of the chain; x shape (n, ...) (n taken from x).",
-                    [f"    return make_acceleration({c.kw}, n=numpy.shape(_x)[0])(_x)"])
+                    [f"    return make_acceleration({c.kw_and('n=numpy.shape(_x)[0]')})(_x)"])
 
 
 def _energy(c: _Context) -> list[str]:
@@ -192,8 +200,8 @@ def _energy(c: _Context) -> list[str]:
     kw = c.kw
     body = ["    n = numpy.shape(_x)[0]",
             "    _extra = (1,) * (numpy.ndim(_x) - 1)",
-            f"    _m = masses({kw}, n=n).reshape((n,) + _extra)",
-            f"    _kk = spring_constants({kw}, n=n)",
+            f"    _m = masses({c.kw_and('n=n')}).reshape((n,) + _extra)",
+            f"    _kk = spring_constants({c.kw_and('n=n')})",
             "    _ends = spring_ends(n)",
             "    _xa = numpy.where((_ends[:, 0] >= 0).reshape((-1,) + _extra), _x[_ends[:, 0]], 0.0)",
             "    _xb = numpy.where((_ends[:, 1] >= 0).reshape((-1,) + _extra), _x[_ends[:, 1]], 0.0)",
@@ -221,11 +229,11 @@ def _damping(c: _Context) -> list[str]:
 def _matrices(c: _Context) -> list[str]:
     """stiffness_bands(n) and, for n <= MAX_DENSE, the dense stiffness_matrix(n) and mass_matrix(n)."""
     kw = c.kw
-    ring = ([f"    _kr = spring_constants({kw}, n=n)[-1]", "    _K[0, n - 1] -= _kr", "    _K[n - 1, 0] -= _kr"]
+    ring = ([f"    _kr = spring_constants({c.kw_and('n=n')})[-1]", "    _K[0, n - 1] -= _kr", "    _K[n - 1, 0] -= _kr"]
             if c.chain.left is End.RING else [])
-    return (function(f"stiffness_bands({c.sig}, n=N)",
+    return (function(f"stiffness_bands({c.sig_and('n=N')})",
                      "Diagonal (n,) and first off-diagonal (n-1,) of K (ring closure not included).",
-                     [f"    _kk = spring_constants({kw}, n=n)",
+                     [f"    _kk = spring_constants({c.kw_and('n=n')})",
                       "    _ends = spring_ends(n)",
                       "    _diag = numpy.zeros(n)",
                       "    for _col in (0, 1):",
@@ -235,13 +243,13 @@ def _matrices(c: _Context) -> list[str]:
                       "    _off = numpy.zeros(n - 1)",
                       "    _off[numpy.minimum(_ends[_inner, 0], _ends[_inner, 1])] = -_kk[_inner]",
                       "    return _diag, _off"])
-            + function(f"stiffness_matrix({c.sig}, n=N)", "Dense K, shape (n, n); only for n <= MAX_DENSE.",
+            + function(f"stiffness_matrix({c.sig_and('n=N')})", "Dense K, shape (n, n); only for n <= MAX_DENSE.",
                        [*_dense_limit("stiffness_matrix", "; use stiffness_bands()"),
-                        f"    _diag, _off = stiffness_bands({kw}, n=n)",
+                        f"    _diag, _off = stiffness_bands({c.kw_and('n=n')})",
                         "    _K = numpy.diag(_diag) + numpy.diag(_off, 1) + numpy.diag(_off, -1)",
                         *ring, "    return _K"])
-            + function(f"mass_matrix({c.sig}, n=N)", "Dense M, shape (n, n); only for n <= MAX_DENSE.",
-                       [*_dense_limit("mass_matrix", ""), f"    return numpy.diag(masses({kw}, n=n))"]))
+            + function(f"mass_matrix({c.sig_and('n=N')})", "Dense M, shape (n, n); only for n <= MAX_DENSE.",
+                       [*_dense_limit("mass_matrix", ""), f"    return numpy.diag(masses({c.kw_and('n=n')}))"]))
 
 
 def _dense_limit(name: str, hint: str) -> list[str]:
@@ -256,7 +264,7 @@ def _spectrum(c: _Context) -> list[str]:
         return _closed_form_spectrum(c)
     if c.chain.left is End.RING:
         return _ring_spectrum(c)
-    return function(f"omega2({c.sig}, n=N)",
+    return function(f"omega2({c.sig_and('n=N')})",
                     "Squared angular frequencies (no closed form), ascending, shape (n,).\n\n"
                     "Singular values of the bidiagonal spring factor G (GᵀG = M^-1/2 K M^-1/2) by bisection on its\n"
                     "Golub–Kahan form: accurate to float64 in the relative sense at any positive masses and springs;\n"
@@ -268,9 +276,9 @@ def _closed_form_spectrum(c: _Context) -> list[str]:
     lo, _ = c.modes.j_range
     expr = p(c.modes.omega2.subs({c.model.j: sp.Symbol("_j"), c.model.n: sp.Symbol("n")}))
     js = f"    _j = numpy.arange({lo}, n + {lo}, dtype=float)"
-    return (function(f"omega2({c.sig}, n=N)", "Closed-form squared angular frequencies, ascending, shape (n,).",
+    return (function(f"omega2({c.sig_and('n=N')})", "Closed-form squared angular frequencies, ascending, shape (n,).",
                      [js, f"    return numpy.sort(numpy.broadcast_to({expr}, (n,)))"])
-            + function(f"mode_omega({c.sig}, n=N)",
+            + function(f"mode_omega({c.sig_and('n=N')})",
                        f"Closed-form angular frequencies of modes j = {lo} … n{lo - 1:+d} in index order (not sorted), "
                        "shape (n,).\n\n"
                        "The order of the chain's sine/cosine/Fourier transform: the numeric exact solution of long\n"
@@ -281,12 +289,12 @@ def _closed_form_spectrum(c: _Context) -> list[str]:
 def _ring_spectrum(c: _Context) -> list[str]:
     """omega2(n) of an index-dependent ring: the spring-factor helper, its globals bound per call."""
     kw = c.kw
-    return (function(f"omega2({c.sig}, n=N)",
+    return (function(f"omega2({c.sig_and('n=N')})",
                      "Squared angular frequencies (index-dependent ring), ascending, shape (n,).\n\n"
                      "The spring-factor route (subtraction-free LDLᵀ of K, one-sided Jacobi SVD of its factor), as\n"
                      "the dense modules run it: accurate to float64 in the relative sense at any positive masses\n"
                      "and springs; the rigid mode exactly 0. Cost O(n³).",
-                     [f"    return _ring_omega2(masses({kw}, n=n), spring_constants({kw}, n=n), spring_ends(n=n), n)"])
+                     [f"    return _ring_omega2(masses({c.kw_and('n=n')}), spring_constants({c.kw_and('n=n')}), spring_ends(n=n), n)"])
             + function("_ring_omega2(_m, _k, _ends, n)",
                        "ω² of a ring of n masses by the spring-factor helper below (its globals bound here).",
                        ["    N, SPRING_ENDS, RIGID_PIECES = n, _ends, (tuple(range(n)),)",
@@ -307,7 +315,7 @@ def _bidiagonal_omega2(c: _Context) -> list[str]:
     D and calling eigh_tridiagonal is not: its small ω² lose ~κ(D)·ε.
     """
     ch = c.chain
-    out = [f"    _rm = 1.0 / numpy.sqrt(masses({c.kw}, n=n))", f"    _rk = numpy.sqrt(spring_constants({c.kw}, n=n))"]
+    out = [f"    _rm = 1.0 / numpy.sqrt(masses({c.kw_and('n=n')}))", f"    _rk = numpy.sqrt(spring_constants({c.kw_and('n=n')}))"]
     if ch.left is End.WALL:  # rows: the wall spring (mass 0), then spring r between r-1 and r
         out += ["    _a = _rk[:n] * _rm", "    _b = _rk[1:n] * _rm[:n - 1]"]
         if ch.right is End.WALL:

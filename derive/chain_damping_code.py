@@ -24,6 +24,7 @@ def chain_damping_code(model, sig: str, kw: str) -> list[str]:
     if not model.dampers and model.rayleigh is None:
         return []
     head = f"{sig}, " if sig else ""
+    kwn = _with_n(kw)
     ends, consts = _dashpot_list(model, kw)
     out = rayleigh_coefficients_lines(model, sig)
     out += function("damper_ends(n=N)",
@@ -40,26 +41,31 @@ def chain_damping_code(model, sig: str, kw: str) -> list[str]:
                      "    _ends = damper_ends(n)",
                      "    _a, _b = _ends[:, 0], _ends[:, 1]",
                      "    _shape = (-1,) + (1,) * (_v.ndim - 1)",
-                     f"    _c = damper_constants({kw}, n=n).reshape(_shape)",
+                     f"    _c = damper_constants({kwn}).reshape(_shape)",
                      "    _ve = numpy.concatenate([_v, numpy.zeros((1,) + _v.shape[1:])])  # row -1 = ground",
                      "    _s = _c * (_ve[_a] - _ve[_b])",
                      "    _f = numpy.zeros_like(_v)",
                      "    _ia, _ib = numpy.flatnonzero(_a >= 0), numpy.flatnonzero(_b >= 0)",
                      "    numpy.add.at(_f, _a[_ia], -_s[_ia])",
                      "    numpy.add.at(_f, _b[_ib], _s[_ib])",
-                     f"    return _f / masses({kw}, n=n).reshape(_shape)"])
+                     f"    return _f / masses({kwn}).reshape(_shape)"])
     return out + function(f"damping_matrix({head}n=N)",
                           "Dense C of every dashpot (and Rayleigh damping), shape (n, n); only for n <= MAX_DENSE.",
                           ["    if n > _MAX_DENSE:",
                            "        raise _ValueError(f'damping_matrix: n = {n} > MAX_DENSE = {_MAX_DENSE}; use damper_ends()')",
                            "    _ends = damper_ends(n)",
-                           f"    _c = damper_constants({kw}, n=n)",
+                           f"    _c = damper_constants({kwn})",
                            "    _C = numpy.zeros((n, n))",
                            "    for _ci, _si in ((0, 1.0), (1, -1.0)):",
                            "        for _cj, _sj in ((0, 1.0), (1, -1.0)):",
                            "            _ok = (_ends[:, _ci] >= 0) & (_ends[:, _cj] >= 0)",
                            "            numpy.add.at(_C, (_ends[_ok, _ci], _ends[_ok, _cj]), _si * _sj * _c[_ok])",
                            "    return _C"])
+
+
+def _with_n(kw: str) -> str:
+    """The parameters passed on, then ``n=n`` (only ``n=n`` for a scene without parameters)."""
+    return f"{kw}, n=n" if kw else "n=n"
 
 
 def _dashpot_list(model, kw: str) -> tuple[list[tuple[str, str]], list[str]]:
@@ -69,6 +75,7 @@ def _dashpot_list(model, kw: str) -> tuple[list[tuple[str, str]], list[str]]:
     from every mass to the ground and β·k beside every spring (zero coefficients left out).
     """
     i = sp.Symbol("i")
+    kwn = _with_n(kw)
     ends, consts = [], []
     for kind, a, b, c, key in model.dampers:
         expr = p(c.subs(model.i, i))
@@ -88,10 +95,10 @@ def _dashpot_list(model, kw: str) -> tuple[list[tuple[str, str]], list[str]]:
         alpha, beta = model.rayleigh
         if alpha != 0:
             ends.append(("numpy.stack([numpy.arange(n), numpy.full(n, -1)], axis=1)", "damping: alpha*M"))
-            consts.append(f"rayleigh_coefficients({kw})[0] * masses({kw}, n=n)")
+            consts.append(f"rayleigh_coefficients({kw})[0] * masses({kwn})")
         if beta != 0:
             ends.append(("spring_ends(n)", "damping: beta*K"))
-            consts.append(f"rayleigh_coefficients({kw})[1] * spring_constants({kw}, n=n)")
+            consts.append(f"rayleigh_coefficients({kw})[1] * spring_constants({kwn})")
     return ends, consts
 
 
