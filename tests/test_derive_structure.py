@@ -17,10 +17,19 @@ def _trees() -> dict[str, ast.Module]:
     return {f.stem: ast.parse(f.read_text(encoding="utf-8"), str(f)) for f in sorted(DERIVE.glob("*.py"))}
 
 
+def _runtime_nodes(tree: ast.AST):
+    """Every node of ``tree`` except those under ``if TYPE_CHECKING:`` (never run)."""
+    for node in ast.iter_child_nodes(tree):
+        if isinstance(node, ast.If) and isinstance(node.test, ast.Name) and node.test.id == "TYPE_CHECKING":
+            continue
+        yield node
+        yield from _runtime_nodes(node)
+
+
 def _imports(tree: ast.Module, modules) -> set[str]:
-    """The derive/ modules a module imports, at top level or inside functions."""
+    """The derive/ modules a module imports when it runs, at top level or inside functions."""
     out = set()
-    for node in ast.walk(tree):
+    for node in _runtime_nodes(tree):
         if isinstance(node, ast.ImportFrom) and node.level == 1:
             names = [node.module] if node.module else [a.name for a in node.names]
             out |= {name.split(".")[0] for name in names}
