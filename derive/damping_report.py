@@ -213,16 +213,21 @@ def _rows_float(model: Model) -> tuple[list[tuple], bool]:
     (Rayleigh and modal damping diagonal by definition), and LAPACK's eigenvalues of the state
     matrix in the balanced form ``[[0, Ω], [−Ω, −G]]``; modes of a piece without damping undamped by
     structure, as at high precision."""
+    subs = exact_values(model.params, model.scene.parameters)
+    w2, Phi = _float_modes(model, subs)
+    G = _float_damping(model, subs, w2, Phi)
+    return _float_proportional_rows(w2, G) or _float_complex_rows(w2, G)
+
+
+def _float_modes(model: Model, subs: dict):
+    """ω² ascending and physical M-orthonormal shapes (columns), piece by piece (exact zeros outside)."""
     import numpy as np
 
     from .spring_factor import accurate_modes_function
 
-    vals = model.scene.parameters
-    subs = exact_values(model.params, vals)
     n = model.scene.n
     masses = np.array([float(m.subs(subs)) for m in model.masses])
     springs = [(a, b, float(k.subs(subs))) for a, b, k, _, _ in model.springs]
-    w2, Phi = np.zeros(n), np.zeros((n, n))
     found = []
     for piece in _pieces(model):  # a loop over pieces, not masses
         where = {i: j for j, i in enumerate(piece)}
@@ -230,22 +235,27 @@ def _rows_float(model: Model) -> tuple[list[tuple], bool]:
         rigid = [] if any(a < 0 or b < 0 for a, b, _ in local) else [tuple(range(len(piece)))]
         run = accurate_modes_function(len(piece), tuple((a, b) for a, b, _ in local), tuple(rigid))
         pw2, pshapes = run(masses[piece], [k for *_, k in local])
-        for j in range(len(piece)):
-            found.append((float(pw2[j]), piece, pshapes[:, j]))
+        found += [(float(pw2[j]), piece, pshapes[:, j]) for j in range(len(piece))]
     found.sort(key=lambda r: r[0])
+    w2, Phi = np.zeros(n), np.zeros((n, n))
     for j, (wj, piece, shape) in enumerate(found):
         w2[j] = wj
         Phi[piece, j] = shape
-    w = np.sqrt(np.maximum(w2, 0.0))
+    return w2, Phi
+
+
+def _float_damping(model: Model, subs: dict, w2, Phi):
+    """G = ΦᵀCΦ: dashpots from their elements, Rayleigh α + βω², modal 2ζω (diagonal by definition)."""
+    import numpy as np
+
+    n = w2.shape[0]
     G = np.zeros((n, n))
     if model.dampers:
         B = np.zeros((len(model.dampers), n))
         c = np.array([float(cc.subs(subs)) for _, _, cc, _ in model.dampers])
-        for r, (a, b, _, _) in enumerate(model.dampers):
-            if a >= 0:
-                B[r, a] += 1.0
-            if b >= 0:
-                B[r, b] -= 1.0
+        for r, (a, b, _, _) in enumerate(model.dampers):  # a loop over dashpots
+            B[r, a] += 1.0 if a >= 0 else 0.0
+            B[r, b] -= 1.0 if b >= 0 else 0.0
         P = B @ Phi
         G = P.T @ (c[:, None] * P)
         G = 0.5 * (G + G.T)
@@ -253,46 +263,62 @@ def _rows_float(model: Model) -> tuple[list[tuple], bool]:
         alpha, beta = (float(e.subs(subs)) for e in model.rayleigh)
         G[np.arange(n), np.arange(n)] += alpha + beta * w2
     if model.modal_zeta is not None:
-        G[np.arange(n), np.arange(n)] += 2 * np.array([float(z.subs(subs)) for z in model.modal_zeta]) * w
+        zeta = np.array([float(z.subs(subs)) for z in model.modal_zeta])
+        G[np.arange(n), np.arange(n)] += 2 * zeta * np.sqrt(np.maximum(w2, 0.0))
+    return G
+
+
+def _float_proportional_rows(w2, G) -> tuple[list[tuple], bool] | None:
+    """Rows of real modes if G is diagonal between distinct ω² (else None)."""
+    import numpy as np
+
+    n = w2.shape[0]
     d = np.sqrt(np.abs(np.diag(G)))
     off = np.abs(G - np.diag(np.diag(G))) > 1e-12 * np.outer(d, d) + 1e-300
     same = np.abs(w2[:, None] - w2[None, :]) <= 1e-12 * max(float(np.max(w2, initial=0.0)), 1e-300)
-    if not np.any(off & ~same):
-        diag = np.diag(G).copy()
-        j = 0
-        while j < n:  # within a repeated ω, the eigenvalues of G's block (any basis is one of modes)
-            k = j + 1
-            while k < n and same[j, k]:
-                k += 1
-            if k - j > 1:
-                diag[j:k] = np.linalg.eigvalsh(G[j:k, j:k])
-            j = k
-        rows = []
-        for j in range(n):
-            if w2[j] == 0:
-                rows.append((0.0, None, 0.0, None))
-                continue
-            wd2 = w2[j] - diag[j] ** 2 / 4
-            rows.append((float(w[j]), float(diag[j] / (2 * w[j])), float(np.sqrt(wd2)) if wd2 > 0 else 0.0, None))
-        return rows, True
+    if np.any(off & ~same):
+        return None
+    diag = np.diag(G).copy()
+    j = 0
+    while j < n:  # within a repeated ω, the eigenvalues of G's block (any basis is one of modes)
+        k = j + 1
+        while k < n and same[j, k]:
+            k += 1
+        if k - j > 1:
+            diag[j:k] = np.linalg.eigvalsh(G[j:k, j:k])
+        j = k
+    w = np.sqrt(np.maximum(w2, 0.0))
+    rows = []
+    for j in range(n):
+        if w2[j] == 0:
+            rows.append((0.0, None, 0.0, None))
+            continue
+        wd2 = w2[j] - diag[j] ** 2 / 4
+        rows.append((float(w[j]), float(diag[j] / (2 * w[j])), float(np.sqrt(wd2)) if wd2 > 0 else 0.0, None))
+    return rows, True
+
+
+def _float_complex_rows(w2, G) -> tuple[list[tuple], bool]:
+    """Rows of complex modes from the balanced state matrix (a piece without damping left out: λ = ±iω)."""
+    import numpy as np
+    import scipy.linalg
+
+    n = w2.shape[0]
+    w = np.sqrt(np.maximum(w2, 0.0))
     free = [j for j in range(n) if not np.any(G[j])]
     kept = [j for j in range(n) if np.any(G[j])]
     m = len(kept)
-    scale = np.where(w[kept] > 0, w[kept], 1.0)
     A = np.zeros((2 * m, 2 * m))
-    A[np.arange(m), m + np.arange(m)] = scale
+    A[np.arange(m), m + np.arange(m)] = np.where(w[kept] > 0, w[kept], 1.0)
     A[m + np.arange(m), np.arange(m)] = -w[kept]
     A[m:, m:] = -G[np.ix_(kept, kept)]
-    import scipy.linalg
-
     lam = list(scipy.linalg.eigvals(A)) if m else []
     undamped = [complex(0.0, float(w[j])) for j in free if w2[j] > 0]
-    top = max([abs(l) for l in lam + undamped] + [1.0])
-    tiny = 1e-12 * top
-    cplx = sorted([l for l in lam if l.imag > tiny], key=abs)
-    rows = [(float(abs(l)), float(-l.real / abs(l)), float(l.imag), complex(l)) for l in cplx]
-    rows += [(float(l.imag), 0.0, float(l.imag), l) for l in undamped]
-    real = sorted((l.real for l in lam if abs(l.imag) <= tiny), key=lambda r: -r)
+    tiny = 1e-12 * max([abs(v) for v in lam + undamped] + [1.0])
+    rows = [(float(abs(v)), float(-v.real / abs(v)), float(v.imag), complex(v))
+            for v in sorted([v for v in lam if v.imag > tiny], key=abs)]
+    rows += [(float(v.imag), 0.0, float(v.imag), v) for v in undamped]
+    real = sorted((v.real for v in lam if abs(v.imag) <= tiny), key=lambda r: -r)
     zeros = [r for r in real if abs(r) <= tiny] + [0.0] * (2 * sum(1 for j in free if w2[j] == 0))
     rest = [r for r in real if abs(r) > tiny]
     rows += [(0.0, None, 0.0, None)] * (len(zeros) // 2 or (1 if zeros else 0))
