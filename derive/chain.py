@@ -21,7 +21,7 @@ from dataclasses import dataclass
 
 import sympy as sp
 
-from ..ends import End
+from ..generated.contract import MAX_DENSE, End
 from .codegen import _p, header, privatize, regenerate_command
 from .model import parameter_symbols
 from .scene import Scene
@@ -283,7 +283,7 @@ def render_chain_module(model: ChainModel, *, bundled: bool = True) -> str:
     w(f"EFFECTS = {model.effects!r}")
     w(f"LINEAR = {model.k3 is None!r}")
     w(f"RIGID_MODES = {model.rigid_modes}")
-    w("MAX_DENSE = 4000")
+    w(f"MAX_DENSE = {MAX_DENSE}")
     w("")
     w("")
     w(f"def masses({sig}, n=N):")

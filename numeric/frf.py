@@ -29,6 +29,7 @@ from dataclasses import dataclass, field
 import numpy as np
 import scipy.linalg
 
+from ..generated.contract import MAX_DENSE
 from .errors import RunRefused
 from .system import System
 
@@ -101,16 +102,10 @@ def operator(system: System) -> Operator:
     K = (diag, off, _corner(n, system.spring_ends, system.stiffness))
     C = None
     if system.damped:
-        if hasattr(mod, "damping_bands"):
-            cd, co = (np.asarray(b, dtype=float) for b in mod.damping_bands(**p, n=n))
-            ends = np.asarray(mod.damper_ends(n=n)) if hasattr(mod, "damper_ends") else np.zeros((0, 2))
-            vals = np.asarray(mod.damper_constants(**p, n=n)) if hasattr(mod, "damper_constants") else np.zeros(0)
-            C = (cd, co, _corner(n, ends, vals))
-        else:
-            try:
-                C = _bands_of_dense(np.asarray(mod.damping_matrix(**p, n=n), dtype=float))
-            except ValueError as exc:
-                raise RunRefused(f"frequency response of a damped chain of {n} masses: {exc}") from None
+        try:
+            C = _bands_of_dense(np.asarray(mod.damping_matrix(**p, n=n), dtype=float))
+        except ValueError as exc:
+            raise RunRefused(f"frequency response of a damped chain of {n} masses: {exc}") from None
     return Operator(system.masses, K, C, True)
 
 
@@ -220,12 +215,12 @@ def undamped_omegas(system: System, count: int | None = None) -> np.ndarray:
 
         return spectrum(system.masses, system.spring_ends, system.stiffness).omega
     n = system.n
-    if bool(getattr(mod, "UNIFORM", False)) and hasattr(mod, "mode_omega"):
+    if system.has("mode_omega"):
         return np.sort(np.asarray(mod.mode_omega(**p, n=n), dtype=float))
     op = operator(system)
     kd, ko, kc = op.K
     if kc != 0.0:
-        if n > getattr(mod, "MAX_DENSE", 4000):
+        if n > MAX_DENSE:
             raise RunRefused(f"an index-dependent ring of {n} masses has no closed-form spectrum here; "
                              "give omega_min and omega_max", quantity="omega_min")
         from .spectrum import spectrum
@@ -240,7 +235,7 @@ def undamped_omegas(system: System, count: int | None = None) -> np.ndarray:
         top = scipy.linalg.eigvalsh_tridiagonal(d, e, select="i", select_range=(n - 1, n - 1))
         w2 = np.concatenate([low, top])
     w = np.sqrt(np.maximum(w2, 0.0))
-    w[: int(getattr(mod, "RIGID_MODES", 0))] = 0.0
+    w[: system.rigid_modes] = 0.0
     return w
 
 

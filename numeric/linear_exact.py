@@ -60,13 +60,13 @@ class AugmentedLinear:
         n = system.n
         minv = 1.0 / system.masses
         K = np.asarray(mod.stiffness_matrix(**p), dtype=float)
-        C = np.asarray(mod.damping_matrix(**p), dtype=float) if hasattr(mod, "damping_matrix") else None
+        C = np.asarray(mod.damping_matrix(**p), dtype=float) if system.damped else None
         omegas, fc, fs = np.zeros(0), np.zeros((0, n)), np.zeros((0, n))
         const = np.zeros(n)
-        if hasattr(mod, "gravity_forces"):
+        if system.has("gravity_forces"):
             const = const + np.asarray(mod.gravity_forces(**p), dtype=float)
-        if hasattr(mod, "external_acceleration"):
-            if not getattr(mod, "FORCING_HARMONIC", False):
+        if system.has("external_acceleration"):
+            if not system.harmonic_forcing:
                 raise ValueError("external forces are not constant + harmonic: no exact solution")
             omegas, fc, fs, c0 = (np.asarray(a, dtype=float) for a in mod.forcing_harmonics(**p))
             const = const + c0
@@ -78,7 +78,7 @@ class AugmentedLinear:
             fs = np.vstack([fs, -np.outer(np.asarray(gs, dtype=float), system.masses)])
             const = const - float(g0) * system.masses
         inputs = []
-        for (tt, ff), on in zip(system.tables, getattr(mod, "TABLE_FORCE_ON", ())):
+        for (tt, ff), on in zip(system.tables, system.provided.table_force_on):
             direction = np.zeros(n)
             direction[on] = minv[on]
             inputs.append((tt, ff, direction))
@@ -192,7 +192,7 @@ def frequency_response(system: System, drive: np.ndarray, force: np.ndarray) -> 
     mod, p = system.module, system.params
     K = np.asarray(mod.stiffness_matrix(**p), dtype=float)
     M = np.diag(system.masses)
-    C = np.asarray(mod.damping_matrix(**p), dtype=float) if hasattr(mod, "damping_matrix") else 0 * K
+    C = np.asarray(mod.damping_matrix(**p), dtype=float) if system.damped else 0 * K
     Z = K[None] - (drive**2)[:, None, None] * M[None] + 1j * drive[:, None, None] * C[None]
     with np.errstate(all="ignore"):
         return np.linalg.solve(Z, np.broadcast_to(force.astype(complex), (drive.shape[0], force.shape[0]))[..., None])[..., 0]

@@ -10,6 +10,7 @@ import math
 from dataclasses import dataclass
 from pathlib import Path
 
+from ._defaults import DEFAULT_OUT
 from .derive.scene import Scene
 
 #: Most frames accepted (a GIF of more is rarely what anyone wants, and memory grows with it).
@@ -55,7 +56,7 @@ def _check(frames, fps):
 
 
 def animate(scene: str | Path | Scene, mode: int | None = None, method: str | None = None, *,
-            out: str | Path = "springchain-out", frames: int = 48, fps: float = 16.0) -> Animation:
+            out: str | Path = DEFAULT_OUT, frames: int = 48, fps: float = 16.0) -> Animation:
     """Write a GIF: mode ``mode`` oscillating through one period, or the trajectory of ``method``.
 
     Parameters
@@ -99,7 +100,7 @@ def animate(scene: str | Path | Scene, mode: int | None = None, method: str | No
         if mode is None:
             from .numeric.spectrum import free_pieces
 
-            rigid = int(getattr(system.module, "RIGID_MODES", 0)) if chain else \
+            rigid = system.rigid_modes if chain else \
                 len(free_pieces(system.n, system.spring_ends))
             mode = min(rigid, system.n - 1)  # the lowest elastic mode
         omega, shape, rigid = anim.mode_shape(system, int(mode))

@@ -11,61 +11,16 @@ import shutil
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from ._scenes import resolve
+from ._modules import load_tables, system_of as _system  # noqa: F401  (tests and scripts use these names)
+from ._defaults import DEFAULT_OUT
+from ._scenes import load
 from .derive.errors import SceneError
 from .derive.scene import Scene
 from .numeric.files import human_bytes as _human_bytes
+from .numeric.run.protocol import DEFAULT_ATOL, DEFAULT_RTOL
 
 #: The most memory a simulation's recorded trajectories may take (in-memory runs).
 MAX_RECORDED_BYTES = 4 * 2**30
-#: Default output folder of the commands that write files.
-DEFAULT_OUT = "springchain-out"
-
-
-# -- scenes -----------------------------------------------------------------------------------------
-def load(source: str | Path | Scene) -> Scene:
-    """Read and validate a scene.
-
-    Parameters
-    ----------
-    source : str, Path or Scene
-        A path to a TOML scene file, or the name of a bundled scene (``"seed"``,
-        ``"building"``, ...). A :class:`Scene` is returned as it is.
-
-    Returns
-    -------
-    Scene
-
-    Raises
-    ------
-    SceneError
-        (a ``ValueError``) with the one-line message the command prints.
-    """
-    if isinstance(source, Scene):
-        return source
-    from .derive.scene import load_scene
-
-    from .numeric.progress import phase
-
-    path = resolve(source)
-    with phase(f"reading {Path(path).name}"):  # a long chain's expressions are checked at every index
-        return load_scene(path)
-
-
-def _system(scene: Scene):
-    """The generated module bound to the scene's parameters (no SymPy for fresh bundled scenes)."""
-    from ._modules import load_module
-    from .numeric.system import System
-
-    module, origin = load_module(scene)
-    return System.from_module(module, **load_tables(scene)), origin
-
-
-def load_tables(scene: Scene) -> dict:
-    """The scene's tables as keyword arguments of ``System.from_module`` (data, never source)."""
-    ground = scene.ground
-    return {"tables": tuple((tf.table.t, tf.table.y) for tf in scene.table_forces),
-            "ground_table": None if ground is None or ground.table is None else (ground.table.t, ground.table.y)}
 
 
 # -- modes ------------------------------------------------------------------------------------------
@@ -215,9 +170,9 @@ def modes(scene: str | Path | Scene) -> Modes:
 # -- simulation -------------------------------------------------------------------------------------
 def method_names() -> list[str]:
     """Every method :func:`simulate` takes by name, the exact one first."""
-    from .numeric.methods import METHOD_NAMES
+    from .numeric.run import registry
 
-    return list(METHOD_NAMES)
+    return list(registry.names())
 
 
 @dataclass(frozen=True)
@@ -254,7 +209,7 @@ class Simulation:
 
     def save(self, path: str | Path) -> Path:
         """Write the NPZ ``springchain simulate`` writes (``t``, ``x_<method>``, ``v_<method>``)."""
-        from .numeric.simulate import save_npz
+        from .numeric.npz import save_npz
 
         path = Path(path)
         save_npz(path, self.t, self.x, self.v, self.extra)
@@ -306,7 +261,7 @@ def _check_disk(scene: Scene, steps: int, record_every: int, methods: int, out: 
 
 def simulate(scene: str | Path | Scene, methods: list[str] | None = None, dt: float | None = None,
              steps: int | None = None, record_every: int | None = None, *, spectrum: str = "svd",
-             rtol: float = 1e-10, atol: float = 1e-12, out: str | Path | None = None,
+             rtol: float = DEFAULT_RTOL, atol: float = DEFAULT_ATOL, out: str | Path | None = None,
              figures: bool = False, progress: bool | None = None) -> Simulation:
     """Simulate a scene from its initial state with exact and numerical methods.
 
@@ -322,10 +277,10 @@ def simulate(scene: str | Path | Scene, methods: list[str] | None = None, dt: fl
     spectrum : {"svd", "closed-form"}
         Modes of the exact solution: the spring-factor SVD (accurate) or the generated closed forms.
     rtol, atol : float
-        Tolerances of the adaptive methods (``rk45``, ``dop853``, ``lsoda``).
+        Tolerances of the adaptive methods (``rk45``, ``dop853``, ``lsoda``, ``dprkn6/8/12``).
     out : str or Path, optional
         Folder for ``<scene>.npz`` (and figures with ``figures=True``). ``[chain]`` scenes stream
-        their frames to disk, into ``out`` or ``springchain-out``.
+        their frames to disk, into ``out`` or :data:`DEFAULT_OUT` (``springchain-out``).
     figures : bool
         Write PNG figures into ``out``.
     progress : bool, optional
@@ -340,8 +295,9 @@ def simulate(scene: str | Path | Scene, methods: list[str] | None = None, dt: fl
 
     import numpy as np
 
-    from .numeric.errors import RunRefused
     from .numeric import simulate as sim
+    from .numeric.errors import RunRefused
+    from .numeric.run.protocol import Options
 
     sc = load(scene)
     _check_motion(sc, "simulate")
@@ -363,12 +319,11 @@ def simulate(scene: str | Path | Scene, methods: list[str] | None = None, dt: fl
     notes: list[str] = []
     if not methods:  # a default Verlet that would be unstable at this dt gives way to the exact method
         names, notes = sim.unstable_defaults(system, names, dt)
-    unknown = [m for m in names if m not in method_names()]
-    if unknown:
-        raise RunRefused(f"method {unknown[0]!r} is unknown; accepted: {', '.join(method_names())}",
-                         quantity="method")
-    if spectrum not in ("svd", "closed-form"):
-        raise RunRefused(f"spectrum {spectrum!r}: accepted: 'svd' or 'closed-form'", quantity="spectrum")
+    from .numeric.run import registry
+
+    for name in names:
+        registry.entry(name)  # unknown names: one line naming the accepted ones
+    Options(rtol, atol, spectrum)  # refuses an unknown spectrum source
     t0 = time.perf_counter()
     if system.chain:
         out = Path(out if out is not None else DEFAULT_OUT)
@@ -387,25 +342,33 @@ def simulate(scene: str | Path | Scene, methods: list[str] | None = None, dt: fl
         _check_memory(sc, steps, record_every, len(names), "steps")
         runs = sim.run_methods(system, sc.x0, sc.v0, dt, steps, names, record_every,
                                spectrum_source=spectrum, rtol=rtol, atol=atol, progress=progress)
-        summary = sim.compare(system, runs)
+        from .numeric.compare import compare
+
+        summary = compare(system, runs)
         t = next(iter(runs.values())).t
         x = {m: r.x for m, r in runs.items()}
         v = {m: r.v for m, r in runs.items()}
         npz, figs = None, ()
-        extra = sim.absolute_npz_arrays(system, t, x, v)
+        from .numeric.absolute import absolute_npz_arrays
+
+        extra = absolute_npz_arrays(system, t, x, v)
         if out is not None:
+            from .numeric.npz import save_npz
+
             out = Path(out)
             out.mkdir(parents=True, exist_ok=True)
             npz = out / f"{sc.name}.npz"
             with phase(f"writing {npz.name}", enabled=progress):
-                sim.save_npz(npz, t, x, v, extra)
+                save_npz(npz, t, x, v, extra)
             if figures:
+                from .numeric.figures import write_figures
+
                 with phase("figures", enabled=progress):
-                    figs = tuple(sim.write_figures(out, sc.name, sc.mass_names, system, runs))
+                    figs = tuple(write_figures(out, sc.name, sc.mass_names, system, runs))
     summary.update({"scene": sc.name, "module": origin, "dt": dt, "steps": steps, "t_end": steps * dt,
                     "npz": None if npz is None else str(npz), "figures": [str(p) for p in figs],
                     "methods_that_apply": sim.applicable(system),
-                    "energy_conserved": not (system.damped or system.forced),
+                    "energy_conserved": system.energy_conserved,
                     "seconds": time.perf_counter() - t0, "notes": notes})
     return Simulation(sc, t, x, v, summary, npz, figs, extra)
 
@@ -493,6 +456,138 @@ def bench(scene: str | Path | Scene = "seed", t_end: float | None = None, *, qui
     return with_derive_seconds(result, derive_seconds)
 
 
+# -- generated modules -------------------------------------------------------------------------------
+@dataclass(frozen=True)
+class Derived:
+    """One scene's generated module, written or checked.
+
+    Attributes
+    ----------
+    scene : Scene
+    path : Path
+    fresh : bool or None
+        With ``check``: whether the file equals a fresh render; None when it was written.
+    lines : int or None
+        Lines of the module written (None with ``check``).
+    seconds : float
+    message : str
+        ``"<path>: fresh"``, ``"<path>: stale (run ...)"``, ``"<path>: missing (run ...)"`` (check).
+    """
+
+    scene: Scene
+    path: Path
+    fresh: bool | None
+    lines: int | None
+    seconds: float
+    message: str = ""
+
+
+def derive(scenes=(), out: str | Path | None = None, *, check: bool = False) -> list[Derived]:
+    """Write the generated module of each scene into ``out``, or (``check``) compare it with a fresh render.
+
+    Parameters
+    ----------
+    scenes : iterable of (str, Path or Scene)
+        As for :func:`load`; empty: every bundled scene. All are loaded before anything is written.
+    out : str or Path, optional
+        Folder of the modules. Default: ``./generated`` when writing; the package's own generated
+        modules with ``check``.
+    check : bool
+        Write nothing; report whether each module on disk is fresh.
+
+    Returns
+    -------
+    list of Derived
+    """
+    import time
+
+    from . import _modules
+    from ._scenes import bundled_scenes
+    from .numeric.progress import phase
+
+    sources = list(scenes) or bundled_scenes()
+    if not sources:
+        raise SceneError(None, "SCENE", "nothing to derive: no scene given and no bundled scenes found; "
+                                        "accepted: scene files, e.g. `springchain derive my_scene.toml`")
+    loaded = [load(p) for p in sources]  # validate everything before writing anything
+    folder = Path(out) if out is not None else (None if check else Path.cwd() / "generated")
+    done = []
+    for sc in loaded:
+        t0 = time.perf_counter()
+        if check:
+            ok, msg = _modules.check(sc, folder)
+            done.append(Derived(sc, _modules.module_path(sc, folder), ok, None, time.perf_counter() - t0, msg))
+            continue
+        with phase(f"deriving {sc.name!r}"):
+            d = _modules.derive(sc)
+        path = _modules.write(d, folder)
+        done.append(Derived(sc, path, None, len(d.source.splitlines()), time.perf_counter() - t0, f"{path}: written"))
+    return done
+
+
+# -- scaling ---------------------------------------------------------------------------------------
+@dataclass(frozen=True)
+class Scaling:
+    """``springchain scaling``'s measurements: the numeric scaling table and the symbolic cost.
+
+    Attributes
+    ----------
+    result : springchain.numeric.scaling.ScalingResult
+    symbolic : springchain.symbolic_cost.SymbolicResult or None
+    files : tuple of Path
+    """
+
+    result: object = field(repr=False)
+    symbolic: object = field(repr=False)
+    files: tuple[Path, ...] = ()
+
+    def to_json(self) -> dict:
+        """What ``springchain scaling --json`` prints."""
+        from .numeric import scaling_report
+
+        return {"scaling": scaling_report.jsonable(self.result.to_json()),
+                "symbolic": None if self.symbolic is None else scaling_report.jsonable(self.symbolic.to_json()),
+                "files": [str(p) for p in self.files]}
+
+    def to_markdown(self) -> str:
+        """The tables ``springchain scaling`` prints."""
+        from . import symbolic_cost
+        from .numeric import scaling_report
+
+        text = scaling_report.markdown(self.result) + "\n"
+        return text + (symbolic_cost.markdown(self.symbolic) + "\n" if self.symbolic is not None else "")
+
+
+def scaling(max_n: int = 1_000_000, symbolic_max_n: int = 40, out: str | Path = DEFAULT_OUT, *,
+            progress: bool = True) -> Scaling:
+    """Exact-solution set-up against one Verlet step for chains of N = 3 … ``max_n`` masses, the memory
+    floor, and (up to ``symbolic_max_n`` masses; 0 skips it) derive time against SymPy's ``LagrangesMethod``.
+
+    Writes ``scaling.{json,md,png}`` (and ``symbolic-cost.*``) into ``out``.
+    """
+    from . import symbolic_cost
+    from .numeric import scaling as sc_mod, scaling_report
+    from .numeric.errors import RunRefused
+
+    if isinstance(max_n, bool) or not isinstance(max_n, int) or max_n < 3:
+        raise RunRefused(f"max_n {max_n!r}: accepted: a whole number >= 3", quantity="max_n")
+    if isinstance(symbolic_max_n, bool) or not isinstance(symbolic_max_n, int) or symbolic_max_n < 0:
+        raise RunRefused(f"symbolic_max_n {symbolic_max_n!r}: accepted: a whole number >= 0 (0 skips it)",
+                         quantity="symbolic_max_n")
+    say = sc_mod.print_progress if progress else (lambda line: None)
+    out = Path(out)
+    sizes = tuple(n for n in sc_mod.DEFAULT_SIZES if n < max_n) + (max_n,)
+    uniform, random = symbolic_cost.scaling_cases()
+    result = sc_mod.run(uniform, random, sc_mod.ScalingConfig(sizes=sizes), progress=say)
+    files = scaling_report.write(result, out)
+    sym = None
+    if symbolic_max_n:
+        small = tuple(n for n in (3, 10, 20, 40, 80, 160, 320) if n <= symbolic_max_n)
+        sym = symbolic_cost.run(small, symbolic_cost.DEFAULT_CHAIN_SIZES, progress=lambda line: say("symbolic: " + line))
+        files += symbolic_cost.write(sym, out)
+    return Scaling(result, sym, tuple(files))
+
+
 def sweep(*args, **kwargs):
     """Ensembles and parameter studies on Dask: see :func:`springchain._sweep.sweep`."""
     from ._sweep import sweep as _sweep
@@ -500,5 +595,5 @@ def sweep(*args, **kwargs):
     return _sweep(*args, **kwargs)
 
 
-__all__ = ["load", "modes", "simulate", "plan", "bench", "sweep", "method_names", "Modes", "Simulation",
-           "MAX_RECORDED_BYTES"]
+__all__ = ["load", "modes", "simulate", "plan", "bench", "derive", "scaling", "sweep", "method_names", "Modes",
+           "Simulation", "Derived", "Scaling", "MAX_RECORDED_BYTES", "DEFAULT_OUT"]

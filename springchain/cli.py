@@ -14,7 +14,9 @@ import time
 from pathlib import Path
 
 from . import __version__
+from ._defaults import DEFAULT_BENCH_OUT, DEFAULT_OUT, DEFAULT_SWEEP_OUT
 from .derive.errors import SceneError
+from .numeric.run.protocol import DEFAULT_ATOL, DEFAULT_RTOL
 
 EXIT_USAGE = 2
 
@@ -25,69 +27,42 @@ class _Parser(argparse.ArgumentParser):
         raise SystemExit(EXIT_USAGE)
 
 
-def _positive_float(flag):
+def _number(flag: str, parse, ok, accepted: str):
+    """An argparse type: ``parse(text)`` checked by ``ok(value)``; one line naming the flag otherwise."""
     def conv(text):
         try:
-            value = float(text)
+            value = parse(text)
         except ValueError:
-            raise argparse.ArgumentTypeError(f"{flag} {text!r}: not a number; accepted: a number > 0") from None
-        if not math.isfinite(value) or value <= 0:
-            raise argparse.ArgumentTypeError(f"{flag} {text!r}: accepted: a finite number > 0")
+            raise argparse.ArgumentTypeError(f"{flag} {text!r}: accepted: {accepted}") from None
+        if not ok(value):
+            raise argparse.ArgumentTypeError(f"{flag} {text!r}: accepted: {accepted}")
         return value
     return conv
+
+
+def _positive_float(flag):
+    return _number(flag, float, lambda v: math.isfinite(v) and v > 0, "a finite number > 0")
 
 
 def _positive_int(flag):
-    def conv(text):
-        try:
-            value = int(text)
-        except ValueError:
-            raise argparse.ArgumentTypeError(f"{flag} {text!r}: accepted: a whole number > 0") from None
-        if value <= 0:
-            raise argparse.ArgumentTypeError(f"{flag} {text!r}: accepted: a whole number > 0")
-        return value
-    return conv
+    return _number(flag, int, lambda v: v > 0, "a whole number > 0")
 
 
 def _whole(flag):
-    def conv(text):
-        try:
-            value = int(text)
-        except ValueError:
-            raise argparse.ArgumentTypeError(f"{flag} {text!r}: accepted: a whole number >= 0") from None
-        if value < 0:
-            raise argparse.ArgumentTypeError(f"{flag} {text!r}: accepted: a whole number >= 0")
-        return value
-    return conv
+    return _number(flag, int, lambda v: v >= 0, "a whole number >= 0")
 
 
 # -- commands: parse, call the API, print -------------------------------------------------------
 def cmd_derive(args) -> int:
-    from . import _modules
-    from ._api import load
-    from ._scenes import bundled_scenes
+    from ._api import derive
 
-    sources = args.scene or bundled_scenes()
-    if not sources:
-        raise SceneError(None, "SCENE", "nothing to derive: no scene given and no bundled scenes found; "
-                                        "accepted: scene files, e.g. `springchain derive my_scene.toml`")
-    scenes = [load(p) for p in sources]  # validate everything before writing anything
-    out = Path(args.out) if args.out else (None if args.check else Path.cwd() / "generated")
-    status = 0
-    for scene in scenes:
-        t0 = time.perf_counter()
+    results = derive(args.scene, args.out, check=args.check)
+    for d in results:
         if args.check:
-            ok, msg = _modules.check(scene, out)
-            print(("ok     " if ok else "STALE  ") + msg)
-            status |= 0 if ok else 1
+            print(("ok     " if d.fresh else "STALE  ") + d.message)
         else:
-            from .numeric.progress import phase
-
-            with phase(f"deriving {scene.name!r}"):
-                d = _modules.derive(scene)
-            path = _modules.write(d, out)
-            print(f"wrote {path} ({len(d.source.splitlines())} lines, {time.perf_counter() - t0:.2f} s)")
-    return status
+            print(f"wrote {d.path} ({d.lines} lines, {d.seconds:.2f} s)")
+    return 0 if all(d.fresh is not False for d in results) else 1
 
 
 def cmd_modes(args) -> int:
@@ -126,11 +101,11 @@ def _print_simulation(result) -> None:
         print(f"  wrote {p}")
 
 
-def _simulate(args, scene) -> "object":
+def cmd_simulate(args) -> int:
     from ._api import simulate
 
     try:
-        return simulate(scene, methods=args.method, dt=args.dt, steps=args.steps, record_every=args.record_every,
+        result = simulate(args.scene, methods=args.method, dt=args.dt, steps=args.steps, record_every=args.record_every,
                         spectrum=args.spectrum, rtol=args.rtol, atol=args.atol, out=args.out,
                         figures=not args.no_figures)
     except SceneError as exc:  # name the flag that set the value, when one did
@@ -138,10 +113,6 @@ def _simulate(args, scene) -> "object":
         if flag and flag != exc.key:
             raise SceneError(exc.file, flag, exc.detail) from None
         raise
-
-
-def cmd_simulate(args) -> int:
-    result = _simulate(args, args.scene)
     if args.json:
         print(json.dumps(result.summary, indent=2))
     else:
@@ -150,24 +121,17 @@ def cmd_simulate(args) -> int:
 
 
 def cmd_run(args) -> int:
-    from . import _modules
-    from ._api import load, modes
+    from ._api import derive, load, modes, simulate
     from ._scenes import display_path, resolve
 
     t0 = time.perf_counter()
     scene = load(display_path(resolve("seed")))
-    m = modes(scene)
-    print(m.to_text())
-    path = _modules.module_path(scene)
-    d = _modules.derive(scene)
-    if path.exists() and path.read_text(encoding="utf-8") == d.source:
-        print(f"generated module {display_path(path)} is fresh (equals a new render)")
-    else:
-        print(f"generated module {display_path(path)} is STALE: regenerate with `springchain derive`")
+    print(modes(scene).to_text())
+    d = derive([scene], check=True)[0]
+    print(f"generated module {display_path(d.path)} is " + ("fresh (equals a new render)" if d.fresh else
+                                                           "STALE: regenerate with `springchain derive`"))
     print()
-    args.method, args.dt, args.steps, args.record_every = None, None, None, None
-    args.spectrum, args.no_figures, args.rtol, args.atol = "svd", False, 1e-10, 1e-12
-    _print_simulation(_simulate(args, scene))
+    _print_simulation(simulate(scene, out=args.out, figures=True))
     print(f"\nfigures and data are in {Path(args.out).resolve()}  ({time.perf_counter() - t0:.2f} s in all)")
     return 0
 
@@ -213,35 +177,14 @@ def cmd_plan(args) -> int:
 
 
 def cmd_scaling(args) -> int:
-    """Scaling to long chains (numeric.scaling) and the symbolic cost (symbolic_cost)."""
-    from . import symbolic_cost
-    from .numeric import scaling, scaling_report
-    from .numeric.errors import RunRefused
+    from ._api import scaling
 
-    if args.max_n < 3:
-        raise RunRefused(f"--max-n {args.max_n}: accepted: a whole number >= 3")
-    if args.symbolic_max_n < 0:
-        raise RunRefused(f"--symbolic-max-n {args.symbolic_max_n}: accepted: a whole number >= 0 (0 skips it)")
-    out = Path(args.out)
-    sizes = tuple(n for n in scaling.DEFAULT_SIZES if n < args.max_n) + (args.max_n,)
-    uniform, random = symbolic_cost.scaling_cases()
-    result = scaling.run(uniform, random, scaling.ScalingConfig(sizes=sizes), progress=scaling.print_progress)
-    paths = scaling_report.write(result, out)
-    sym = None
-    if args.symbolic_max_n:
-        say = lambda line: scaling.print_progress("symbolic: " + line)  # noqa: E731
-        small = tuple(n for n in (3, 10, 20, 40, 80, 160, 320) if n <= args.symbolic_max_n)
-        sym = symbolic_cost.run(small, symbolic_cost.DEFAULT_CHAIN_SIZES, progress=say)
-        paths += symbolic_cost.write(sym, out)
+    result = scaling(args.max_n, args.symbolic_max_n, args.out)
     if args.json:
-        print(json.dumps({"scaling": scaling_report.jsonable(result.to_json()),
-                          "symbolic": None if sym is None else scaling_report.jsonable(sym.to_json()),
-                          "files": [str(p) for p in paths]}, indent=1))
+        print(json.dumps(result.to_json(), indent=1))
         return 0
-    print(scaling_report.markdown(result))
-    if sym is not None:
-        print(symbolic_cost.markdown(sym))
-    for path in paths:
+    print(result.to_markdown(), end="")
+    for path in result.files:
         print(f"wrote {path}")
     return 0
 
@@ -286,24 +229,20 @@ def cmd_animate(args) -> int:
     return 0
 
 
-# -- parser ---------------------------------------------------------------------------------
-def build_parser() -> argparse.ArgumentParser:
-    p = _Parser(prog="springchain",
-                description="Mass-spring chains: a scene file -> equations of motion and closed-form "
-                            "normal modes (SymPy) -> generated NumPy code -> exact and numerical "
-                            "simulations with plots.",
-                epilog="Start with `springchain run` (the bundled three-mass reference scene).")
-    p.add_argument("--version", action="version", version=f"springchain {__version__}")
-    sub = p.add_subparsers(dest="command", required=True, parser_class=_Parser)
-
+# -- parser: one function per command ---------------------------------------------------------
+def _add_run(sub) -> None:
+    """``springchain run``: the main job."""
     r = sub.add_parser("run", help="the main job on the bundled reference scene",
                        description="Derive the bundled reference scene (masses m, 3m, m; springs k), print "
                                    "its equations and closed-form modes, check the checked-in generated "
                                    "module is fresh, simulate with the exact modal solution and velocity "
                                    "Verlet, and write figures.")
-    r.add_argument("--out", default="springchain-out", help="folder for figures and data (default: %(default)s)")
+    r.add_argument("--out", default=DEFAULT_OUT, help="folder for figures and data (default: %(default)s)")
     r.set_defaults(func=cmd_run)
 
+
+def _add_derive(sub) -> None:
+    """``springchain derive``: write or check generated modules."""
     d = sub.add_parser("derive", help="generate NumPy modules from scenes",
                        description="Derive each scene and write DIR/<name>.py (plain NumPy, deterministic). "
                                    "With no SCENE: every bundled scene.")
@@ -313,6 +252,9 @@ def build_parser() -> argparse.ArgumentParser:
                    help="write nothing; exit 1 if a module on disk differs from a fresh render")
     d.set_defaults(func=cmd_derive)
 
+
+def _add_modes(sub) -> None:
+    """``springchain modes``: equations and modes."""
     m = sub.add_parser("modes", help="print equations of motion and closed-form normal modes",
                        description="Print the Lagrangian derivation and the normal modes of a scene.")
     m.add_argument("scene", help="a scene file (TOML) or the name of a bundled scene, e.g. seed")
@@ -321,16 +263,16 @@ def build_parser() -> argparse.ArgumentParser:
     g.add_argument("--latex", action="store_true", help="print the derivation as LaTeX (amsmath)")
     m.set_defaults(func=cmd_modes)
 
-    from .numeric.methods import METHOD_NAMES
 
-    method_names = lambda: METHOD_NAMES  # noqa: E731
+def _add_simulate(sub) -> None:
+    """``springchain simulate``: run methods."""
     s = sub.add_parser("simulate", help="simulate a scene with exact and numerical methods",
                        description="Run the chosen methods from the scene's initial state and write "
                                    "DIR/<name>.npz (t, x_<method>, v_<method>) and PNG figures: positions, "
                                    "velocities, method - exact, energy.")
     s.add_argument("scene", help="a scene file (TOML) or the name of a bundled scene, e.g. seed")
-    s.add_argument("--method", action="append", choices=method_names(), metavar="NAME",
-                   help=f"method to run, repeatable ({', '.join(method_names())}; default: modal and verlet "
+    s.add_argument("--method", action="append", choices=_method_names(), metavar="NAME",
+                   help=f"method to run, repeatable ({', '.join(_method_names())}; default: modal and verlet "
                         "for linear scenes, verlet otherwise)")
     s.add_argument("--dt", type=_positive_float("--dt"), help="time step (default: the scene's)")
     s.add_argument("--steps", type=_positive_int("--steps"), help="number of steps (default: the scene's)")
@@ -339,14 +281,18 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("--spectrum", choices=("svd", "closed-form"), default="svd",
                    help="modes for the exact solution: SVD of the spring factor (accurate, default) or the "
                         "generated closed forms")
-    s.add_argument("--rtol", type=_positive_float("--rtol"), default=1e-10,
+    s.add_argument("--rtol", type=_positive_float("--rtol"), default=DEFAULT_RTOL,
                    help="relative tolerance of the adaptive methods rk45, dop853, lsoda (default: %(default)g)")
-    s.add_argument("--atol", type=_positive_float("--atol"), default=1e-12,
+    s.add_argument("--atol", type=_positive_float("--atol"), default=DEFAULT_ATOL,
                    help="absolute tolerance of the adaptive methods (default: %(default)g)")
-    s.add_argument("--out", default="springchain-out", help="output folder (default: %(default)s)")
+    s.add_argument("--out", default=DEFAULT_OUT, help="output folder (default: %(default)s)")
     s.add_argument("--no-figures", action="store_true", help="write only the NPZ")
     s.add_argument("--json", action="store_true", help="print a JSON summary instead of text")
     s.set_defaults(func=cmd_simulate)
+
+
+def _add_bench(sub) -> None:
+    """``springchain bench``: work-precision benchmark."""
     b = sub.add_parser("bench", help="work-precision benchmark of every method (figures and a table)",
                        description="Sweep the step of every fixed-step method and the tolerance of the adaptive "
                                    "ones, measure the largest position error against an exact (extended-"
@@ -357,14 +303,17 @@ def build_parser() -> argparse.ArgumentParser:
     b.add_argument("--t-end", type=_positive_float("--t-end"),
                    help="horizon T (default: the scene's dt x steps)")
     b.add_argument("--quick", action="store_true", help="a small sweep (seconds, for tests)")
-    b.add_argument("--method", action="append", choices=method_names(), metavar="NAME",
+    b.add_argument("--method", action="append", choices=_method_names(), metavar="NAME",
                    help="restrict to these methods, repeatable (default: every method that applies; the "
                         "error-vs-horizon study runs only with the default)")
-    b.add_argument("--out", default="springchain-bench", help="output folder (default: %(default)s)")
+    b.add_argument("--out", default=DEFAULT_BENCH_OUT, help="output folder (default: %(default)s)")
     b.add_argument("--json", action="store_true", help="print the records and targets as JSON")
     b.add_argument("--no-progress", action="store_true", help="no progress lines on stderr")
     b.set_defaults(func=cmd_bench)
 
+
+def _add_plan(sub) -> None:
+    """``springchain plan``: the cheapest method for a tolerance."""
     pl = sub.add_parser("plan", help="cheapest method and step to reach a tolerance",
                         description="Predict, from closed-form error models and measured costs, the step (or "
                                     "tolerance) each method needs to keep the largest position error below TOL "
@@ -374,6 +323,10 @@ def build_parser() -> argparse.ArgumentParser:
     pl.add_argument("--t-end", type=_positive_float("--t-end"), help="horizon T (default: the scene's dt x steps)")
     pl.add_argument("--json", action="store_true", help="print one JSON object and nothing else")
     pl.set_defaults(func=cmd_plan)
+
+
+def _add_scaling(sub) -> None:
+    """``springchain scaling``: long-chain scaling."""
     sc = sub.add_parser("scaling", help="setup-vs-step cost from N = 3 to 10^6, and the symbolic cost",
                         description="Time the exact solution's set-up (dense, tridiagonal, transform) against one "
                                     "Verlet step (NumPy stencil, fused) and the 32-byte-per-mass memory floor for "
@@ -386,9 +339,12 @@ def build_parser() -> argparse.ArgumentParser:
                     help="largest N for [masses] derive and LagrangesMethod (0: skip the symbolic part; "
                          "LagrangesMethod takes ~13 s at 80; default: %(default)s)")
     sc.add_argument("--json", action="store_true", help="print one JSON object with both tables")
-    sc.add_argument("--out", default="springchain-out", help="output folder (default: %(default)s)")
+    sc.add_argument("--out", default=DEFAULT_OUT, help="output folder (default: %(default)s)")
     sc.set_defaults(func=cmd_scaling)
 
+
+def _add_sweep(sub) -> None:
+    """``springchain sweep``: Dask studies."""
     sw = sub.add_parser("sweep", help="ensembles and parameter studies on Dask (parquet, summary, figures)",
                         description="Draw S realisations of a scene (parameters with --vary, per-mass or "
                                     "per-spring disorder of [chain] scenes with --disorder), compute every "
@@ -412,11 +368,14 @@ def build_parser() -> argparse.ArgumentParser:
                        help="processes of the embedded LocalCluster (default: the cores)")
     where.add_argument("--scheduler", metavar="ADDRESS",
                        help="use a running `dask scheduler`, e.g. tcp://127.0.0.1:8786")
-    sw.add_argument("--out", default="springchain-sweep", help="output folder (default: %(default)s)")
+    sw.add_argument("--out", default=DEFAULT_SWEEP_OUT, help="output folder (default: %(default)s)")
     sw.add_argument("--json", action="store_true", help="print one JSON object and nothing else")
     sw.add_argument("--no-progress", action="store_true", help="no progress lines on stderr")
     sw.set_defaults(func=cmd_sweep)
 
+
+def _add_frf(sub) -> None:
+    """``springchain frf``: frequency response."""
     fr = sub.add_parser("frf", help="frequency response X_out/F_in: Bode figure, JSON, transfer function",
                         description="The receptance H(iw) = X_out / F_in of (K - w^2 M + i w C) X = F (a dense "
                                     "solve per frequency; a tridiagonal one for [chain] scenes) on a log grid "
@@ -439,9 +398,12 @@ def build_parser() -> argparse.ArgumentParser:
     fr.add_argument("--json", action="store_true",
                     help='print one JSON object {"omega", "magnitude", "phase" (deg), "resonances", '
                          '"transfer_function", ...} and nothing else')
-    fr.add_argument("--out", default="springchain-out", metavar="DIR", help="folder for the Bode figure (default: %(default)s)")
+    fr.add_argument("--out", default=DEFAULT_OUT, metavar="DIR", help="folder for the Bode figure (default: %(default)s)")
     fr.set_defaults(func=cmd_frf)
 
+
+def _add_animate(sub) -> None:
+    """``springchain animate``: GIFs."""
     an = sub.add_parser("animate", help="a GIF of a mode shape oscillating or of a simulated trajectory",
                         description="Write DIR/<scene>-mode<J>.gif (mode J, counted from 0 in ascending "
                                     "frequency, rigid-body modes included) or DIR/<scene>-<method>.gif (the "
@@ -453,13 +415,33 @@ def build_parser() -> argparse.ArgumentParser:
     what.add_argument("--mode", type=_whole("--mode"), metavar="J",
                       help="animate mode J (0 = lowest frequency; default: the lowest elastic mode)")
     what.add_argument("--method", metavar="NAME",
-                      help=f"animate the trajectory of method NAME ({', '.join(method_names())})")
+                      help=f"animate the trajectory of method NAME ({', '.join(_method_names())})")
     an.add_argument("--frames", type=_positive_int("--frames"), default=48, metavar="F",
                     help="frames in the GIF (default: %(default)s)")
     an.add_argument("--fps", type=_positive_float("--fps"), default=16.0, metavar="R",
                     help="frames per second (default: %(default)g)")
-    an.add_argument("--out", default="springchain-out", metavar="DIR", help="output folder (default: %(default)s)")
+    an.add_argument("--out", default=DEFAULT_OUT, metavar="DIR", help="output folder (default: %(default)s)")
     an.set_defaults(func=cmd_animate)
+
+
+# -- parser ---------------------------------------------------------------------------------
+def _method_names() -> tuple[str, ...]:
+    """The registered method names (the registry lists them without importing any integrator)."""
+    from .numeric.run import registry
+
+    return registry.names()
+
+
+def build_parser() -> argparse.ArgumentParser:
+    p = _Parser(prog="springchain",
+                description="Mass-spring chains: a scene file -> equations of motion and closed-form "
+                            "normal modes (SymPy) -> generated NumPy code -> exact and numerical "
+                            "simulations with plots.",
+                epilog="Start with `springchain run` (the bundled three-mass reference scene).")
+    p.add_argument("--version", action="version", version=f"springchain {__version__}")
+    sub = p.add_subparsers(dest="command", required=True, parser_class=_Parser)
+    for add in (_add_run, _add_derive, _add_modes, _add_simulate, _add_bench, _add_plan, _add_scaling, _add_sweep, _add_frf, _add_animate):
+        add(sub)
     return p
 
 
@@ -467,7 +449,8 @@ def build_parser() -> argparse.ArgumentParser:
 FLAGS = {"dt": "--dt", "steps": "--steps", "record_every": "--record-every", "method": "--method",
          "rtol": "--rtol", "atol": "--atol", "tol": "--tol", "spectrum": "--spectrum",
          "input": "--input", "output": "--output", "omega_min": "--omega-min", "omega_max": "--omega-max",
-         "points": "--points", "mode": "--mode", "frames": "--frames", "fps": "--fps"}
+         "points": "--points", "mode": "--mode", "frames": "--frames", "fps": "--fps", "max_n": "--max-n",
+         "symbolic_max_n": "--symbolic-max-n"}
 
 
 def _flag_for(args, quantity: str | None) -> str | None:

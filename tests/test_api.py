@@ -151,13 +151,15 @@ def test_import_is_light_and_sets_no_backend():
     assert out.stdout.strip() == "[] True False"
 
 
-def test_method_name_table_matches_the_registries():
-    from springchain.numeric.integrators import ADAPTIVE, INTEGRATORS
-    from springchain.numeric.methods import ADAPTIVE as ADAPTIVE_NAMES
-    from springchain.numeric.methods import EXACT, FIXED_STEP, METHOD_NAMES
+def test_method_name_table_matches_the_implementations():
+    from springchain.numeric.run import registry
+    from springchain.numeric.run.protocol import Kind
 
-    assert FIXED_STEP == tuple(INTEGRATORS) and ADAPTIVE_NAMES == tuple(ADAPTIVE)
-    assert METHOD_NAMES[0] == EXACT and springchain.method_names() == list(METHOD_NAMES)
+    names = registry.names()
+    assert names[0] == registry.EXACT and springchain.method_names() == list(names)
+    assert names == registry.names(Kind.EXACT) + registry.names(Kind.STEP) + registry.names(Kind.ADAPTIVE)
+    for kind in (Kind.STEP, Kind.ADAPTIVE):  # every implementation calls itself by its registered name
+        assert all(cls.name == name for name, cls in registry.classes(kind).items())
 
 
 def test_stability_limits_are_computed_on_first_use_not_at_import():

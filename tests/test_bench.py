@@ -15,11 +15,14 @@ import springchain.generated.duffing as duffing_module
 import springchain.generated.seed as seed_module
 from springchain.numeric.bench import (BenchConfig, ExtendedModalReference, energy_norm, run_bench, targets,
                            BenchRecord)
-from springchain.numeric.integrators import ADAPTIVE, INTEGRATORS
+from springchain.numeric.run import registry
+from springchain.numeric.run.protocol import Kind
 from springchain.numeric.modal import ModalSolution
 from springchain.numeric.spectrum import spectrum
 from springchain.numeric.system import System
 from springchain.numeric.timing import measure, single_threaded_blas
+
+INTEGRATORS, ADAPTIVE = registry.classes(Kind.STEP), registry.classes(Kind.ADAPTIVE)
 
 ROOT = Path(__file__).resolve().parent.parent
 X0 = np.array([0.8552, 1.5376, 0.8834])
