@@ -44,7 +44,7 @@ from .progress import Reporter
 from .run import registry
 from .run.grid import Grid
 from .run.protocol import Kind, Method, Options, SpectrumSource
-from .run.recorder import record
+from .run.protocol import record
 from .system import System
 from .timing import measure
 from .bench_records import (LINEAR_TARGET_ACCURACIES, LINEAR_TARGET_RATIO, NONLINEAR_TARGET_ACCURACIES,

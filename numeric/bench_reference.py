@@ -11,7 +11,7 @@ import numpy as np
 from .run import registry
 from .run.grid import Grid
 from .run.protocol import Options
-from .run.recorder import record
+from .run.protocol import record
 from .system import System
 
 

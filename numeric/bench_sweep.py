@@ -14,7 +14,7 @@ from .progress import Reporter
 from .run import registry
 from .run.grid import Grid
 from .run.protocol import Kind, Method, Options
-from .run.recorder import record
+from .run.protocol import record
 from .system import System
 from .timing import measure
 

@@ -45,7 +45,7 @@ from .run import registry
 from .run.exact import solve
 from .run.grid import Grid
 from .run.protocol import Kind, Method, Options, SpectrumSource
-from .run.recorder import record
+from .run.protocol import record
 from .system import System
 from .timing import measure
 

@@ -33,7 +33,7 @@ from .run import registry
 from .run.exact import Solution, solve
 from .run.grid import Grid
 from .run.protocol import Kind, Method, Options
-from .run.recorder import record
+from .run.protocol import record
 from .system import System
 from .timing import measure
 

@@ -233,30 +233,99 @@ class Simulation:
                 f"masses={self.scene.n})")
 
 
+def _recorded(scene: Scene, steps: int, record_every: int, methods: int) -> tuple[int, str]:
+    """Bytes of the recorded trajectories, and how the run is described in a refusal."""
+    need = (steps // record_every + 1) * scene.n * 8 * 2 * methods
+    return need, (f"{steps}: {steps} steps x {scene.n} masses (recorded every {record_every}, {methods} methods) "
+                  f"would {{}} {_human_bytes(need)}")
+
+
 def _check_memory(scene: Scene, steps: int, record_every: int, methods: int, key: str) -> None:
-    frames = steps // record_every + 1
-    need = frames * scene.n * 8 * 2 * methods
+    need, what = _recorded(scene, steps, record_every, methods)
     if need > MAX_RECORDED_BYTES:
         raise SceneError(scene.file, key,
-                         f"{steps}: {steps} steps x {scene.n} masses (recorded every {record_every}, "
-                         f"{methods} methods) would need {_human_bytes(need)} for the trajectories; "
-                         f"accepted: at most {_human_bytes(MAX_RECORDED_BYTES)} - raise the recording "
-                         f"stride (--record-every) or lower the steps (--steps)")
+                         what.format("need") + f" for the trajectories; accepted: at most "
+                         f"{_human_bytes(MAX_RECORDED_BYTES)} - raise the recording stride (--record-every) or "
+                         f"lower the steps (--steps)")
 
 
 def _check_disk(scene: Scene, steps: int, record_every: int, methods: int, out: Path, key: str) -> None:
-    frames = steps // record_every + 1
-    need = frames * scene.n * 8 * 2 * methods
+    need, what = _recorded(scene, steps, record_every, methods)
     probe = out
     while not probe.exists() and probe != probe.parent:
         probe = probe.parent
     free = shutil.disk_usage(probe).free
     if need > 0.95 * free:
         raise SceneError(scene.file, key,
-                         f"{steps}: {steps} steps x {scene.n} masses (recorded every {record_every}, "
-                         f"{methods} methods) would write {_human_bytes(need)} into {out}, which has "
-                         f"{_human_bytes(free)} free; accepted: a run that fits - raise the recording "
-                         f"stride (--record-every), lower the steps (--steps) or choose another --out")
+                         what.format("write") + f" into {out}, which has {_human_bytes(free)} free; accepted: a run "
+                         f"that fits - raise the recording stride (--record-every), lower the steps (--steps) or "
+                         f"choose another --out")
+
+
+def _grid_settings(sc: Scene, dt, steps, record_every) -> tuple[float, int, int]:
+    """The run's step, steps and recording stride: the arguments, else the scene's; refused when not
+    a finite dt > 0 and whole numbers > 0."""
+    import numpy as np
+
+    from .numeric.errors import RunRefused
+
+    dt = dt if dt is not None else sc.dt
+    steps = steps if steps is not None else sc.steps
+    record_every = record_every if record_every is not None else sc.record_every
+    if not (isinstance(dt, float | int) and math.isfinite(dt) and dt > 0):
+        raise RunRefused(f"dt {dt!r}: accepted: a finite number > 0", quantity="dt")
+    for what, value in (("steps", steps), ("record_every", record_every)):
+        if not (isinstance(value, int | np.integer) and value > 0):
+            raise RunRefused(f"{what} {value!r}: accepted: a whole number > 0", quantity=what)
+    return dt, steps, record_every
+
+
+def _streamed(sc: Scene, system, names, dt, steps, record_every, out, figures, progress):
+    """A ``[chain]`` run streamed into ``out`` (bounded memory), read back from its NPZ."""
+    import numpy as np
+
+    from .numeric.simulate import stream_methods
+
+    out = Path(out if out is not None else DEFAULT_OUT)
+    _check_disk(sc, steps, record_every, len(names), out, "steps")
+    out.mkdir(parents=True, exist_ok=True)
+    summary = stream_methods(system, sc.x0, sc.v0, dt, steps, names, record_every, out, sc.name,
+                             figures=figures, progress=progress)
+    npz = Path(summary["npz"])
+    data = np.load(npz)
+    extra = {k: data[k] for k in data.files if k.startswith(("aabs_", "xabs_"))}
+    return (summary, data["t"], {m: data[f"x_{m}"] for m in names}, {m: data[f"v_{m}"] for m in names}, extra,
+            npz, tuple(Path(p) for p in summary["figures"]))
+
+
+def _kept(sc: Scene, system, names, dt, steps, record_every, options, out, figures):
+    """An in-memory run; the NPZ (and figures) written into ``out`` when given."""
+    from .numeric.absolute import absolute_npz_arrays
+    from .numeric.compare import compare
+    from .numeric.progress import phase
+    from .numeric.simulate import run_methods
+
+    _check_memory(sc, steps, record_every, len(names), "steps")
+    runs = run_methods(system, sc.x0, sc.v0, dt, steps, names, record_every, spectrum_source=options.spectrum,
+                       rtol=options.rtol, atol=options.atol, progress=options.progress)
+    t = next(iter(runs.values())).t
+    x, v = {m: r.x for m, r in runs.items()}, {m: r.v for m, r in runs.items()}
+    extra = absolute_npz_arrays(system, t, x, v)
+    npz, figs = None, ()
+    if out is not None:
+        from .numeric.npz import save_npz
+
+        out = Path(out)
+        out.mkdir(parents=True, exist_ok=True)
+        npz = out / f"{sc.name}.npz"
+        with phase(f"writing {npz.name}", enabled=options.progress):
+            save_npz(npz, t, x, v, extra)
+        if figures:
+            from .numeric.figures import write_figures
+
+            with phase("figures", enabled=options.progress):
+                figs = tuple(write_figures(out, sc.name, sc.mass_names, system, runs))
+    return compare(system, runs), t, x, v, extra, npz, figs
 
 
 def simulate(scene: str | Path | Scene, methods: list[str] | None = None, dt: float | None = None,
@@ -293,78 +362,30 @@ def simulate(scene: str | Path | Scene, methods: list[str] | None = None, dt: fl
     """
     import time
 
-    import numpy as np
-
     from .numeric import simulate as sim
-    from .numeric.errors import RunRefused
+    from .numeric.progress import phase
+    from .numeric.run import registry
     from .numeric.run.protocol import Options
 
     sc = load(scene)
     _check_motion(sc, "simulate")
-    dt = dt if dt is not None else sc.dt
-    steps = steps if steps is not None else sc.steps
-    record_every = record_every if record_every is not None else sc.record_every
-    if not (isinstance(dt, float | int) and math.isfinite(dt) and dt > 0):
-        raise RunRefused(f"dt {dt!r}: accepted: a finite number > 0", quantity="dt")
-    for what, value in (("steps", steps), ("record_every", record_every)):
-        if not (isinstance(value, int | np.integer) and value > 0):
-            raise RunRefused(f"{what} {value!r}: accepted: a whole number > 0", quantity=what)
+    dt, steps, record_every = _grid_settings(sc, dt, steps, record_every)
     if sc.chain is None:  # refuse before any derivation when even one method would not fit
         _check_memory(sc, steps, record_every, len(methods) if methods else 1, "steps")
-    from .numeric.progress import phase
-
     with phase("loading the generated module (deriving it if not cached)", enabled=progress):
         system, origin = _system(sc)
-    names = methods or sim.default_methods(system)
-    notes: list[str] = []
+    names, notes = methods, []
     if not methods:  # a default Verlet that would be unstable at this dt gives way to the exact method
-        names, notes = sim.unstable_defaults(system, names, dt)
-    from .numeric.run import registry
-
+        names, notes = sim.unstable_defaults(system, sim.default_methods(system), dt)
     for name in names:
         registry.entry(name)  # unknown names: one line naming the accepted ones
-    Options(rtol, atol, spectrum)  # refuses an unknown spectrum source
+    options = Options(rtol, atol, spectrum, progress)  # refuses an unknown spectrum source
     t0 = time.perf_counter()
     if system.chain:
-        out = Path(out if out is not None else DEFAULT_OUT)
-        _check_disk(sc, steps, record_every, len(names), out, "steps")
-        out.mkdir(parents=True, exist_ok=True)
-        summary = sim.stream_methods(system, sc.x0, sc.v0, dt, steps, names, record_every, out, sc.name,
-                                     figures=figures, progress=progress)
-        npz = Path(summary["npz"])
-        figs = tuple(Path(p) for p in summary["figures"])
-        data = np.load(npz)
-        t = data["t"]
-        x = {m: data[f"x_{m}"] for m in names}
-        v = {m: data[f"v_{m}"] for m in names}
-        extra = {k: data[k] for k in data.files if k.startswith(("aabs_", "xabs_"))}
+        summary, t, x, v, extra, npz, figs = _streamed(sc, system, names, dt, steps, record_every, out, figures,
+                                                       progress)
     else:
-        _check_memory(sc, steps, record_every, len(names), "steps")
-        runs = sim.run_methods(system, sc.x0, sc.v0, dt, steps, names, record_every,
-                               spectrum_source=spectrum, rtol=rtol, atol=atol, progress=progress)
-        from .numeric.compare import compare
-
-        summary = compare(system, runs)
-        t = next(iter(runs.values())).t
-        x = {m: r.x for m, r in runs.items()}
-        v = {m: r.v for m, r in runs.items()}
-        npz, figs = None, ()
-        from .numeric.absolute import absolute_npz_arrays
-
-        extra = absolute_npz_arrays(system, t, x, v)
-        if out is not None:
-            from .numeric.npz import save_npz
-
-            out = Path(out)
-            out.mkdir(parents=True, exist_ok=True)
-            npz = out / f"{sc.name}.npz"
-            with phase(f"writing {npz.name}", enabled=progress):
-                save_npz(npz, t, x, v, extra)
-            if figures:
-                from .numeric.figures import write_figures
-
-                with phase("figures", enabled=progress):
-                    figs = tuple(write_figures(out, sc.name, sc.mass_names, system, runs))
+        summary, t, x, v, extra, npz, figs = _kept(sc, system, names, dt, steps, record_every, options, out, figures)
     summary.update({"scene": sc.name, "module": origin, "dt": dt, "steps": steps, "t_end": steps * dt,
                     "npz": None if npz is None else str(npz), "figures": [str(p) for p in figs],
                     "methods_that_apply": sim.applicable(system),

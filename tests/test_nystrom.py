@@ -255,7 +255,10 @@ def test_plan_covers_the_pairs():
 
 
 def test_bench_duffing_interpolates_costs_on_the_lower_envelope():
-    from springchain.bench_duffing import TARGET, cost_at, ratio_table
+    from benchmark_scripts import load
+
+    duffing = load("duffing")
+    TARGET, cost_at, ratio_table = duffing.TARGET, duffing.cost_at, duffing.ratio_table
 
     runs = [{"error": 1e-3, "evals": 100, "seconds": 1.0}, {"error": 2e-3, "evals": 150, "seconds": 1.5},
             {"error": 1e-5, "evals": 400, "seconds": 4.0}]

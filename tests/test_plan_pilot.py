@@ -72,7 +72,7 @@ def check_candidates(plan, system, x0, v0, exact):
     """Every reachable step candidate meets TOL when run (within the evaluation budget)."""
     checked = 0
     for c in plan.candidates:
-        if c.steps is None or c.steps * max(c.method.evals_per_step, 1) > EVAL_BUDGET:
+        if c.steps is None or c.steps * max(c.method.traits.evals_per_step, 1) > EVAL_BUDGET:
             continue
         run = run_methods(system, x0, v0, c.dt, c.steps, [c.name])[c.name]
         err = float(np.max(np.abs(run.x - exact(run.t))))

@@ -17,7 +17,7 @@ from typing import TYPE_CHECKING, ClassVar
 
 from ..errors import RunRefused
 
-if TYPE_CHECKING:  # pragma: no cover
+if TYPE_CHECKING:  # pragma: no cover  (listing method names imports no NumPy)
     import numpy as np
 
     from ..system import System
@@ -142,4 +142,24 @@ class Method(abc.ABC):
         """
 
 
-__all__ = ["Kind", "Traits", "Options", "Method", "SpectrumSource", "DEFAULT_RTOL", "DEFAULT_ATOL"]
+@dataclass(frozen=True)
+class Recorded:
+    """A run kept in memory: ``t`` (S,), ``x``, ``v`` (S, N) and the force evaluations."""
+
+    t: "np.ndarray" = field(repr=False)
+    x: "np.ndarray" = field(repr=False)
+    v: "np.ndarray" = field(repr=False)
+    force_evals: int
+
+
+def record(method: Method, system: "System", x0: np.ndarray, v0: np.ndarray, grid: "Grid") -> Recorded:
+    """``method.run`` into a :class:`MemoryRecorder`: what plan, bench and references time and measure."""
+    from .recorder import MemoryRecorder
+
+    rec = MemoryRecorder(grid.frames, system.n)
+    evals = method.run(system, x0, v0, grid, rec)
+    return Recorded(grid.t, rec.x, rec.v, int(evals))
+
+
+__all__ = ["Kind", "Traits", "Options", "Method", "SpectrumSource", "Recorded", "record", "DEFAULT_RTOL",
+           "DEFAULT_ATOL"]

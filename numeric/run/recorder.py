@@ -8,15 +8,9 @@ one call, while a streamed step run passes one frame at a time.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Protocol
+from typing import Protocol
 
 import numpy as np
-
-if TYPE_CHECKING:  # pragma: no cover
-    from ..system import System
-    from .grid import Grid
-    from .protocol import Method
 
 
 class Recorder(Protocol):
@@ -78,21 +72,4 @@ class StreamRecorder:
                 self.snapshots[float(self.t[row])] = np.array(x1[:, 0])
 
 
-@dataclass(frozen=True)
-class Recorded:
-    """A run kept in memory: ``t`` (S,), ``x``, ``v`` (S, N) and the force evaluations."""
-
-    t: np.ndarray = field(repr=False)
-    x: np.ndarray = field(repr=False)
-    v: np.ndarray = field(repr=False)
-    force_evals: int
-
-
-def record(method: "Method", system: "System", x0: np.ndarray, v0: np.ndarray, grid: "Grid") -> Recorded:
-    """``method.run`` into a :class:`MemoryRecorder`: what plan, bench and references time and measure."""
-    rec = MemoryRecorder(grid.frames, system.n)
-    evals = method.run(system, x0, v0, grid, rec)
-    return Recorded(grid.t, rec.x, rec.v, int(evals))
-
-
-__all__ = ["Recorder", "MemoryRecorder", "StreamRecorder", "Recorded", "record"]
+__all__ = ["Recorder", "MemoryRecorder", "StreamRecorder"]
