@@ -109,9 +109,13 @@ def test_simulate_memory_is_checked_with_the_effective_settings(seed_path):
 def test_plan_and_bench_through_the_api():
     plan = springchain.plan("seed", tol=1e-3)
     assert plan.recommended.predicted_error <= 1e-3
-    assert json.loads(json.dumps(plan.as_json()))
+    data = json.loads(json.dumps(plan.as_json()))  # plain JSON: the same object back
+    assert data == plan.as_json() and data["recommended"]["method"] == plan.recommended.name
+    assert data["recommended"] in data["candidates"] and len(data["candidates"]) == len(plan.candidates)
     result = springchain.bench("seed", quick=True, methods=["verlet"])
-    assert result.records and all(r.method in ("verlet", "modal") or r.method for r in result.records)
+    assert result.records and {r.method for r in result.records} == {"verlet"}  # only the method asked for
+    for r in result.records:  # each a Verlet run against the extended-precision reference
+        assert 0 < r.error < 1 and r.force_evals == r.steps + 1 and abs(r.dt * r.steps - 100.0) < 1e-9
 
 
 def _readme_python_example() -> str:

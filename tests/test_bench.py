@@ -53,8 +53,8 @@ def test_quick_bench_records(quick_bench):
     assert methods == {"modal", *INTEGRATORS, *ADAPTIVE}
     for r in records:
         assert FIELDS <= set(r)
-        assert math.isfinite(r["error"]) and r["error"] >= 0
-        assert r["seconds"] > 0 and r["force_evals"] >= 0
+        assert math.isfinite(r["error"]) and r["error"] > 0  # float64 never matches the 80-bit reference exactly
+        assert r["seconds"] > 0 and (r["force_evals"] == 0) == (r["method"] in ("modal", "expm"))
         assert r["predicted_error"] is not None and r["predicted_error"] > 0
     # the sweep includes the scene's own dt
     assert any(r["method"] == "verlet" and r["dt"] == pytest.approx(0.1) for r in records)
