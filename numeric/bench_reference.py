@@ -10,7 +10,7 @@ import numpy as np
 
 from .run import registry
 from .run.grid import Grid
-from .run.protocol import Options
+from .run.protocol import Options, Recorded
 from .run.protocol import record
 from .system import System
 
@@ -116,18 +116,21 @@ class GridReference:
 
     Attributes
     ----------
-    t : ndarray, shape (S,)
-    x, v : ndarray, shape (S, N)
+    run : Recorded
+        The reference run: ``t`` (S,), ``x``, ``v`` (S, N).
     accuracy : float
         Estimated largest position error of the reference itself.
     description : str
     """
 
-    t: np.ndarray = field(repr=False)
-    x: np.ndarray = field(repr=False)
-    v: np.ndarray = field(repr=False)
+    run: Recorded = field(repr=False)
     accuracy: float
     description: str
+
+    @property
+    def x(self) -> np.ndarray:
+        """Positions, shape (S, N)."""
+        return self.run.x
 
     @classmethod
     def kahan_li(cls, system: System, x0, v0, t_end: float, spacing: float, m_fine: int, m_coarse: int,
@@ -144,10 +147,12 @@ class GridReference:
         rp = (m_coarse / m_fine) ** p
         diff = float(np.max(np.abs(fine.x - coarse.x)))
         acc = diff * rp / (1 - rp)
-        return cls(fine.t, fine.x, fine.v, acc,
+        return cls(fine, acc,
                    f"{method.name} at h = {spacing / m_fine:.4g} (estimated error {acc:.1e} from a second run at "
                    f"h = {spacing / m_coarse:.4g})")
 
     def at(self, t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        idx = np.rint(np.asarray(t) / (self.t[1] - self.t[0])).astype(int)
-        return self.x[idx], self.v[idx]
+        """Positions and velocities at grid times ``t``, shapes (S, N)."""
+        run = self.run
+        idx = np.rint(np.asarray(t) / (run.t[1] - run.t[0])).astype(int)
+        return run.x[idx], run.v[idx]

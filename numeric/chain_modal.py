@@ -232,16 +232,8 @@ class ChainModal:
         return q, p
 
     def at(self, t) -> tuple[np.ndarray, np.ndarray]:
-        """Positions and velocities at times ``t``.
-
-        Parameters
-        ----------
-        t : float or ndarray, shape (S,)
-
-        Returns
-        -------
-        x, v : ndarray, shape (n, ...) for scalar t, or (S, n, ...) for an array of times
-        """
+        """Positions and velocities at times ``t`` (a float, or an array of shape (S,)): x and v of
+        shape (n, ...), or (S, n, ...) for an array of times, as :meth:`numeric.modal.ModalSolution.at`."""
         t = np.asarray(t, dtype=float)
         q, p = self.modal_at(t)
         axis = t.ndim

@@ -9,14 +9,14 @@ the figures :mod:`numeric.figures`'.
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
 from .run import registry
 from .run.grid import Grid
-from .run.protocol import DEFAULT_ATOL, DEFAULT_RTOL, Kind, Method, Options
+from .run.protocol import DEFAULT_ATOL, DEFAULT_RTOL, Kind, Method, Options, Recorded
 from .run.recorder import MemoryRecorder
 from .system import System
 
@@ -56,16 +56,13 @@ def applicable(system: System) -> str:
 
 
 @dataclass(frozen=True)
-class Run:
-    """One method's recorded trajectory. x, v : ndarray, shape (S, N)."""
+class Run(Recorded):
+    """One method's recorded trajectory (a :class:`~numeric.run.protocol.Recorded`: ``t`` (S,),
+    ``x``, ``v`` (S, N), ``force_evals``), its name, seconds, and whether it is the exact solution
+    (what the others are compared with)."""
 
-    method: str
-    t: np.ndarray = field(repr=False)
-    x: np.ndarray = field(repr=False)
-    v: np.ndarray = field(repr=False)
-    seconds: float
-    force_evals: int
-    #: The exact solution (what the others are compared with).
+    method: str = ""
+    seconds: float = 0.0
     exact: bool = False
 
 
@@ -99,7 +96,7 @@ def run_methods(system: System, x0: np.ndarray, v0: np.ndarray, h: float, steps:
         rec = MemoryRecorder(grid.frames, system.n)
         t0 = time.perf_counter()
         evals = m.run(system, x0, v0, grid, rec)
-        out[m.name] = Run(m.name, grid.t, rec.x, rec.v, time.perf_counter() - t0, evals, m.kind is Kind.EXACT)
+        out[m.name] = Run(grid.t, rec.x, rec.v, evals, m.name, time.perf_counter() - t0, m.kind is Kind.EXACT)
     return out
 
 

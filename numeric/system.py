@@ -31,6 +31,11 @@ def interface(module: ModuleType) -> Provided:
     return contract.read(module)
 
 
+def _provided(name: str, doc: str) -> property:
+    """A property that answers from the module's :class:`Provided` facts."""
+    return property(lambda self: getattr(self.provided, name), doc=doc)
+
+
 @dataclass(frozen=True)
 class System:
     """A scene's generated equations at fixed parameter values.
@@ -102,27 +107,18 @@ class System:
     def n(self) -> int:
         return int(self.masses.shape[0])
 
-    @property
-    def effects(self) -> frozenset[str]:
-        return self.provided.effects
-
-    @property
-    def linear(self) -> bool:
-        return self.provided.linear
-
-    @property
-    def uniform(self) -> bool:
-        """A uniform ``[chain]`` (coefficients independent of the index)."""
-        return self.provided.uniform
+    effects = _provided("effects", "The Lagrangian's effects (``spring``, ``damper``, ``gravity``, ...).")
+    linear = _provided("linear", "No cubic springs.")
+    uniform = _provided("uniform", "A uniform ``[chain]`` (coefficients independent of the index).")
+    rigid_modes = _provided("rigid_modes", "The number of rigid-body modes (free pieces).")
+    ground = _provided("ground", "How ``[ground]`` is given (a :class:`Ground`, equal to its word), else None.")
+    ground_displacement = _provided("ground_displacement",
+                                    "Whether the ground displacement x_g(t) is known (``ground_motion``).")
 
     @property
     def ends(self) -> tuple[End, End] | None:
         """``(left, right)`` of a ``[chain]``; None otherwise."""
         return (self.provided.left, self.provided.right) if self.chain else None
-
-    @property
-    def rigid_modes(self) -> int:
-        return self.provided.rigid_modes
 
     def has(self, name: str) -> bool:
         """Whether the module defines the contract function ``name``."""
@@ -151,16 +147,6 @@ class System:
     def tabulated(self) -> bool:
         """Tabulated forces ([[forces]] with table)."""
         return bool(self.provided.table_force_on)
-
-    @property
-    def ground(self) -> Ground | None:
-        """How ``[ground]`` is given (a :class:`Ground`, equal to its word), else None."""
-        return self.provided.ground
-
-    @property
-    def ground_displacement(self) -> bool:
-        """Whether the ground displacement x_g(t) is known (``ground_motion``)."""
-        return self.provided.ground_displacement
 
     @property
     def harmonic_forcing(self) -> bool:

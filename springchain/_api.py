@@ -480,27 +480,14 @@ def bench(scene: str | Path | Scene = "seed", t_end: float | None = None, *, qui
 # -- generated modules -------------------------------------------------------------------------------
 @dataclass(frozen=True)
 class Derived:
-    """One scene's generated module, written or checked.
-
-    Attributes
-    ----------
-    scene : Scene
-    path : Path
-    fresh : bool or None
-        With ``check``: whether the file equals a fresh render; None when it was written.
-    lines : int or None
-        Lines of the module written (None with ``check``).
-    seconds : float
-    message : str
-        ``"<path>: fresh"``, ``"<path>: stale (run ...)"``, ``"<path>: missing (run ...)"`` (check).
-    """
+    """One scene's generated module, written or checked (see :func:`derive`)."""
 
     scene: Scene
-    path: Path
-    fresh: bool | None
-    lines: int | None
+    path: Path  #: where the module is
+    fresh: bool | None  #: with ``check``, whether it equals a fresh render; None when it was written
+    lines: int | None  #: lines written (None with ``check``)
     seconds: float
-    message: str = ""
+    message: str = ""  #: ``"<path>: fresh"``, ``"<path>: stale (run ...)"``, ``"<path>: missing (run ...)"``
 
 
 def derive(scenes=(), out: str | Path | None = None, *, check: bool = False) -> list[Derived]:

@@ -230,6 +230,23 @@ def cmd_animate(args) -> int:
 
 
 # -- parser: one function per command ---------------------------------------------------------
+def _scene(p, example: str = "seed") -> None:
+    """The SCENE argument: a path or a bundled scene's name."""
+    p.add_argument("scene", help="a scene file (TOML) or the name of a bundled scene" + (f", e.g. {example}" if example else ""))
+
+
+def _out(p, default: str, help: str = "output folder (default: %(default)s)", **kw) -> None:
+    p.add_argument("--out", default=default, help=help, **kw)
+
+
+def _json(p, help: str = "print one JSON object and nothing else") -> None:
+    p.add_argument("--json", action="store_true", help=help)
+
+
+def _no_progress(p) -> None:
+    p.add_argument("--no-progress", action="store_true", help="no progress lines on stderr")
+
+
 def _add_run(sub) -> None:
     """``springchain run``: the main job."""
     r = sub.add_parser("run", help="the main job on the bundled reference scene",
@@ -257,7 +274,7 @@ def _add_modes(sub) -> None:
     """``springchain modes``: equations and modes."""
     m = sub.add_parser("modes", help="print equations of motion and closed-form normal modes",
                        description="Print the Lagrangian derivation and the normal modes of a scene.")
-    m.add_argument("scene", help="a scene file (TOML) or the name of a bundled scene, e.g. seed")
+    _scene(m)
     g = m.add_mutually_exclusive_group()
     g.add_argument("--json", action="store_true", help="print one JSON object (see README) and nothing else")
     g.add_argument("--latex", action="store_true", help="print the derivation as LaTeX (amsmath)")
@@ -270,7 +287,7 @@ def _add_simulate(sub) -> None:
                        description="Run the chosen methods from the scene's initial state and write "
                                    "DIR/<name>.npz (t, x_<method>, v_<method>) and PNG figures: positions, "
                                    "velocities, method - exact, energy.")
-    s.add_argument("scene", help="a scene file (TOML) or the name of a bundled scene, e.g. seed")
+    _scene(s)
     s.add_argument("--method", action="append", choices=_method_names(), metavar="NAME",
                    help=f"method to run, repeatable ({', '.join(_method_names())}; default: modal and verlet "
                         "for linear scenes, verlet otherwise)")
@@ -285,7 +302,7 @@ def _add_simulate(sub) -> None:
                    help="relative tolerance of the adaptive methods rk45, dop853, lsoda (default: %(default)g)")
     s.add_argument("--atol", type=_positive_float("--atol"), default=DEFAULT_ATOL,
                    help="absolute tolerance of the adaptive methods (default: %(default)g)")
-    s.add_argument("--out", default=DEFAULT_OUT, help="output folder (default: %(default)s)")
+    _out(s, DEFAULT_OUT)
     s.add_argument("--no-figures", action="store_true", help="write only the NPZ")
     s.add_argument("--json", action="store_true", help="print a JSON summary instead of text")
     s.set_defaults(func=cmd_simulate)
@@ -306,9 +323,9 @@ def _add_bench(sub) -> None:
     b.add_argument("--method", action="append", choices=_method_names(), metavar="NAME",
                    help="restrict to these methods, repeatable (default: every method that applies; the "
                         "error-vs-horizon study runs only with the default)")
-    b.add_argument("--out", default=DEFAULT_BENCH_OUT, help="output folder (default: %(default)s)")
+    _out(b, DEFAULT_BENCH_OUT)
     b.add_argument("--json", action="store_true", help="print the records and targets as JSON")
-    b.add_argument("--no-progress", action="store_true", help="no progress lines on stderr")
+    _no_progress(b)
     b.set_defaults(func=cmd_bench)
 
 
@@ -318,10 +335,10 @@ def _add_plan(sub) -> None:
                         description="Predict, from closed-form error models and measured costs, the step (or "
                                     "tolerance) each method needs to keep the largest position error below TOL "
                                     "over the horizon, and recommend the cheapest.")
-    pl.add_argument("scene", help="a scene file (TOML) or the name of a bundled scene, e.g. seed")
+    _scene(pl)
     pl.add_argument("--tol", type=_positive_float("--tol"), required=True, help="largest position error allowed")
     pl.add_argument("--t-end", type=_positive_float("--t-end"), help="horizon T (default: the scene's dt x steps)")
-    pl.add_argument("--json", action="store_true", help="print one JSON object and nothing else")
+    _json(pl)
     pl.set_defaults(func=cmd_plan)
 
 
@@ -339,7 +356,7 @@ def _add_scaling(sub) -> None:
                     help="largest N for [masses] derive and LagrangesMethod (0: skip the symbolic part; "
                          "LagrangesMethod takes ~13 s at 80; default: %(default)s)")
     sc.add_argument("--json", action="store_true", help="print one JSON object with both tables")
-    sc.add_argument("--out", default=DEFAULT_OUT, help="output folder (default: %(default)s)")
+    _out(sc, DEFAULT_OUT)
     sc.set_defaults(func=cmd_scaling)
 
 
@@ -353,7 +370,7 @@ def _add_sweep(sub) -> None:
                                     "DIR/sweep.parquet (one part per batch), DIR/summary.json and figures. "
                                     "DIST: uniform(a, b), normal(mu, sigma), lognormal(mu, sigma) or "
                                     "grid(a, b, n). Re-running into the same DIR resumes.")
-    sw.add_argument("scene", help="a scene file (TOML) or the name of a bundled scene")
+    _scene(sw, "")
     sw.add_argument("--vary", action="append", metavar="NAME=DIST",
                     help="draw scene parameter NAME per sample, repeatable; grids form their product")
     sw.add_argument("--disorder", action="append", metavar="mass=DIST|k=DIST",
@@ -368,9 +385,9 @@ def _add_sweep(sub) -> None:
                        help="processes of the embedded LocalCluster (default: the cores)")
     where.add_argument("--scheduler", metavar="ADDRESS",
                        help="use a running `dask scheduler`, e.g. tcp://127.0.0.1:8786")
-    sw.add_argument("--out", default=DEFAULT_SWEEP_OUT, help="output folder (default: %(default)s)")
-    sw.add_argument("--json", action="store_true", help="print one JSON object and nothing else")
-    sw.add_argument("--no-progress", action="store_true", help="no progress lines on stderr")
+    _out(sw, DEFAULT_SWEEP_OUT)
+    _json(sw)
+    _no_progress(sw)
     sw.set_defaults(func=cmd_sweep)
 
 
@@ -384,7 +401,7 @@ def _add_frf(sub) -> None:
                                     "Prints the resonances and, for scenes of at most 6 masses, the transfer "
                                     "function H(s) as a ratio of polynomials in s (text and LaTeX); writes the "
                                     "Bode figure DIR/<scene>-frf-<in>-<out>.png.")
-    fr.add_argument("scene", help="a scene file (TOML) or the name of a bundled scene, e.g. building")
+    _scene(fr, "building")
     fr.add_argument("--input", required=True, metavar="MASS",
                     help="the mass the unit harmonic force drives (a name; an index for [chain] scenes)")
     fr.add_argument("--output", required=True, metavar="MASS",
@@ -410,7 +427,7 @@ def _add_animate(sub) -> None:
                                     "scene simulated from its initial state by METHOD, a few frames recorded). "
                                     "Masses are dots on a line joined by springs, displacements scaled to be "
                                     "visible; [chain] scenes show a decimated displacement profile.")
-    an.add_argument("scene", help="a scene file (TOML) or the name of a bundled scene, e.g. seed")
+    _scene(an)
     what = an.add_mutually_exclusive_group()
     what.add_argument("--mode", type=_whole("--mode"), metavar="J",
                       help="animate mode J (0 = lowest frequency; default: the lowest elastic mode)")
@@ -420,7 +437,7 @@ def _add_animate(sub) -> None:
                     help="frames in the GIF (default: %(default)s)")
     an.add_argument("--fps", type=_positive_float("--fps"), default=16.0, metavar="R",
                     help="frames per second (default: %(default)g)")
-    an.add_argument("--out", default=DEFAULT_OUT, metavar="DIR", help="output folder (default: %(default)s)")
+    _out(an, DEFAULT_OUT, metavar="DIR")
     an.set_defaults(func=cmd_animate)
 
 

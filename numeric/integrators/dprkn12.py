@@ -166,4 +166,3 @@ class DPRKN12(EmbeddedNystrom):
 
     name = "dprkn12"
     table = DPRKN12_TABLE
-    order = 12

@@ -60,4 +60,3 @@ class DPRKN6(EmbeddedNystrom):
 
     name = "dprkn6"
     table = DPRKN6_TABLE
-    order = 6

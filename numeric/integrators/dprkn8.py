@@ -49,4 +49,3 @@ class DPRKN8(EmbeddedNystrom):
 
     name = "dprkn8"
     table = DPRKN8_TABLE
-    order = 8

@@ -85,6 +85,11 @@ class EmbeddedNystrom(AdaptiveMethod):
     scipy_method = ""
     supports_damping: ClassVar[bool] = False
 
+    def __init_subclass__(cls, **kwargs):
+        super().__init_subclass__(**kwargs)
+        if "table" in cls.__dict__:  # the order is the table's (declared once, where it is checked)
+            cls.order = cls.table.order
+
     @property
     def evals_per_accepted_step(self) -> int:
         return self.table.evals_per_step

@@ -17,7 +17,7 @@ from ..integrators.base import Problem
 from ..integrators.ivp import AdaptiveMethod
 from ..progress import phase
 from ..system import System
-from .protocol import Kind, Method, Traits
+from .protocol import Kind, Method
 
 
 def full_problem(system: System) -> Problem:
@@ -29,16 +29,14 @@ def full_problem(system: System) -> Problem:
 
 @dataclass(frozen=True)
 class AdaptiveRun(Method):
-    """An adaptive method (``solver_class``), evaluated on the grid's times with the options' tolerances."""
+    """An adaptive method (the ``implementation``, an :class:`AdaptiveMethod` subclass), evaluated on the
+    grid's times with the options' tolerances."""
 
-    solver_class: type[AdaptiveMethod] = AdaptiveMethod
     kind: ClassVar[Kind] = Kind.ADAPTIVE
 
     @property
-    def traits(self) -> Traits:
-        c = self.solver_class
-        return Traits(order=float(c.order), symplectic=bool(c.symplectic),
-                      supports_damping=bool(c.supports_damping))
+    def solver_class(self) -> type[AdaptiveMethod]:
+        return self.implementation
 
     def refusal(self, system: System) -> str | None:
         if system.damped and not self.solver_class.supports_damping:

@@ -39,18 +39,12 @@ def step_grid(t_end: float, h_target: float) -> tuple[float, int]:
 
 @dataclass(frozen=True)
 class Grid:
-    """``steps`` steps of size ``h``, every ``record_every``-th state recorded (and the last).
+    """``steps`` steps of size ``h`` (times ``t = i·h``), every ``record_every``-th state recorded, and
+    always the last one."""
 
-    Attributes
-    ----------
-    h : float
-    steps : int
-    record_every : int
-    """
-
-    h: float
-    steps: int
-    record_every: int = 1
+    h: float  #: the step
+    steps: int  #: the number of steps (the last time is ``steps·h``)
+    record_every: int = 1  #: the recording stride
 
     def __post_init__(self):
         if not (math.isfinite(self.h) and self.h > 0):

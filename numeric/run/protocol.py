@@ -68,6 +68,16 @@ class Traits:
     stability_limit: float = math.inf
     supports_damping: bool = True
 
+    @classmethod
+    def of(cls, implementation: type) -> "Traits":
+        """The traits an implementation class declares (its class attributes; the defaults above
+        for those it leaves out)."""
+        c = implementation
+        return cls(order=float(c.order), symplectic=bool(c.symplectic),
+                   evals_per_step=float(getattr(c, "evals_per_step", math.nan)),
+                   stability_limit=float(getattr(c, "stability_limit", math.inf)),
+                   supports_damping=bool(getattr(c, "supports_damping", True)))
+
 
 @dataclass(frozen=True)
 class Options:
@@ -104,18 +114,22 @@ class Method(abc.ABC):
     name : str
         The name at the edge (command line, NPZ keys, records).
     options : Options
+    implementation : type or None
+        The class that does the work (an integrator or an adaptive solver), whose declared
+        :class:`Traits` are the method's.
     """
 
     name: str
     options: Options = field(default=Options(), compare=False)
+    implementation: type | None = None
 
     #: Which kind of method this is (declared by each kind).
     kind: ClassVar[Kind]
 
     @property
-    @abc.abstractmethod
     def traits(self) -> Traits:
-        """The declared traits."""
+        """The declared traits (the implementation's)."""
+        return Traits.of(self.implementation)
 
     def refusal(self, system: "System") -> str | None:
         """Why this method does not apply to ``system`` (None when it does)."""

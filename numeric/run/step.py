@@ -23,7 +23,7 @@ from ..integrators.base import Integrator, Problem
 from ..integrators.verlet import VelocityVerlet
 from ..progress import Reporter
 from ..system import System
-from .protocol import Kind, Method, Traits
+from .protocol import Kind, Method
 
 #: Runs shorter than this many mass-steps show no progress bar.
 PROGRESS_MIN_WORK = 2_000_000
@@ -56,16 +56,13 @@ class FusedChainVerlet(VelocityVerlet):
 
 @dataclass(frozen=True)
 class StepMethod(Method):
-    """A fixed-step integrator (``integrator_class``) as a method."""
+    """A fixed-step integrator (the ``implementation``, an :class:`Integrator` subclass) as a method."""
 
-    integrator_class: type[Integrator] = Integrator
     kind: ClassVar[Kind] = Kind.STEP
 
     @property
-    def traits(self) -> Traits:
-        c = self.integrator_class
-        return Traits(order=float(c.order), symplectic=bool(c.symplectic), evals_per_step=float(c.evals_per_step),
-                      stability_limit=float(c.stability_limit), supports_damping=bool(c.supports_damping))
+    def integrator_class(self) -> type[Integrator]:
+        return self.implementation
 
     def problem(self, system: System) -> Problem:
         """The conservative problem the (wrapped) integrator steps (:meth:`Problem.from_system`)."""
