@@ -36,7 +36,7 @@ from typing import Callable
 
 import numpy as np
 
-from .bench_sweep import (adaptive_rtols, adaptive_sweep, energy_norm, progress_reporter, report_run,
+from .bench_runs import (adaptive_rtols, adaptive_sweep, energy_norm, progress_reporter, report_run,
                           selected_in_order, timed_run)
 from .plan import Planner, exact_method, with_tolerance
 from .plan_pilot import check_pilot, needs_pilot

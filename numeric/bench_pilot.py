@@ -17,7 +17,7 @@ import math
 
 import numpy as np
 
-from .bench_sweep import adaptive_rtols, adaptive_sweep, energy_norm, progress_reporter, report_run, \
+from .bench_runs import adaptive_rtols, adaptive_sweep, energy_norm, progress_reporter, report_run, \
     selected_in_order, timed_run
 from .bench_records import BenchConfig, BenchRecord, BenchResult
 from .plan import with_tolerance

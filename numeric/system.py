@@ -38,33 +38,23 @@ def _provided(name: str, doc: str) -> property:
 
 @dataclass(frozen=True)
 class System:
-    """A scene's generated equations at fixed parameter values.
+    """A scene's generated equations at fixed parameter values (build with :meth:`from_module`)."""
 
-    Attributes
-    ----------
-    module : module
-        The generated module.
-    params : dict of str to float
-        Parameter values (keyword arguments of the module's functions).
-    masses : ndarray, shape (N,)
-    spring_ends : ndarray of int, shape (S, 2)
-        Mass indices of the spring ends, -1 for a wall.
-    stiffness : ndarray, shape (S,)
-    tables : tuple of (ndarray, ndarray)
-        ``(times, values)`` of each tabulated force, in the module's ``TABLE_FORCE_ON`` order.
-    ground_table : (ndarray, ndarray) or None
-        ``(times, a_g)`` of a ``[ground]`` table.
-    provided : Provided
-        What the module provides (read once through the contract).
-    """
-
+    #: The generated module.
     module: ModuleType
+    #: Parameter values (keyword arguments of the module's functions).
     params: dict[str, float]
+    #: Masses, shape (N,).
     masses: np.ndarray = field(repr=False)
+    #: Mass indices of the spring ends, -1 for a wall; int, shape (S, 2).
     spring_ends: np.ndarray = field(repr=False)
+    #: Linear spring constants, shape (S,).
     stiffness: np.ndarray = field(repr=False)
+    #: ``(times, values)`` of each tabulated force, in the module's ``TABLE_FORCE_ON`` order.
     tables: tuple = field(default=(), repr=False)
+    #: ``(times, a_g)`` of a ``[ground]`` table, or None.
     ground_table: tuple | None = field(default=None, repr=False)
+    #: What the module provides (read once through the contract).
     provided: Provided | None = field(default=None, repr=False)
 
     @classmethod

@@ -244,11 +244,11 @@ def test_progress_is_silent_for_short_phases_and_reports_long_ones(monkeypatch):
 
 
 def test_the_reporters_share_one_module():
-    from springchain.numeric import bench_sweep, chunked, driver, scaling, sweep_driver
+    from springchain.numeric import bench_runs, chunked, driver, scaling, sweep_driver
     from springchain.numeric.progress import Reporter
 
     assert issubclass(sweep_driver.Progress, Reporter) and not hasattr(driver, "Progress")
-    for mod in (bench_sweep, scaling, sweep_driver, chunked, driver):
+    for mod in (bench_runs, scaling, sweep_driver, chunked, driver):
         src = Path(mod.__file__).read_text()
         assert "sys.stderr" not in src and "print(" not in src, mod.__name__  # only through the reporter
 

@@ -85,10 +85,12 @@ class EmbeddedNystrom(AdaptiveMethod):
     scipy_method = ""
     supports_damping: ClassVar[bool] = False
 
-    def __init_subclass__(cls, **kwargs):
-        super().__init_subclass__(**kwargs)
-        if "table" in cls.__dict__:  # the order is the table's (declared once, where it is checked)
-            cls.order = cls.table.order
+    @classmethod
+    def of(cls, name: str, table: NystromTable) -> type["EmbeddedNystrom"]:
+        """The pair ``table`` as a method class called ``name`` (its order is the table's: declared
+        once, where the table checks it)."""
+        return type(name.upper(), (cls,), {"name": name, "table": table, "order": table.order,
+                                           "__doc__": f"{table.source} (``{name}``)", "__module__": cls.__module__})
 
     @property
     def evals_per_accepted_step(self) -> int:
