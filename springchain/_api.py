@@ -479,8 +479,8 @@ def bench(scene: str | Path | Scene = "seed", t_end: float | None = None, *, qui
 
 # -- generated modules -------------------------------------------------------------------------------
 @dataclass(frozen=True)
-class Derived:
-    """One scene's generated module, written or checked (see :func:`derive`)."""
+class Generated:
+    """One scene's generated module, written or checked (see :func:`generate`)."""
 
     scene: Scene
     path: Path  #: where the module is
@@ -490,8 +490,10 @@ class Derived:
     message: str = ""  #: ``"<path>: fresh"``, ``"<path>: stale (run ...)"``, ``"<path>: missing (run ...)"``
 
 
-def derive(scenes=(), out: str | Path | None = None, *, check: bool = False) -> list[Derived]:
-    """Write the generated module of each scene into ``out``, or (``check``) compare it with a fresh render.
+def generate(scenes=(), out: str | Path | None = None, *, check: bool = False) -> list[Generated]:
+    """What ``springchain derive`` does: write the generated module of each scene into ``out``, or
+    (``check``) compare it with a fresh render. (``springchain.derive`` is the symbolic subpackage,
+    so the function is called ``generate``.)
 
     Parameters
     ----------
@@ -505,7 +507,7 @@ def derive(scenes=(), out: str | Path | None = None, *, check: bool = False) -> 
 
     Returns
     -------
-    list of Derived
+    list of Generated
     """
     import time
 
@@ -524,12 +526,12 @@ def derive(scenes=(), out: str | Path | None = None, *, check: bool = False) -> 
         t0 = time.perf_counter()
         if check:
             ok, msg = _modules.check(sc, folder)
-            done.append(Derived(sc, _modules.module_path(sc, folder), ok, None, time.perf_counter() - t0, msg))
+            done.append(Generated(sc, _modules.module_path(sc, folder), ok, None, time.perf_counter() - t0, msg))
             continue
         with phase(f"deriving {sc.name!r}"):
             d = _modules.derive(sc)
         path = _modules.write(d, folder)
-        done.append(Derived(sc, path, None, len(d.source.splitlines()), time.perf_counter() - t0, f"{path}: written"))
+        done.append(Generated(sc, path, None, len(d.source.splitlines()), time.perf_counter() - t0, f"{path}: written"))
     return done
 
 
@@ -603,5 +605,5 @@ def sweep(*args, **kwargs):
     return _sweep(*args, **kwargs)
 
 
-__all__ = ["load", "modes", "simulate", "plan", "bench", "derive", "scaling", "sweep", "method_names", "Modes",
-           "Simulation", "Derived", "Scaling", "MAX_RECORDED_BYTES", "DEFAULT_OUT"]
+__all__ = ["load", "modes", "simulate", "plan", "bench", "generate", "scaling", "sweep", "method_names", "Modes",
+           "Simulation", "Generated", "Scaling", "MAX_RECORDED_BYTES", "DEFAULT_OUT"]

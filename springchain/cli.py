@@ -54,9 +54,9 @@ def _whole(flag):
 
 # -- commands: parse, call the API, print -------------------------------------------------------
 def cmd_derive(args) -> int:
-    from ._api import derive
+    from ._api import generate
 
-    results = derive(args.scene, args.out, check=args.check)
+    results = generate(args.scene, args.out, check=args.check)
     for d in results:
         if args.check:
             print(("ok     " if d.fresh else "STALE  ") + d.message)
@@ -121,13 +121,13 @@ def cmd_simulate(args) -> int:
 
 
 def cmd_run(args) -> int:
-    from ._api import derive, load, modes, simulate
+    from ._api import generate, load, modes, simulate
     from ._scenes import display_path, resolve
 
     t0 = time.perf_counter()
     scene = load(display_path(resolve("seed")))
     print(modes(scene).to_text())
-    d = derive([scene], check=True)[0]
+    d = generate([scene], check=True)[0]
     print(f"generated module {display_path(d.path)} is " + ("fresh (equals a new render)" if d.fresh else
                                                            "STALE: regenerate with `springchain derive`"))
     print()

@@ -186,3 +186,15 @@ def test_library_errors_name_the_quantity_and_the_command_adds_the_flag(tmp_path
     with pytest.raises(springchain.RunRefused) as exc:
         springchain.simulate("duffing", methods=["modal"])
     assert exc.value.quantity == "method" and str(exc.value).startswith("method 'modal'")
+
+
+def test_generate_writes_and_checks_like_the_derive_command(tmp_path):
+    (checked,) = springchain.generate(["seed"], check=True)  # the package's own module: fresh
+    assert checked.fresh is True and checked.path.name == "seed.py" and checked.lines is None
+    (written,) = springchain.generate(["seed"], out=tmp_path)
+    assert written.path == tmp_path / "seed.py" and written.fresh is None
+    assert written.lines == len(written.path.read_text(encoding="utf-8").splitlines())
+    assert written.path.read_text(encoding="utf-8") == checked.path.read_text(encoding="utf-8")
+    written.path.write_text("# stale\n", encoding="utf-8")
+    (stale,) = springchain.generate(["seed"], out=tmp_path, check=True)
+    assert stale.fresh is False and "stale" in stale.message
