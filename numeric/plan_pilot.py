@@ -28,14 +28,13 @@ import numpy as np
 from .error_models import EPS, roundoff_floor
 from .errors import RunRefused
 from .plan import MAX_MASSES, SAFETY, AdaptiveLaw, Candidate, Plan, calibrate_adaptive, exact_method, \
-    measure_step_cost
+    measure_exact_cost, measure_step_cost
 from .run import registry
 from .run.exact import Solution, solve
 from .run.grid import Grid
 from .run.protocol import Kind, Method, Options
 from .run.protocol import record
 from .system import System
-from .timing import measure
 
 #: Largest ``steps × N`` of one pilot run (the pilot horizon is shortened beyond it).
 PILOT_WORK = 4e7
@@ -197,9 +196,7 @@ class PilotPlanner:
         # the exact method: its cost on the output grid (timed on a sample of it), rounding-level error
         out = _reference_grid(t_end, dt_out, 1)
         sample = min(out.frames, max(2, int(REFERENCE_FLOATS // max(system.n, 1))), 2001)
-        secs = measure(lambda: record(exact_method(), system.fresh(), x0, v0, Grid.frames_of(out.h, sample)),
-                       budget=0.1).seconds
-        exact_seconds = secs * out.frames / sample
+        exact_seconds = measure_exact_cost(system, x0, v0, out, sample, budget=0.1)
         size = max([law.size for law in laws.values()] + [float(np.max(np.abs(x0))), 1e-300])
         exact_error = EPS * size * (8.0 + w_max * t_end + math.sqrt(out.frames))
         laws_a = {}

@@ -160,11 +160,14 @@ class ExactSolution(Method):
 
         return f"no exact solution applies ({why}); use one of {', '.join(registry.names(Kind.STEP))}"
 
-    def run(self, system, x0, v0, grid, recorder) -> int:
+    def prepare(self, system: System, x0: np.ndarray, v0: np.ndarray) -> Solution:
+        """The set-up half of :meth:`run`: the solution from ``(x0, v0)``, ready to record any grid."""
         self.check(system)
         with phase("exact solution: set-up", enabled=self.options.progress):
-            sol = solve(system, x0, v0, self.options.spectrum)
-        sol.record(grid, recorder, system.n, self.options.progress)
+            return solve(system, x0, v0, self.options.spectrum)
+
+    def run(self, system, x0, v0, grid, recorder) -> int:
+        self.prepare(system, x0, v0).record(grid, recorder, system.n, self.options.progress)
         return 0
 
 
