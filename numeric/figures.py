@@ -42,20 +42,28 @@ def write_figures(out: Path, scene_name: str, names, system: System, runs: dict)
             amp = np.abs(frequency_response(system, drive, force))
             save(plots.frequency_response(drive, amp, names, spec.omega[spec.rigid:], omegas), "frequency-response")
     energies = {m: system.energy(r.x.T, r.v.T) for m, r in runs.items()}
-    save(plots.energy(t, energies, float(next(iter(energies.values()))[0])), "energy")
+    conserved = system.energy_conserved
+    ref = exact if exact is not None else next(iter(runs.values()))  # the work along the exact run, else the first
+    work = None
+    if not conserved:
+        from .energy_balance import work as work_done
+
+        work = work_done(system, t, ref.v)
+    save(plots.energy(t, energies, float(next(iter(energies.values()))[0]), conserved=conserved, work=work), "energy")
     return paths
 
 
-def write_stream_figures(out: Path, scene_name: str, t: np.ndarray, recorders: dict) -> list[Path]:
+def write_stream_figures(out: Path, scene_name: str, t: np.ndarray, recorders: dict,
+                         conserved: bool = True) -> list[Path]:
     """Profile snapshots per method and the energy of streamed runs
-    (:class:`~numeric.run.recorder.StreamRecorder` by method name)."""
+    (:class:`~numeric.run.recorder.StreamRecorder` by method name; ``conserved``: whether the energy is)."""
     paths = []
     for name, rec in recorders.items():
         paths.append(out / f"{scene_name}-{name}-profiles.png")
         plots.save(plots.profiles(rec.snapshots), paths[-1])
     energies = {name: rec.energy for name, rec in recorders.items()}
     paths.append(out / f"{scene_name}-energy.png")
-    plots.save(plots.energy(t, energies, float(next(iter(energies.values()))[0])), paths[-1])
+    plots.save(plots.energy(t, energies, float(next(iter(energies.values()))[0]), conserved=conserved), paths[-1])
     return paths
 
 

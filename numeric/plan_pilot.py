@@ -57,7 +57,16 @@ def check_pilot(system: System, what: str) -> None:
                          f"{'nonlinear' if not system.linear else 'index-dependent'})")
     why = system.no_exact_solution
     if why:
-        raise RunRefused(f"{what} measures against the exact solution; this scene has none ({why})")
+        drivers = [word for word, on in (("dampers", system.damped),
+                                         ("forces", system.has("external_acceleration") or system.tabulated),
+                                         ("ground motion", system.ground is not None),
+                                         ("gravity", "gravity" in system.effects)) if on]
+        raise RunRefused(f"{what}: this scene's {' and '.join(drivers)} put it outside the closed-form error models, "
+                         f"so {what} calibrates every method by pilot runs against the exact solution, and there is "
+                         f"none: {why}; accepted: linear springs with forces and ground acceleration constant + "
+                         "harmonic (or tables), or a scene without dampers, forces, gravity and ground motion (cubic "
+                         "springs are then planned from their linearization); compare methods here with `springchain "
+                         "simulate --method NAME`")
 
 
 class ExactReference:

@@ -140,7 +140,7 @@ def stream_methods(system: System, x0: np.ndarray, v0: np.ndarray, h: float, ste
         from .figures import write_stream_figures
 
         with phase("figures", enabled=progress):
-            paths = write_stream_figures(out, scene_name, t, recorders)
+            paths = write_stream_figures(out, scene_name, t, recorders, system.energy_conserved)
     summary["npz"] = str(npz)
     summary["figures"] = [str(p) for p in paths]
     return summary

@@ -105,18 +105,20 @@ def system_of(scene: Scene):
     scenes), and where the module came from: ``(System, "generated" | "cache")``."""
     from .numeric.system import System
 
-    module, origin = load_module(scene)
-    return System.from_module(module, **load_tables(scene)), origin
+    module, origin = load_module(scene)  # keyed by the scene's whole content: a changed scene has its own
+    return System.from_module(module, scene.parameters, **load_tables(scene)), origin
 
 
 def check(scene: Scene, out_dir: Path | None = None) -> tuple[bool, str]:
     """Whether the module on disk equals a fresh render. Writes nothing."""
     path = module_path(scene, out_dir)
     fresh = derive(scene).source
+    default = out_dir is None or Path(out_dir).resolve() == (Path.cwd() / "generated").resolve()
+    fix = f"run `springchain derive {scene.file}" + ("" if default else f" --out {out_dir}") + "`"
     if not path.exists():
-        return False, f"{path}: missing (run `springchain derive {scene.file}`)"
+        return False, f"{path}: missing ({fix})"
     if path.read_text(encoding="utf-8") != fresh:
-        return False, f"{path}: stale (run `springchain derive {scene.file}`)"
+        return False, f"{path}: stale ({fix})"
     return True, f"{path}: fresh"
 
 

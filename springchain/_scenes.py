@@ -58,7 +58,8 @@ def resolve(source: str | Path) -> Path:
 
 def load(source):
     """Read and validate a scene (:func:`springchain.load`): a path to a TOML file, the name of a
-    bundled scene, or a :class:`~springchain.derive.scene.Scene` (returned as it is).
+    bundled scene, a :class:`~springchain.derive.scene.Scene` (returned as it is) or a dict (through
+    :func:`springchain.scene_from_dict`).
 
     Raises
     ------
@@ -70,6 +71,10 @@ def load(source):
 
     if isinstance(source, Scene):
         return source
+    if isinstance(source, dict):
+        from .derive.scene import scene_from_dict
+
+        return scene_from_dict(source)
     path = resolve(source)
     with phase(f"reading {Path(path).name}"):  # a long chain's expressions are checked at every index
         return load_scene(path)

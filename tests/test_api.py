@@ -189,7 +189,9 @@ def test_library_errors_name_the_quantity_and_the_command_adds_the_flag(tmp_path
 
 
 def test_generate_writes_and_checks_like_the_derive_command(tmp_path):
-    (checked,) = springchain.generate(["seed"], check=True)  # the package's own module: fresh
+    from springchain._modules import generated_dir
+
+    (checked,) = springchain.generate(["seed"], generated_dir(), check=True)  # the package's own module: fresh
     assert checked.fresh is True and checked.path.name == "seed.py" and checked.lines is None
     (written,) = springchain.generate(["seed"], out=tmp_path)
     assert written.path == tmp_path / "seed.py" and written.fresh is None
