@@ -22,12 +22,6 @@ PACKAGES = {"springchain": "springchain", "derive": "springchain.derive", "numer
             "generated": "springchain.generated", "scenes": "springchain.scenes"}
 #: The layers below the top package.
 LOWER = ("springchain.derive", "springchain.numeric", "springchain.generated", "springchain.scenes")
-#: Circles known to be under repair on another branch (derive's section writers, issue 19); the
-#: coordinator removes these entries once that branch is merged. Nothing else may form a circle.
-KNOWN_CIRCLES = {
-    frozenset({"springchain.derive.codegen", "springchain.derive.damping_code", "springchain.derive.loadgen"}),
-    frozenset({"springchain.derive.scene", "springchain.derive.loads"}),
-}
 #: What numeric modules other than system.py may take from the contract: facts both sides share.
 SHARED_FACTS = {"MAX_DENSE", "End", "END_WORDS", "Ground"}
 
@@ -46,12 +40,25 @@ def _modules() -> dict[str, Path]:
 MODULES = _modules()
 
 
+def _type_checking_only(tree: ast.AST) -> set[int]:
+    """ids of the import nodes under ``if TYPE_CHECKING:`` (annotations only: no edge at run time)."""
+    out = set()
+    for node in ast.walk(tree):
+        if isinstance(node, ast.If) and "TYPE_CHECKING" in ast.unparse(node.test):
+            out |= {id(n) for st in node.body for n in ast.walk(st)}
+    return out
+
+
 def _imports(name: str, path: Path) -> list[tuple[str, tuple[str, ...]]]:
-    """``(imported module, names taken from it)`` for every import statement of a module."""
+    """``(imported module, names taken from it)`` for every import statement of a module that runs
+    (at module level or inside a function; not the ``TYPE_CHECKING`` ones)."""
     tree = ast.parse(path.read_text(encoding="utf-8"))
     package = name if path.name == "__init__.py" else name.rpartition(".")[0]
+    skip = _type_checking_only(tree)
     out = []
     for node in ast.walk(tree):
+        if id(node) in skip:
+            continue
         if isinstance(node, ast.Import):
             out += [(a.name, ()) for a in node.names]
         elif isinstance(node, ast.ImportFrom):
@@ -120,7 +127,7 @@ def test_the_reader_sees_every_module():
 
 
 def test_no_import_circles():
-    circles = [sorted(c) for c in _circles(_graph()) if c not in KNOWN_CIRCLES]
+    circles = [sorted(c) for c in _circles(_graph())]
     assert not circles, f"import circles: {circles}"
 
 
