@@ -206,7 +206,21 @@ def calibrate_adaptive(method: Method, system: System, x0: np.ndarray, v0: np.nd
 
 
 @dataclass(frozen=True)
-class Planner:
+class Horizon:
+    """What a plan is for: errors over ``t = 0 … t_end`` on the output spacing ``dt_out``, ``n`` masses."""
+
+    t_end: float
+    dt_out: float
+    n: int
+
+    @property
+    def output_grid(self) -> Grid:
+        """The output times ``t = i·Δ`` over the horizon (Δ ≤ dt_out)."""
+        return Grid.covering(self.t_end, self.dt_out)
+
+
+@dataclass(frozen=True)
+class Planner(Horizon):
     """Everything measured once for a scene, from which plans for any tolerance follow.
 
     Build with :meth:`for_system`; then :meth:`plan` (cheap) for each tolerance.
@@ -223,9 +237,6 @@ class Planner:
         Finite-order step methods with their :class:`OscillatorResponse` in ``responses``.
     """
 
-    t_end: float
-    dt_out: float
-    n: int
     model: LinearChainModel
     exact: bool
     step_methods: tuple
@@ -424,7 +435,7 @@ class Planner:
         rtol = max(min(rtol, 1e-2), MIN_RTOL)
         # no integrator beats the rounding floor of the exact solution (a power law steeper than
         # rtol¹, as the high-order RKN pairs calibrate to, would otherwise promise 1e-17)
-        floor = self.exact_error(Grid.covering(self.t_end, self.dt_out).steps)
+        floor = self.exact_error(self.output_grid.steps)
         error = max(law.error(rtol, self.t_end), floor)
         evals = law.evals(rtol, self.t_end)
         return Candidate(method, None, None, rtol, error, evals * law.seconds_per_eval,
@@ -444,7 +455,7 @@ class Planner:
         if not (math.isfinite(tol) and tol > 0):
             raise ValueError(f"tolerance must be finite and > 0, got {tol!r}")
         cands: list[Candidate] = []
-        out = Grid.covering(self.t_end, self.dt_out)
+        out = self.output_grid
         if self.exact:
             e = self.exact_error(out.steps)
             cands.append(Candidate(exact_method(), None, None, None, e, self.modal_seconds, e <= tol,

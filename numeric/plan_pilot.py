@@ -27,7 +27,7 @@ import numpy as np
 
 from .error_models import EPS, roundoff_floor
 from .errors import RunRefused
-from .plan import MAX_MASSES, SAFETY, AdaptiveLaw, Candidate, Plan, calibrate_adaptive, exact_method, \
+from .plan import MAX_MASSES, SAFETY, AdaptiveLaw, Candidate, Horizon, Plan, calibrate_adaptive, exact_method, \
     measure_exact_cost, measure_step_cost
 from .run import registry
 from .run.exact import Solution, solve
@@ -168,15 +168,12 @@ def _pilot_law(system: System, method: Method, ref: ExactReference, x0, v0, t_en
 
 
 @dataclass(frozen=True)
-class PilotPlanner:
+class PilotPlanner(Horizon):
     """Plans for scenes measured against an exact reference (see the module docstring).
 
     ``laws``, ``step_costs`` and ``adaptive`` are keyed by the :class:`~numeric.run.protocol.Method`.
     """
 
-    t_end: float
-    dt_out: float
-    n: int
     omega_max: float
     laws: dict = field(repr=False)
     step_costs: dict = field(repr=False)

@@ -146,12 +146,8 @@ def undamped_forced_sin(omega: np.ndarray, Omega: np.ndarray, t: np.ndarray) -> 
 
     Parameters
     ----------
-    omega : array_like
-        Natural frequency ω ≥ 0.
-    Omega : array_like
-        Drive frequency Ω (any sign: the response is odd in Ω).
-    t : array_like
-        Time since the force was switched on (x(0) = ẋ(0) = 0), t ≥ 0.
+    omega, Omega, t : array_like
+        As for :func:`undamped_forced_cos` (t ≥ 0); the response is odd in Ω.
 
     Returns
     -------
