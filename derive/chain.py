@@ -22,7 +22,7 @@ from dataclasses import dataclass
 
 import sympy as sp
 
-from ..ends import End
+from ..generated.contract import End
 from .model import parameter_symbols
 from .printing import sstr
 from .scene import Scene
