@@ -28,12 +28,14 @@ import sympy as sp
 from .printing import latex, sstr
 from .accurate import MAX_MPMATH_MODES, NotAccurate, _eig_dynamical, _mp, exact_values, value
 from .model import Model
-from .modes import BudgetExceeded, ModeSet, time_budget
+from .modes import ModeSet
+from .work import WorkCapExceeded, check, ops
 
 #: Two successive precisions agreeing to this relative difference settle a float64 value.
 _SETTLED = 4e-16
-#: Seconds allowed to simplify closed-form damping ratios of dashpots.
-ZETA_BUDGET = 5.0
+#: Largest dashpot damping ratio ``φᵀCφ / φᵀMφ`` (SymPy operations, before simplifying it) whose
+#: closed form is sought (a size, never a time: the same scene gives the same report under any load).
+MAX_ZETA_OPS = 400
 
 
 @dataclass(frozen=True)
@@ -372,29 +374,29 @@ def _closed_forms(model: Model, modes: ModeSet) -> list[sp.Expr | None]:
     if model.dampers:
         C_d = model._assemble([(a, b, c) for a, b, c, _ in model.dampers], model.v)
     try:
-        with time_budget(ZETA_BUDGET):
-            for mode, shape in records:
-                if mode.rigid:
-                    out.append(None)
-                    j += 1
-                    continue
-                w = sp.sqrt(mode.omega2)
-                zeta = sp.Integer(0)
-                if model.rayleigh is not None:
-                    alpha, beta = model.rayleigh
-                    zeta += alpha / (2 * w) + beta * w / 2
-                if model.modal_zeta is not None:
-                    zeta += model.modal_zeta[j]
-                if C_d is not None:
-                    if not (mode.exact and modes.closed_form):
-                        raise BudgetExceeded
-                    phi = sp.Matrix(shape)
-                    ratio = (phi.T * C_d * phi)[0, 0] / (phi.T * model.M * phi)[0, 0]
-                    ratio = sp.factor(sp.radsimp(sp.cancel(sp.expand(ratio))))
-                    zeta += ratio / (2 * w)
-                out.append(zeta)
+        for mode, shape in records:
+            if mode.rigid:
+                out.append(None)
                 j += 1
-    except BudgetExceeded:
+                continue
+            w = sp.sqrt(mode.omega2)
+            zeta = sp.Integer(0)
+            if model.rayleigh is not None:
+                alpha, beta = model.rayleigh
+                zeta += alpha / (2 * w) + beta * w / 2
+            if model.modal_zeta is not None:
+                zeta += model.modal_zeta[j]
+            if C_d is not None:
+                if not (mode.exact and modes.closed_form):
+                    raise WorkCapExceeded("no closed-form mode shape")
+                phi = sp.Matrix(shape)
+                ratio = (phi.T * C_d * phi)[0, 0] / (phi.T * model.M * phi)[0, 0]
+                check(ops(ratio), MAX_ZETA_OPS)
+                ratio = sp.factor(sp.radsimp(sp.cancel(sp.expand(ratio))))
+                zeta += ratio / (2 * w)
+            out.append(zeta)
+            j += 1
+    except WorkCapExceeded:
         return [None] * len(records)
     return out
 

@@ -232,7 +232,7 @@ def frf(scene: str | Path | Scene, input, output, omega_min: float | None = None
         if sc.n <= MAX_MASSES:
             tf = transfer_function(model or Model(sc), i, o)
             if tf is None:
-                notes.append("the closed-form transfer function exceeded its time budget")
+                notes.append("no closed-form transfer function: its determinant is past the symbolic work cap")
     name = lambda k: str(k) if sc.chain is not None else sc.mass_names[k]  # noqa: E731
     return FrequencyResponse(sc, name(i), name(o), response.omega, response.H, response.resonances, tf, notes)
 
