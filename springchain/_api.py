@@ -438,14 +438,14 @@ def simulate(scene: str | Path | Scene, methods: list[str] | None = None, dt: fl
     dt, steps, record_every = _grid_settings(sc, dt, steps, record_every)
     if sc.chain is None:  # refuse before any derivation when even one method would not fit
         _check_memory(sc, steps, record_every, len(methods) if methods else 1, "steps")
+    for name in methods or ():  # refusals before any work: their one line stands alone
+        registry.entry(name)  # unknown names: one line naming the accepted ones
+    options = Options(rtol, atol, spectrum, progress)  # refuses an unknown spectrum source
     with phase("loading the generated module (deriving it if not cached)", enabled=progress):
         system, origin = _system(sc)
     names, notes = methods, []
     if not methods:  # a default Verlet that would be unstable at this dt gives way to the exact method
         names, notes = sim.unstable_defaults(system, sim.default_methods(system), dt)
-    for name in names:
-        registry.entry(name)  # unknown names: one line naming the accepted ones
-    options = Options(rtol, atol, spectrum, progress)  # refuses an unknown spectrum source
     t0 = time.perf_counter()
     if system.chain:
         summary, t, x, v, extra, npz, figs = _streamed(sc, system, names, dt, steps, record_every, out, figures,
