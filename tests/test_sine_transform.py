@@ -54,3 +54,11 @@ def test_chunks_of_columns_agree(monkeypatch):
     x = np.random.default_rng(0).standard_normal((9900, 3))
     np.testing.assert_allclose(stf.dst1(x), scipy.fft.dst(x, type=1, norm="ortho", axis=0),
                                atol=1e-14 * np.linalg.norm(x))
+
+
+def test_benchmark_script_measures_both_routes():
+    from benchmark_scripts import load
+
+    r = load("sine_transform").measure(9900, rounds=1)
+    assert r["chirp_route"] and set(r["median_seconds"]) == {"pocketfft", "chirp", "fast neighbour"}
+    assert r["max_difference_over_norm"] < 1e-14
