@@ -23,7 +23,7 @@ def dense_dst1(x: np.ndarray) -> np.ndarray:
     return S @ x
 
 
-@settings(max_examples=40, deadline=None)
+@settings(deadline=None)
 @given(st.integers(1, 300), st.integers(0, 2**32 - 1), st.integers(1, 3))
 def test_chirp_route_matches_the_dense_sine_matrix(n, seed, cols):
     x = np.random.default_rng(seed).standard_normal((n, cols))

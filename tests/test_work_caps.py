@@ -90,7 +90,7 @@ _entry = st.lists(st.tuples(st.integers(-3, 3), st.lists(st.sampled_from(_symbol
                   max_size=3).map(lambda terms: sp.expand(sp.Add(*(c * sp.Mul(*s) for c, s in terms))))
 
 
-@settings(max_examples=60, deadline=None)
+@settings(deadline=None)
 @given(st.integers(1, 4).flatmap(lambda n: st.lists(_entry, min_size=n * n, max_size=n * n)
                                  .map(lambda e: sp.Matrix(n, n, e))))
 def test_det_terms_bound_is_an_upper_bound(A):
