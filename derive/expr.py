@@ -265,6 +265,9 @@ def parse_expression(
             if node.func.id not in functions:
                 raise fail(f"calls to {node.func.id!r} are not accepted",
                            f"the functions {', '.join(functions) or '(none)'}")
+            if node.func.id in allowed:  # e.g. a parameter named log: the name is taken
+                raise fail(f"{node.func.id!r} is a parameter of this scene, so {node.func.id}() cannot be "
+                           "called", f"another name for the parameter {node.func.id!r}")
             if node.keywords or len(node.args) != 1 or isinstance(node.args[0], ast.Starred):
                 raise fail(f"{node.func.id}() takes exactly one argument",
                            f"{node.func.id}(x) with one plain argument")
