@@ -388,7 +388,7 @@ def render_chain_module(model: ChainModel, *, bundled: bool = True) -> str:
     w(f"RIGHT = {ch.right.value!r}")
     w(f"UNIFORM = {ch.uniform!r}")
     w(f"EFFECTS = {model.effects!r}")
-    w(f"LINEAR = {model.k3 is None!r}")
+    w(f"LINEAR = {model.linear!r}")
     w(f"RIGID_MODES = {model.rigid_modes}")
     w("MAX_DENSE = 4000")
     w("")
@@ -481,19 +481,31 @@ def render_chain_module(model: ChainModel, *, bundled: bool = True) -> str:
         w("        _ks, _inv_m = _ks1.reshape(_shape), _inv_m1.reshape(_shape)")
         if cubic:
             w("        _k3s = _k3s1.reshape(_shape)")
+    law = model.law is not None  # a spring potential: tensions from spring_force() (derive/potential_code.py)
+    if law:
+        from .potential_code import chain_tension_code
+
+        def tension(d: str, index: str) -> str:
+            return chain_tension_code(model, kw, d, index)
     w("        _f = numpy.empty(numpy.shape(_y))")
     w("        _d = _y[1:] - _y[:-1]")
-    w("        _s = _ks * _d" + (" + _k3s * _d**3" if cubic else ""))
+    if law:
+        w("        _s = " + tension("_d", "i.reshape((-1,) + (1,) * (numpy.ndim(_y) - 1))"))
+    else:
+        w("        _s = _ks * _d" + (" + _k3s * _d**3" if cubic else ""))
     w("        _f[:-1] = _s")
     w("        _f[-1] = 0.0")
     w("        _f[1:] -= _s")
-    if ch.left is End.WALL:
-        w("        _f[0] -= _k_left * _y[0]" + (" + _k3_left * _y[0]**3" if cubic else ""))
-    if ch.right is End.WALL:
-        w("        _f[-1] -= _k_right * _y[-1]" + (" + _k3_right * _y[-1]**3" if cubic else ""))
+    if ch.left is End.WALL:  # the wall spring -1: d = x_0
+        w("        _f[0] -= " + (tension("_y[0]", "-1.0") if law else
+                                 "_k_left * _y[0]" + (" + _k3_left * _y[0]**3" if cubic else "")))
+    if ch.right is End.WALL:  # the wall spring n-1: d = -x_{n-1}
+        w("        _f[-1] " + (f"+= {tension('-_y[-1]', 'n - 1.0')}" if law else
+                               "-= _k_right * _y[-1]" + (" + _k3_right * _y[-1]**3" if cubic else "")))
     if ch.left is End.RING:
         w("        _dr = _y[0] - _y[-1]")
-        w("        _sr = _k_right * _dr" + (" + _k3_right * _dr**3" if cubic else ""))
+        w("        _sr = " + (tension("_dr", "n - 1.0") if law else
+                              "_k_right * _dr" + (" + _k3_right * _dr**3" if cubic else "")))
         w("        _f[-1] += _sr")
         w("        _f[0] -= _sr")
     w("        _f *= _inv_m")
@@ -519,7 +531,14 @@ def render_chain_module(model: ChainModel, *, bundled: bool = True) -> str:
     w("    _xa = numpy.where((_ends[:, 0] >= 0).reshape((-1,) + _extra), _x[_ends[:, 0]], 0.0)")
     w("    _xb = numpy.where((_ends[:, 1] >= 0).reshape((-1,) + _extra), _x[_ends[:, 1]], 0.0)")
     w("    _d = _xb - _xa")
-    w("    _e = 0.5 * numpy.sum(_m * _v**2, axis=0) + 0.5 * numpy.sum(_kk.reshape((-1,) + _extra) * _d**2, axis=0)")
+    if law:  # V(d) - V(0) per spring; spring index i of each spring_ends() row
+        w(f"    i = (numpy.arange(_kk.shape[0], dtype=float) - (1.0 if _LEFT == {End.WALL.value!r} else 0.0))"
+          ".reshape((-1,) + _extra)")
+        w("    i = numpy.where(i < n - 1, i, n - 1.0)")
+        w("    _e = 0.5 * numpy.sum(_m * _v**2, axis=0) + numpy.sum("
+          + chain_tension_code(model, kw, "_d", "i").replace("spring_force(", "spring_energy(", 1) + ", axis=0)")
+    else:
+        w("    _e = 0.5 * numpy.sum(_m * _v**2, axis=0) + 0.5 * numpy.sum(_kk.reshape((-1,) + _extra) * _d**2, axis=0)")
     if cubic:
         w(f"    i = numpy.arange(_kk.shape[0], dtype=float) - (1.0 if _LEFT == {End.WALL.value!r} else 0.0)")
         w(f"    _k3s = numpy.broadcast_to(_spring_k3(i, {kw}), _kk.shape)")
@@ -527,6 +546,10 @@ def render_chain_module(model: ChainModel, *, bundled: bool = True) -> str:
     if model.g is not None:
         w(f"    _e = _e - ({_p(model.g)}) * numpy.sum(_m * _x, axis=0)")
     w("    return _e")
+    if law:
+        from .potential_code import chain_law_lines
+
+        w_lines.extend(chain_law_lines(model, sig))
     from .loadgen import chain_load_code
 
     w_lines.extend(chain_load_code(model, sig, kw))

@@ -35,6 +35,12 @@ class _Printer(NumPyPrinter):
     def _print_Abs(self, expr):
         return f"numpy.abs({self._print(expr.args[0])})"
 
+    def _print_expm1mx(self, expr):  # derive.stable_laws: exp(z) - 1 - z, a private helper of the module
+        return f"_expm1mx({self._print(expr.args[0])})"
+
+    def _print_log1pmx(self, expr):  # log(1 + z) - z
+        return f"_log1pmx({self._print(expr.args[0])})"
+
 
 def _printer() -> NumPyPrinter:
     return _Printer({"fully_qualified_modules": True, "allow_unknown_functions": False})
@@ -57,7 +63,7 @@ def _p(expr) -> str:
 
 #: Module constants that function bodies read; bodies use private aliases (``_N``) so that a
 #: parameter (a keyword argument) of the same name cannot shadow them.
-_BODY_CONSTANTS = ("N", "SPRING_ENDS", "DAMPER_ENDS", "RIGID_MODES", "MAX_DENSE", "LEFT")
+_BODY_CONSTANTS = ("N", "SPRING_ENDS", "DAMPER_ENDS", "RIGID_MODES", "MAX_DENSE", "LEFT", "DEFAULTS", "PARAMETERS")
 _DEF = re.compile(r"^def ([A-Za-z]\w*)\(", re.M)
 
 
@@ -220,7 +226,7 @@ def render_module(model: Model, modes: ModeSet, *, bundled: bool = True) -> str:
     w(f"MASS_NAMES = {tuple(sc.mass_names)!r}")
     w(f"N = {n}")
     w(f"EFFECTS = {tuple(effects)!r}")
-    w(f"LINEAR = {sc.linear!r}")
+    w(f"LINEAR = {model.linear!r}")
     w("#: Spring ends as mass indices; -1 is a wall.")
     w(f"SPRING_ENDS = {tuple((a, b) for a, b, *_ in model.springs)!r}")
     if model.dampers:
@@ -237,9 +243,17 @@ def render_module(model: Model, modes: ModeSet, *, bundled: bool = True) -> str:
     w(f"    return {_array([_p(m) for m in model.masses])}")
     w("")
     w("")
+    laws = model.equilibrium is not None  # spring potentials (derive/potential_code.py)
     w(f"def spring_constants({sig}):")
-    w('    """Linear stiffness of each spring in SPRING_ENDS order, shape (S,)."""')
-    w(f"    return {_array([_p(k) for _, _, k, _, _ in model.springs])}")
+    w('    """Linear stiffness of each spring in SPRING_ENDS order, shape (S,)' + (
+        " (potentials: V''(d) at the equilibrium)" if laws else "") + '."""')
+    from .potential_code import dense_spring_constant_lines
+
+    numeric_k = dense_spring_constant_lines(model, sig, ", ".join(f"{p}={p}" for p in params)) if laws else None
+    if numeric_k:
+        lines.extend(numeric_k)
+    else:
+        w(f"    return {_array([_p(k) for _, _, k, _, _ in model.springs])}")
     if any(k3 is not None for *_, k3, _ in model.springs):
         w("")
         w("")
@@ -345,7 +359,11 @@ def render_module(model: Model, modes: ModeSet, *, bundled: bool = True) -> str:
     w("    -------")
     w("    ndarray, shape (N, ...)")
     w('    """')
-    if dense:
+    if laws:
+        from .potential_code import dense_acceleration_lines
+
+        lines.extend(dense_acceleration_lines(model, kwcall))
+    elif dense:
         w(f"    {xs} = _x")
         w("    _out = numpy.empty(numpy.shape(_x))")
         for i in range(n):
@@ -359,7 +377,7 @@ def render_module(model: Model, modes: ModeSet, *, bundled: bool = True) -> str:
     w("")
     w("")
     w(f"def make_acceleration({sig}):")
-    if sc.linear:
+    if model.linear:
         w('    """acceleration() with the parameters bound: -M⁻¹K' + (" and g" if model.g is not None else "")
           + ' formed once; x shape (N,) or (N, B)."""')
         w(f"    _inv_m = 1.0 / masses({kwcall})")
@@ -475,7 +493,12 @@ def render_module(model: Model, modes: ModeSet, *, bundled: bool = True) -> str:
     w(f"def energy(_x, _v{kw}):")
     w('    """Total energy T + V' + (" (V includes gravity's potential)" if model.g is not None else "")
       + '; x, v shape (N, ...), result shape (...)."""')
-    if dense:
+    if laws:
+        from .potential_code import dense_energy_lines, dense_law_lines
+
+        lines.extend(dense_energy_lines(model, kwcall))
+        lines.extend(dense_law_lines(model, sig, kwcall))
+    elif dense:
         w(f"    {xs} = _x")
         w(f"    {vs} = _v")
         w(f"    return {_p(model.energy)}")

@@ -97,6 +97,25 @@ def _refuse_value(file: str, law: SpringLaw, what: str, d_value, why: str, accep
                                        f"{why}; accepted: {accepted}")
 
 
+def _at_rest_finite(file: str, law: SpringLaw, subs: dict) -> None:
+    """V, V', V'' finite at d = 0, where Newton starts (e.g. not r0/d: write the potential in the
+    extension from the rest length, r = r0 + d)."""
+    with mpmath.workdps(30):
+        for name, expr in (("V", law.energy), ("V'", law.force), ("V''", law.stiffness)):
+            f = sp.lambdify([law.d] + list(subs), expr, modules="mpmath")
+            try:
+                v = f(mpmath.mpf(0), *[_mpv(r, 30) for r in subs.values()])
+            except (ZeroDivisionError, ValueError, OverflowError, TypeError):
+                v = mpmath.nan
+            if isinstance(v, mpmath.mpc) and v.imag == 0:
+                v = v.real
+            if not _finite(v):
+                raise SceneError(file, law.where, f"{sp.sstr(law.energy)}: {name}(0) = {mpmath.nstr(v, 6)} is not "
+                                 "finite at the rest configuration d = 0; accepted: a potential finite and twice "
+                                 "differentiable at d = 0, written in the extension from the rest length "
+                                 "(e.g. r = r0 + d for a pair at distance r)")
+
+
 def check_law(file: str, law: SpringLaw, d_value, subs: dict, *, closed_form: sp.Expr | None = None) -> sp.Expr:
     """V, V', V'' finite at ``d_value`` and V'' > 0 there; returns V''(d_value) (closed form or Float).
 
@@ -293,6 +312,9 @@ def solve(file: str, n: int, springs, loads, params: dict, values: dict, pieces,
         Free pieces (mass indices) with their masses.
     """
     subs = exact_values(params, values)
+    for _, _, law in springs:
+        if law.given:
+            _at_rest_finite(file, law, subs)
     grad = [-(load) for load in loads]
     for a, b, law in springs:
         t0 = law.force.subs(law.d, 0)

@@ -30,7 +30,9 @@ stencil (:data:`Backend.NUMPY`), which is also what the tests compare with.
 Chain ends follow the generated modules: ``free``, ``wall`` (a spring
 ``k(-1)`` to a wall on the left, ``k(n-1)`` on the right) or ``ring`` (the
 spring ``k(n-1)`` closes n-1 to 0); masses and springs may depend on the
-index (then read from arrays) and springs may be cubic (``k d + k3 d³``).
+index (then read from arrays) and springs may be cubic (``k d + k3 d³``) or any potential
+``V(d)`` whose law is free of the index: its tension ``V'(d)``, compiled from the generated
+module's ``spring_force`` (:mod:`numeric.potential_law`), takes the cubic term's place.
 """
 
 import enum
@@ -102,7 +104,12 @@ class FusedVerlet:
         coeffs = ChainCoefficients.from_module(module, params, n)
         values = dict(module.DEFAULTS)
         values.update(params or {})
-        backend = default_backend() if backend is None else backend
+        law_missing = hasattr(module, "spring_force") and coeffs.law is None  # an index-dependent potential
+        if backend is None:
+            backend = Backend.NUMPY if law_missing else default_backend()
+        if backend is Backend.NUMBA and law_missing and available():
+            raise RunRefused("the fused chain step compiles index-free spring potentials only; this chain's "
+                             "potential depends on i: use the NumPy backend")
         if backend is Backend.NUMBA and not available():
             raise RunRefused("the fused chain step needs numba: install the `fast` extra "
                              "(pip install 'springchain[fast]') or use the NumPy backend")

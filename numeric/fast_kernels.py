@@ -60,7 +60,8 @@ def _rows(c, a, b):
 
 
 def _cubic(s, c, i, d):
-    """``s + c_i d³``, or ``s`` when c is None (a linear chain) (numba overload)."""
+    """``s + c_i d³``, ``s`` when c is None (a linear chain), ``s + c(d)`` when c is a compiled spring law
+    (numba overload)."""
     return s if c is None else s + _at(c, i) * d * d * d
 
 
@@ -338,6 +339,8 @@ def _compiled():
     def _cubic_ol(s, c, i, d):
         if isinstance(c, (types.NoneType, types.Omitted)):
             return lambda s, c, i, d: s
+        if isinstance(c, types.Dispatcher):  # a spring potential's compiled tension V'(d) (s is 0 then)
+            return lambda s, c, i, d: s + c(d)
         if is_array(c):
             return lambda s, c, i, d: s + c[i] * d * d * d
         return lambda s, c, i, d: s + c * d * d * d

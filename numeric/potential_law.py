@@ -1,0 +1,45 @@
+"""A chain module's spring potential as a compiled scalar function, for the fused kernels.
+
+The generated ``spring_force(d, *parameters)`` of a ``[chain]`` scene with ``potential = "EXPR"``
+(:mod:`springchain.derive.potential_code`) is NumPy ufuncs and arithmetic only; numba compiles it,
+and :func:`compiled_law` binds the parameter values as compile-time constants, so the kernels of
+:mod:`numeric.fast_kernels` call ``law(d)`` inline in their loops (the law takes the place of the
+cubic term; one specialisation per law and parameter set, compiled in each process: numba cannot
+cache functions that take other functions). Index-dependent laws (``POTENTIAL_LAW_INDEXED``) are
+not compiled: their chains run the module's NumPy stencil.
+"""
+
+from __future__ import annotations
+
+from types import ModuleType
+
+
+def law_indexed(module: ModuleType) -> bool:
+    """Whether the module's spring law depends on the spring index i."""
+    return bool(getattr(module, "POTENTIAL_LAW_INDEXED", False))
+
+
+def compiled_law(module: ModuleType, values: dict[str, float]):
+    """``law(d) = V'(d)`` of the module at ``values``, compiled by numba; None when numba is missing
+    or the law depends on the spring index."""
+    from .fast_kernels import available
+
+    if law_indexed(module) or not available():
+        return None
+    import numba
+
+    args = tuple(float(values[p]) for p in module.PARAMETERS)
+    force = numba.njit(module.spring_force)
+
+    @numba.njit
+    def law(d):
+        return force(d, *args)
+
+    return law
+
+
+def numpy_law(module: ModuleType, values: dict[str, float]):
+    """``law(d, i) = V'(d)`` through the module's NumPy function (any law)."""
+    if law_indexed(module):
+        return lambda d, i: module.spring_force(d, i, **values)
+    return lambda d, i: module.spring_force(d, **values)
