@@ -63,7 +63,7 @@ def _p(expr) -> str:
 
 #: Module constants that function bodies read; bodies use private aliases (``_N``) so that a
 #: parameter (a keyword argument) of the same name cannot shadow them.
-_BODY_CONSTANTS = ("N", "SPRING_ENDS", "DAMPER_ENDS", "RIGID_MODES", "MAX_DENSE", "LEFT", "DEFAULTS", "PARAMETERS")
+_BODY_CONSTANTS = ("N", "SPRING_ENDS", "DAMPER_ENDS", "RIGID_MODES", "MAX_DENSE", "LEFT")
 _DEF = re.compile(r"^def ([A-Za-z]\w*)\(", re.M)
 
 

@@ -118,7 +118,7 @@ def dense_law_lines(model, sig: str, kwcall: str) -> list[str]:
                   "    The equilibrium has no closed form; springchain solved it at the scene's parameter values.",
                   '    Other values are refused: change [parameters] and regenerate."""',
                   f"    _given = ({', '.join(f'{p}' for p in model.params)}{',' if len(model.params) == 1 else ''})",
-                  "    if _given != tuple(_DEFAULTS[_k] for _k in _PARAMETERS):",
+                  f"    if _given != {tuple(float(model.scene.parameters[p]) for p in model.params)!r}:",
                   "        raise ValueError('equilibrium: solved for DEFAULTS only (no closed form); "
                   "regenerate the module with the new [parameters]')",
                   "    return numpy.array(_EQUILIBRIUM_AT_DEFAULTS, dtype=float)"]

@@ -179,7 +179,7 @@ class ChainModal:
         if not getattr(module, "CHAIN", False):
             raise RunRefused("ChainModal needs a [chain] scene's generated module; use numeric.modal for others")
         if not bool(module.LINEAR):
-            raise RunRefused("no exact solution: this chain has cubic springs (use an integrator, e.g. verlet)")
+            raise RunRefused("no exact solution: this chain has cubic springs or spring potentials (use an integrator, e.g. verlet)")
         values = dict(module.DEFAULTS)
         values.update(params or {})
         x0, v0 = _initial(x0, v0)

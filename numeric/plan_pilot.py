@@ -59,7 +59,7 @@ def check_pilot(system: System, what: str) -> None:
                              f"{'nonlinear' if not system.linear else 'index-dependent'})")
         return
     if not system.exact_available:
-        why = ("cubic springs" if not system.linear else
+        why = ("cubic springs or spring potentials" if not system.linear else
                "a loaded [chain] too long for its dense exact solution" if system.chain else
                "forces or ground acceleration that are not constant + harmonic")
         raise RunRefused(f"{what} measures against the exact solution; this scene has none ({why})")

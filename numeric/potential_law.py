@@ -14,6 +14,9 @@ from __future__ import annotations
 from types import ModuleType
 
 
+_NOTED = False
+
+
 def law_indexed(module: ModuleType) -> bool:
     """Whether the module's spring law depends on the spring index i."""
     return bool(getattr(module, "POTENTIAL_LAW_INDEXED", False))
@@ -28,6 +31,13 @@ def compiled_law(module: ModuleType, values: dict[str, float]):
         return None
     import numba
 
+    global _NOTED
+    if not _NOTED:
+        from .progress import note
+
+        note("compiling the chain kernels for this spring potential (numba, several seconds; "
+             "a law's kernels are compiled in each run)")
+        _NOTED = True
     args = tuple(float(values[p]) for p in module.PARAMETERS)
     force = numba.njit(module.spring_force)
 

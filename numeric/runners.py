@@ -126,7 +126,7 @@ class ExactMethod(Method):
     def refusal(self, system: System) -> str | None:
         if system.exact_available:
             return None
-        why = ("this scene has cubic springs" if not system.linear else
+        why = ("this scene has cubic springs or spring potentials" if not system.linear else
                f"a loaded [chain] of more than {LOADED_CHAIN_EXACT_MAX} masses (the exact solution is dense)"
                if system.chain and system.n > LOADED_CHAIN_EXACT_MAX else
                "its external forces or ground acceleration are not constant + harmonic")

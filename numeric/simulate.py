@@ -67,7 +67,7 @@ def applicable(system: System) -> str:
     if not system.exact_available:
         from .system import LOADED_CHAIN_EXACT_MAX
 
-        why = ("cubic springs" if not system.linear else
+        why = ("cubic springs or spring potentials" if not system.linear else
                f"a loaded [chain] of more than {LOADED_CHAIN_EXACT_MAX} masses"
                if system.chain and not system.conservative and system.n > LOADED_CHAIN_EXACT_MAX else
                "non-harmonic forces or ground acceleration")

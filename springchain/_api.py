@@ -307,7 +307,7 @@ def _check_disk(scene: Scene, steps: int, record_every: int, methods: int, out: 
 def simulate(scene: str | Path | Scene, methods: list[str] | None = None, dt: float | None = None,
              steps: int | None = None, record_every: int | None = None, *, spectrum: str = "svd",
              rtol: float = 1e-10, atol: float = 1e-12, out: str | Path | None = None,
-             figures: bool = False, progress: bool | None = None) -> Simulation:
+             figures: bool = False, progress: bool | None = None, modal_energy: bool = False) -> Simulation:
     """Simulate a scene from its initial state with exact and numerical methods.
 
     Parameters
@@ -331,6 +331,10 @@ def simulate(scene: str | Path | Scene, methods: list[str] | None = None, dt: fl
     progress : bool, optional
         Progress on stderr of every phase longer than about a second (default: on; a bar on a
         terminal, a plain line every few seconds otherwise). ``False`` silences it.
+    modal_energy : bool
+        Also record ``modal_energy_<method>`` (S × N): the harmonic energy ½(q̇ⱼ² + ωⱼ² qⱼ²) of each
+        linear normal mode about the equilibrium, ascending ω (:mod:`numeric.modal_energy`), in
+        ``extra`` and the NPZ, and with ``figures`` the figure ``<scene>-modal-energy.png``.
 
     Returns
     -------
@@ -402,6 +406,18 @@ def simulate(scene: str | Path | Scene, methods: list[str] | None = None, dt: fl
             if figures:
                 with phase("figures", enabled=progress):
                     figs = tuple(sim.write_figures(out, sc.name, sc.mass_names, system, runs))
+    if modal_energy:
+        from .numeric.modal_energy import modal_energy_figure, modal_energy_record
+
+        with phase("modal energies", enabled=progress):
+            energies, omega = modal_energy_record(system, x, v)
+            extra.update(energies)
+            summary["modal_energy"] = {m: {"initial": e[0].tolist()[:10], "final": e[-1].tolist()[:10]}
+                                       for m, e in ((k[len("modal_energy_"):], e) for k, e in energies.items())}
+            if npz is not None:
+                sim.save_npz(npz, t, x, v, extra)
+            if figures and out is not None:
+                figs = figs + (modal_energy_figure(Path(out), sc.name, t, energies, omega),)
     summary.update({"scene": sc.name, "module": origin, "dt": dt, "steps": steps, "t_end": steps * dt,
                     "npz": None if npz is None else str(npz), "figures": [str(p) for p in figs],
                     "methods_that_apply": sim.applicable(system),

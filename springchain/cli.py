@@ -132,7 +132,7 @@ def _simulate(args, scene) -> "object":
     try:
         return simulate(scene, methods=args.method, dt=args.dt, steps=args.steps, record_every=args.record_every,
                         spectrum=args.spectrum, rtol=args.rtol, atol=args.atol, out=args.out,
-                        figures=not args.no_figures)
+                        figures=not args.no_figures, modal_energy=getattr(args, "modal_energy", False))
     except SceneError as exc:  # name the flag that set the value, when one did
         flag = {"steps": "--steps" if args.steps is not None else "simulation.steps"}.get(exc.key)
         if flag and flag != exc.key:
@@ -345,6 +345,10 @@ def build_parser() -> argparse.ArgumentParser:
                    help="absolute tolerance of the adaptive methods (default: %(default)g)")
     s.add_argument("--out", default="springchain-out", help="output folder (default: %(default)s)")
     s.add_argument("--no-figures", action="store_true", help="write only the NPZ")
+    s.add_argument("--modal-energy", action="store_true",
+                   help="also record modal_energy_<method> (S x N): the energy 1/2 (q'^2 + omega^2 q^2) of each "
+                        "linear normal mode about the equilibrium (ascending omega), and draw the lowest modes' "
+                        "energies over time (DIR/<name>-modal-energy.png)")
     s.add_argument("--json", action="store_true", help="print a JSON summary instead of text")
     s.set_defaults(func=cmd_simulate)
     b = sub.add_parser("bench", help="work-precision benchmark of every method (figures and a table)",
