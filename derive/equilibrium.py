@@ -100,12 +100,16 @@ def _refuse_value(file: str, law: SpringLaw, what: str, d_value, why: str, accep
 def _at_rest_finite(file: str, law: SpringLaw, subs: dict) -> None:
     """V, V', V'' finite at d = 0, where Newton starts (e.g. not r0/d: write the potential in the
     extension from the rest length, r = r0 + d)."""
+    if any(e.has(sp.DiracDelta, sp.Heaviside, sp.sign, sp.Abs) for e in (law.force, law.stiffness)):
+        raise SceneError(file, law.where, f"{sp.sstr(law.energy)}: has a kink or a jump (V' or V'' holds Abs or "
+                         "sign): not twice differentiable; accepted: a potential with two continuous derivatives, "
+                         "e.g. d**2 instead of sqrt(d**2)")
     with mpmath.workdps(30):
         for name, expr in (("V", law.energy), ("V'", law.force), ("V''", law.stiffness)):
             f = sp.lambdify([law.d] + list(subs), expr, modules="mpmath")
             try:
                 v = f(mpmath.mpf(0), *[_mpv(r, 30) for r in subs.values()])
-            except (ZeroDivisionError, ValueError, OverflowError, TypeError):
+            except (ZeroDivisionError, ValueError, OverflowError, TypeError, NameError):
                 v = mpmath.nan
             if isinstance(v, mpmath.mpc) and v.imag == 0:
                 v = v.real
@@ -140,7 +144,7 @@ def check_law(file: str, law: SpringLaw, d_value, subs: dict, *, closed_form: sp
             f = sp.lambdify([law.d] + list(subs), expr, modules="mpmath")
             try:
                 v = f(dv, *[_mpv(r, dps) for r in subs.values()])
-            except (ZeroDivisionError, ValueError, OverflowError, TypeError):
+            except (ZeroDivisionError, ValueError, OverflowError, TypeError, NameError):
                 v = mpmath.nan
             if isinstance(v, mpmath.mpc) and abs(v.imag) <= mpmath.mpf(10) ** (-dps + 5) * max(abs(v.real), 1):
                 v = v.real

@@ -192,35 +192,51 @@ def delta(f: sp.Expr, d: sp.Symbol) -> sp.Expr:
     return f - _at0(f, d)  # anything else (Abs, sign, ...): as it is
 
 
-def delta2(f: sp.Expr, d: sp.Symbol) -> sp.Expr:
+def delta2(f: sp.Expr, d: sp.Symbol, fallbacks: list | None = None) -> sp.Expr:
     """``f(d) − f(0) − f'(0)·d`` in a form without cancellation at small d where it can.
 
-    Exact forms for sums, products, powers of functions that vanish at 0, polynomials in d and
-    exp; anything else falls back to ``Δf − f'(0) d`` (which cancels to first order).
+    Exact forms for sums, products, powers (``Δ₂ u**p = u0**p [expm1mx(p log1p z) + p log1pmx(z)
+    + p Δ₂u/u0]`` with ``z = Δu/u0``), exp, log, cosh and cos of functions vanishing at 0, and
+    polynomials in d; anything else falls back to ``Δf − f'(0) d`` (which cancels to first order)
+    and is appended to ``fallbacks`` if given.
     """
     if not f.has(d) or f == d:
         return sp.Integer(0)
     if f.is_Add:
-        return sp.Add(*(delta2(t, d) for t in f.args))
+        return sp.Add(*(delta2(t, d, fallbacks) for t in f.args))
     if f.is_Mul:
         const = sp.Mul(*(a for a in f.args if not a.has(d)))
         parts = [a for a in f.args if a.has(d)]
         if len(parts) == 1:
-            return const * delta2(parts[0], d)
+            return const * delta2(parts[0], d, fallbacks)
         a, b = parts[0], sp.Mul(*parts[1:])
         a0, a1 = _at0(a, d), _at0(sp.diff(a, d), d)
-        return const * (delta2(a, d) * b + a1 * d * delta(b, d) + a0 * delta2(b, d))
+        return const * (delta2(a, d, fallbacks) * b + a1 * d * delta(b, d) + a0 * delta2(b, d, fallbacks))
     if f.is_Pow and not f.exp.has(d):
         base, p = f.args
-        if _is_zero(_at0(base, d)) and p.is_number and p >= 2:  # f(0) = f'(0) = 0
-            return delta(base, d) ** p
+        u0 = _at0(base, d)
+        if _is_zero(u0):
+            if p.is_number and p >= 2:  # f(0) = f'(0) = 0
+                return delta(base, d) ** p
+        elif p.is_Integer and 2 <= p <= MAX_FACTORED_POWER:  # u² = u0² + 2 u0 Δu + Δu², ...
+            du = delta(base, d)
+            return sp.Add(*(sp.binomial(p, j) * u0 ** (p - j) * du**j for j in range(2, int(p) + 1))) \
+                + p * u0 ** (p - 1) * delta2(base, d, fallbacks)
+        else:
+            z = delta(base, d) / u0
+            return u0**p * (expm1mx(p * log1p(z)) + p * log1pmx(z) + p * delta2(base, d, fallbacks) / u0)
     if isinstance(f, sp.exp):
         u = f.args[0]
-        return sp.exp(_at0(u, d)) * (expm1mx(delta(u, d)) + delta2(u, d))
+        return sp.exp(_at0(u, d)) * (expm1mx(delta(u, d)) + delta2(u, d, fallbacks))
     if isinstance(f, (sp.log, log1p)):  # log(u) = log(u0) + log1p(z), z = du/u0 (u0 -> 1 + u0 for log1p)
         u = f.args[0]
         u0 = _at0(u, d) + (1 if isinstance(f, log1p) else 0)
-        return log1pmx(delta(u, d) / u0) + delta2(u, d) / u0
+        return log1pmx(delta(u, d) / u0) + delta2(u, d, fallbacks) / u0
+    if isinstance(f, (sp.cosh, sp.cos)) and _is_zero(_at0(f.args[0], d)):  # cosh u - 1 = 2 sinh²(u/2)
+        h = delta(f.args[0], d) / 2
+        return 2 * sp.sinh(h) ** 2 if isinstance(f, sp.cosh) else -2 * sp.sin(h) ** 2
+    if fallbacks is not None:
+        fallbacks.append(f)
     return delta(f, d) - _at0(sp.diff(f, d), d) * d
 
 
@@ -233,21 +249,31 @@ def stable_force(force: sp.Expr, d: sp.Symbol) -> sp.Expr:
 def stable_energy(energy: sp.Expr, d: sp.Symbol) -> sp.Expr:
     """``V(d) − V(0)`` for generated code: second differences when V'(0) = 0, else first.
 
-    SymPy's ``factor`` is tried first (a square such as Morse's or the Lennard-Jones pair's
-    becomes a product whose factors vanish at 0, exactly); it is kept only if it is no longer
-    than eight times the plain form.
+    Term by term (each additive term of V loses its own linear part, so linear parts that cancel
+    between terms, as in Toda's ``a/b exp(-b d) + a d``, never meet); a term whose second difference
+    has no exact form is tried through SymPy's ``factor`` too (a Morse or Lennard-Jones energy becomes
+    a square of a function vanishing at 0), kept if it is no longer than eight times the term.
     """
-    shifted = energy - _at0(energy, d)
     slope = _at0(sp.diff(energy, d), d)
-    candidates = [shifted]
-    try:
-        factored = sp.factor(shifted, d)
-    except (sp.PolynomialError, NotImplementedError):  # pragma: no cover - SymPy gives up
-        factored = shifted
-    if factored != shifted and sp.count_ops(factored) <= 8 * max(sp.count_ops(shifted), 1):
-        candidates.insert(0, factored)
-    form = candidates[0]
-    return delta2(form, d) if _is_zero(slope) else delta(form, d)
+    if not _is_zero(slope):
+        return delta(energy, d)
+    out = []
+    for term in sp.Add.make_args(energy):
+        missed: list = []
+        form = delta2(term, d, missed)
+        if missed:
+            shifted = term - _at0(term, d)
+            try:
+                factored = sp.factor(shifted, d)
+            except (sp.PolynomialError, NotImplementedError):  # pragma: no cover - SymPy gives up
+                factored = shifted
+            if factored != shifted and sp.count_ops(factored) <= 8 * max(sp.count_ops(shifted), 1):
+                again: list = []
+                alt = delta2(factored, d, again)
+                if not again:
+                    form = alt
+        out.append(form)
+    return sp.Add(*out)
 
 
 __all__ = ["expm1", "log1p", "expm1mx", "log1pmx", "HELPER_NAMES", "delta", "delta2", "stable_force", "stable_energy", "plain"]

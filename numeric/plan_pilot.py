@@ -58,19 +58,37 @@ def check_pilot(system: System, what: str) -> None:
                              f"a uniform linear [chain] (this one has {system.n} masses and is "
                              f"{'nonlinear' if not system.linear else 'index-dependent'})")
         return
-    if not system.exact_available:
+    if not system.exact_available and not tight_reference_applies(system):
         why = ("cubic springs or spring potentials" if not system.linear else
                "a loaded [chain] too long for its dense exact solution" if system.chain else
                "forces or ground acceleration that are not constant + harmonic")
         raise RunRefused(f"{what} measures against the exact solution; this scene has none ({why})")
 
 
+def tight_reference_applies(system: System) -> bool:
+    """A nonlinear conservative scene of at most MAX_MASSES masses: no exact solution, so plan measures
+    against a tight DOP853 reference (:data:`TIGHT_RTOL`) instead."""
+    return system.conservative and not system.linear and system.n <= MAX_MASSES
+
+
+#: Tolerance of the reference of nonlinear scenes (its own error is ~1e-12 of the state's size).
+TIGHT_RTOL = 1e-13
+
+
 class ExactReference:
-    """The exact solution at the times of a uniform grid: ``at(t) -> (x, v)``, shapes (S, N)."""
+    """The exact solution at the times of a uniform grid: ``at(t) -> (x, v)``, shapes (S, N).
+
+    For a nonlinear conservative scene (no exact solution) the reference is DOP853 at rtol
+    :data:`TIGHT_RTOL` instead, and ``exact`` is False.
+    """
 
     def __init__(self, system: System, x0: np.ndarray, v0: np.ndarray):
         self.system, self.x0, self.v0 = system, np.asarray(x0, dtype=float), np.asarray(v0, dtype=float)
-        if system.conservative:
+        self.exact = not tight_reference_applies(system)
+        if not self.exact:
+            self.description = (f"reference: DOP853 at rtol {TIGHT_RTOL:g} (no exact solution: "
+                                "nonlinear springs), float64")
+        elif system.conservative:
             from .chain_modal import ChainModal
 
             self._chain = ChainModal.from_module(system.module, system.params, self.x0, self.v0)
@@ -85,6 +103,12 @@ class ExactReference:
     def compute(self, t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """x, v at the uniform grid ``t``, computed afresh (what the exact method costs)."""
         t = np.asarray(t, dtype=float)
+        if not self.exact:
+            from .plan import adaptive_atol
+
+            res = ADAPTIVE["dop853"]().solve(Problem.from_system(self.system), self.x0, self.v0, t, TIGHT_RTOL,
+                                            adaptive_atol(self.x0, self.v0, TIGHT_RTOL * 1e-2))
+            return np.asarray(res.x[..., 0]), np.asarray(res.v[..., 0])
         if self.system.conservative:
             x, v = self._chain.at(t)
         else:
@@ -174,6 +198,7 @@ class PilotLaw:
     size: float
     stages: float
     pilots: tuple  # ((h, error), ...) of the pilot runs, h decreasing
+    against: str = "the exact solution"
 
     def error(self, h: float, t_end: float) -> float:
         steps = t_end / h
@@ -183,7 +208,7 @@ class PilotLaw:
     def label(self) -> str:
         grow = "" if math.isinf(self.t_pilot) else f", error ∝ T beyond t = {self.t_pilot:g}"
         runs = ", ".join(f"h = {h:.3g}: {e:.2g}" for h, e in self.pilots[-2:])
-        return f"pilot-calibrated C·h^{self.p:.2g} against the exact solution ({runs}{grow})"
+        return f"pilot-calibrated C·h^{self.p:.2g} against {self.against} ({runs}{grow})"
 
 
 def _pilot_law(system: System, integ: Integrator, problem: Problem, ref: ExactReference, x0, v0,
@@ -227,7 +252,7 @@ def _pilot_law(system: System, integ: Integrator, problem: Problem, ref: ExactRe
     C = max(e / hh**p for hh, e in pilots)
     h1 = pilots[0][0]
     return PilotLaw(C, p, h1, t_pilot if t_pilot < t_end * (1 - 1e-9) else math.inf, size, stages,
-                    tuple(pilots))
+                    tuple(pilots), "the exact solution" if ref.exact else f"DOP853 at rtol {TIGHT_RTOL:g}")
 
 
 @dataclass(frozen=True)
@@ -245,6 +270,8 @@ class PilotPlanner:
     exact_seconds: float = math.nan
     exact_error: float = math.nan
     reference: str = ""
+    #: Whether the reference is the exact solution (then it is a candidate too); False for nonlinear scenes.
+    exact: bool = True
 
     @classmethod
     def for_system(cls, system: System, x0: np.ndarray, v0: np.ndarray, t_end: float, dt_out: float,
@@ -268,10 +295,12 @@ class PilotPlanner:
             costs[name] = measure_step_cost(wrapped(system, cls_()), problem, x0, v0, h_probe, short, long)
         # the exact method: its cost on the output grid (timed on a sample of it), rounding-level error
         grid = _grid(t_end, dt_out, 1)
-        sample = min(grid.frames, max(2, int(REFERENCE_FLOATS // max(system.n, 1))), 2001)
-        probe = ExactReference(system, x0, v0)
-        secs = measure(lambda: probe.compute(np.arange(sample) * grid.spacing), budget=0.1).seconds
-        exact_seconds = secs * grid.frames / sample
+        exact_seconds = math.nan
+        if ref.exact:
+            sample = min(grid.frames, max(2, int(REFERENCE_FLOATS // max(system.n, 1))), 2001)
+            probe = ExactReference(system, x0, v0)
+            secs = measure(lambda: probe.compute(np.arange(sample) * grid.spacing), budget=0.1).seconds
+            exact_seconds = secs * grid.frames / sample
         size = max([law.size for law in laws.values()] + [float(np.max(np.abs(x0))), 1e-300])
         exact_error = EPS * size * (8.0 + w_max * t_end + math.sqrt(grid.frames))
         laws_a = {}
@@ -290,7 +319,7 @@ class PilotPlanner:
                     continue
                 laws_a[name] = calibrate_adaptive(cls_(), fp, x0, v0, t_ad, g.spacing, reference, scale=size)
         return cls(float(t_end), float(dt_out), system.n, w_max, laws, integs, costs, laws_a, exact_seconds,
-                   exact_error, ref.description)
+                   exact_error, ref.description, ref.exact)
 
     def plan_step(self, name: str, tol: float) -> Candidate:
         law, integ, cost = self.laws[name], self.integrators[name], self.step_costs[name]
@@ -313,15 +342,16 @@ class PilotPlanner:
         ok = rtol >= MIN_RTOL
         rtol = max(min(rtol, 1e-2), MIN_RTOL)
         evals = law.evals(rtol, self.t_end)
+        against = "the exact solution" if self.exact else f"DOP853 at rtol {TIGHT_RTOL:g}"
         return Candidate(ADAPTIVE[name](), None, None, rtol, law.error(rtol, self.t_end),
-                         evals * law.seconds_per_eval, ok, "pilot-calibrated power law in rtol against the exact solution")
+                         evals * law.seconds_per_eval, ok, f"pilot-calibrated power law in rtol against {against}")
 
     def plan(self, tol: float) -> Plan:
         if not (math.isfinite(tol) and tol > 0):
             raise ValueError(f"tolerance must be finite and > 0, got {tol!r}")
         cands = [Candidate(ExactModal(), None, None, None, self.exact_error, self.exact_seconds,
                            self.exact_error <= tol, f"exact ({self.reference.split(': ', 1)[1]}); "
-                           "error at the rounding level")]
+                           "error at the rounding level")] if self.exact else []
         cands += [self.plan_step(name, tol) for name in self.laws]
         cands += [self.plan_adaptive(name, tol) for name in self.adaptive]
         ok = tuple(c for c in cands if c.reachable)
@@ -333,4 +363,4 @@ class PilotPlanner:
 
 
 __all__ = ["PilotPlanner", "PilotLaw", "ExactReference", "needs_pilot", "check_pilot", "wrapped", "full_problem",
-           "adaptive_applies"]
+           "adaptive_applies", "tight_reference_applies"]

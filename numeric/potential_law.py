@@ -11,6 +11,7 @@ not compiled: their chains run the module's NumPy stencil.
 
 from __future__ import annotations
 
+import functools
 from types import ModuleType
 
 
@@ -24,11 +25,17 @@ def law_indexed(module: ModuleType) -> bool:
 
 def compiled_law(module: ModuleType, values: dict[str, float]):
     """``law(d) = V'(d)`` of the module at ``values``, compiled by numba; None when numba is missing
-    or the law depends on the spring index."""
+    or the law depends on the spring index. One compiled law per module and parameter values in a
+    process (the kernels specialised on it are then compiled once too)."""
     from .fast_kernels import available
 
     if law_indexed(module) or not available():
         return None
+    return _compiled_law(module, tuple(float(values[p]) for p in module.PARAMETERS))
+
+
+@functools.lru_cache(maxsize=32)
+def _compiled_law(module: ModuleType, args: tuple):
     import numba
 
     global _NOTED
@@ -38,7 +45,6 @@ def compiled_law(module: ModuleType, values: dict[str, float]):
         note("compiling the chain kernels for this spring potential (numba, several seconds; "
              "a law's kernels are compiled in each run)")
         _NOTED = True
-    args = tuple(float(values[p]) for p in module.PARAMETERS)
     force = numba.njit(module.spring_force)
 
     @numba.njit

@@ -466,11 +466,13 @@ def plan(scene: str | Path | Scene, tol: float, t_end: float | None = None):
     sc = load(scene)
     _check_motion(sc, "plan")
     system, _ = _system(sc)
-    from .numeric.plan_pilot import PilotPlanner, needs_pilot
+    from .numeric.plan_pilot import PilotPlanner, needs_pilot, tight_reference_applies
 
     with single_threaded_blas():
-        # damped, forced, gravity, ground scenes and long uniform chains: calibrated against the exact solution
-        planner = (PilotPlanner if needs_pilot(system) else Planner).for_system(
+        # damped, forced, gravity, ground scenes and long uniform chains: calibrated against the exact solution;
+        # nonlinear (cubic, potential) scenes: against a tight DOP853 reference
+        pilot = needs_pilot(system) or tight_reference_applies(system)
+        planner = (PilotPlanner if pilot else Planner).for_system(
             system, sc.x0, sc.v0, _horizon(sc, t_end), sc.dt * sc.record_every)
         try:
             return planner.plan(tol)
