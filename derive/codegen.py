@@ -492,6 +492,7 @@ def render_module(model: Model, modes: ModeSet, *, bundled: bool = True) -> str:
     w("")
     w(f"def energy(_x, _v{kw}):")
     w('    """Total energy T + V' + (" (V includes gravity's potential)" if model.g is not None else "")
+      + (" (each spring potential counted from its value at rest, V(d) - V(0))" if laws else "")
       + '; x, v shape (N, ...), result shape (...)."""')
     if laws:
         from .potential_code import dense_energy_lines, dense_law_lines
