@@ -121,7 +121,7 @@ def spring_force(_d, alpha, k, m):
 
 def spring_energy(_d, alpha, k, m):
     """Energy V(d) - V(0) of a spring at extension d (elementwise; 0 at rest)."""
-    return (1/6)*_d**2*(2*_d*alpha + 3*k)
+    return (1/3)*_d**3*alpha + (1/2)*_d**2*k
 
 
 def spring_stiffness(_d, alpha, k, m):
