@@ -54,6 +54,32 @@ def _compiled_law(module: ModuleType, args: tuple):
     return law
 
 
+#: Chains with at least this many masses evaluate a potential's forces through the compiled kernel in
+#: every step method (below it the module's NumPy stencil is as fast, and needs no compiling).
+COMPILED_FORCE_MIN_N = 1 << 14
+
+
+def compiled_acceleration(module: ModuleType, values: dict[str, float], n: int):
+    """``a(x)`` of a potential chain through the compiled kernel (x shape (n,) or (n, B)), for the
+    step methods other than Verlet; None below :data:`COMPILED_FORCE_MIN_N` masses, without numba or
+    for an index-dependent law."""
+    if n < COMPILED_FORCE_MIN_N or law_indexed(module):
+        return None
+    from .fast import Backend, FusedVerlet
+    from .fast_kernels import available
+
+    if not available():
+        return None
+    import numpy as np
+
+    fv = FusedVerlet.from_module(module, values, n, 1.0, Backend.NUMBA)
+
+    def acceleration(x):
+        return fv.force(np.ascontiguousarray(x, dtype=np.float64))
+
+    return acceleration
+
+
 def numpy_law(module: ModuleType, values: dict[str, float]):
     """``law(d, i) = V'(d)`` through the module's NumPy function (any law)."""
     if law_indexed(module):

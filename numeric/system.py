@@ -86,6 +86,12 @@ class System:
     def acceleration_fn(self) -> Callable[[np.ndarray], np.ndarray]:
         """a(x) with everything that does not depend on x computed once."""
         mod, p = self.module, self.params
+        if self.chain and hasattr(mod, "spring_force"):  # a long potential chain: the law compiled by numba
+            from .potential_law import compiled_acceleration
+
+            fast = compiled_acceleration(mod, p, self.n)
+            if fast is not None:
+                return fast
         if hasattr(mod, "make_acceleration"):
             return mod.make_acceleration(**p, n=self.n) if self.chain else mod.make_acceleration(**p)
         return lambda x: mod.acceleration(x, **p)
