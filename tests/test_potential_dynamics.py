@@ -81,8 +81,11 @@ def chain_module(scene_from_text, import_source, name, pot, params, n, left, rig
 
 
 @pytest.mark.parametrize("law", sorted(LAWS))
-def test_law_kernel_equals_numpy_stencil(law, scene_from_text, import_source):
+def test_law_kernel_equals_numpy_stencil(law, scene_from_text, import_source, monkeypatch):
+    from springchain.numeric import potential_law
     from springchain.numeric.fast import Backend, FusedVerlet, available
+
+    monkeypatch.setattr(potential_law, "COMPILED_FORCE_MIN_N", 1)  # the other step methods' force, at n = 9
 
     if not available():
         pytest.skip("numba is not installed")
@@ -98,6 +101,8 @@ def test_law_kernel_equals_numpy_stencil(law, scene_from_text, import_source):
             assert fused.coefficients.law is not None
             a1, a2 = fused.force(x.copy()), plain.force(x.copy())
             assert np.allclose(a1, a2, rtol=1e-14, atol=1e-15 * np.max(np.abs(a2)))
+            a3 = potential_law.compiled_acceleration(mod, dict(mod.DEFAULTS), 9)(x.T.copy().T)  # not contiguous
+            assert np.allclose(a3, a2, rtol=1e-14, atol=1e-15 * np.max(np.abs(a2)))
             s1 = [x.copy(), v.copy(), a1.copy()]
             s2 = [x.copy(), v.copy(), a2.copy()]
             fused.advance(*s1, 101)
