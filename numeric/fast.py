@@ -46,7 +46,7 @@ import numpy as np
 from ..ends import End
 from .errors import RunRefused
 from .fast_coefficients import ChainCoefficients
-from .fast_kernels import BLOCK_ELEMENTS, _compiled, _Mode, available, stream_update
+from .fast_kernels import BLOCK_ELEMENTS, _compiled, _compiled_for_laws, _Mode, available, stream_update
 
 
 class Backend(enum.Enum):
@@ -126,7 +126,7 @@ class FusedVerlet:
         return self.acceleration(x)
 
     def _kernels(self):
-        k = _compiled()
+        k = _compiled_for_laws() if self.coefficients.law is not None else _compiled()
         return k.force, k.sweep, k.half_kick
 
     # -- building blocks ------------------------------------------------------------------

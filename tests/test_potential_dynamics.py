@@ -113,6 +113,20 @@ def test_law_kernel_equals_numpy_stencil(law, scene_from_text, import_source, mo
             assert np.allclose(xs, xp, rtol=1e-14, atol=1e-15) and np.allclose(vs, vp, rtol=1e-13, atol=1e-15)
 
 
+def test_law_kernels_stay_out_of_numbas_disk_cache():
+    """Kernels specialised on a compiled law are never written to numba's cache: their signature holds a
+    function type, which cannot be pickled once the function is gone (a later run's cache index broke)."""
+    from springchain.numeric import fast_kernels
+
+    if not fast_kernels.available():
+        pytest.skip("numba is not installed")
+    ns = fast_kernels._compiled_for_laws()
+    inner = ns.sweep.py_func.__globals__
+    for d in (ns.force, ns.sweep, ns.half_kick, *(inner[name] for name in fast_kernels._INNER)):
+        assert type(d._cache).__name__ == "NullCache", d
+    assert inner is not vars(fast_kernels)  # the cached kernels of linear chains are untouched
+
+
 def test_energy_bounded_over_a_million_steps(scene_from_text, import_source):
     """Verlet (the fused law kernel) on an FPUT-β chain of 8 masses: 10⁶ steps, energy error bounded
     at the h² level and not growing (the last tenth's largest error within 1.5 x the first tenth's)."""
