@@ -23,7 +23,8 @@ from __future__ import annotations
 
 import sympy as sp
 
-from .codegen import _array, _p
+from .codeprint import array as _array
+from .codeprint import p as _p
 from .potential import D
 from .stable_laws import HELPER_NAMES
 

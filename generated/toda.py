@@ -95,7 +95,6 @@ def energy(_x, _v, a, b, c, kappa, m):
     _xb = _np.where((_ends[:, 1] >= 0).reshape((-1,) + _extra), _x[_ends[:, 1]], 0.0)
     _d = _xb - _xa
     i = (_np.arange(_kk.shape[0], dtype=_np.float64) - (1.0 if _LEFT == 'wall' else 0.0)).reshape((-1,) + _extra)
-    i = _np.where(i < n - 1, i, n - 1.0)
     _e = 0.5 * _np.sum(_m * _v**2, axis=0) + _np.sum(_spring_energy(_d, a=a, b=b, c=c, kappa=kappa, m=m), axis=0)
     return _e
 

@@ -30,7 +30,7 @@ _LAZY = {
     "SceneError": ".derive.errors", "RunRefused": ".numeric.errors", "Scene": ".derive.scene",
     "bundled_scenes": "._scenes", "sweep": "._sweep", "SweepResult": "._sweep",
     "frf": "._frf", "FrequencyResponse": "._frf", "animate": "._animate", "Animation": "._animate",
-    "scene_from_dict": ".derive.scene_edit",
+    "scene_from_dict": ".derive.scene",
 }
 
 __all__ = ["__version__", *_LAZY]

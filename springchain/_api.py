@@ -45,7 +45,7 @@ def load(source: str | Path | Scene | dict) -> Scene:
     if isinstance(source, Scene):
         return source
     if isinstance(source, dict):
-        from .derive.scene_edit import scene_from_dict
+        from .derive.scene import scene_from_dict
 
         return scene_from_dict(source)
     from .derive.scene import load_scene

@@ -158,7 +158,8 @@ def work(route: Route, n: int) -> dict:
     from .derive.scene import load_scene
 
     if route is Route.CHAIN:
-        from .derive.chain import ChainModel, chain_modes, render_chain_module
+        from .derive.chain import ChainModel, chain_modes
+        from .derive.chain_codegen import render_chain_module
 
         t0 = time.perf_counter()
         scene = load_scene(f"costchain{n}.toml", chain_scene_text(n))

@@ -15,13 +15,12 @@ import numpy as np
 import pytest
 from scipy.integrate import solve_ivp
 
+import helpers
 import springchain as sc
-from springchain._modules import load_module
 from springchain.cli import main
 from springchain.derive.scene import load_scene
 from springchain.numeric.linear_exact import AugmentedLinear
 from springchain.numeric.simulate import run_methods
-from springchain.numeric.system import System
 
 ROOT = Path(__file__).resolve().parent.parent
 #: Largest force evaluations of one contract run (costlier candidates are skipped: not a timing test).
@@ -48,8 +47,7 @@ steps = 100
 
 
 def system_of(scene):
-    module, _ = load_module(scene)
-    return System.from_module(module)
+    return helpers.system_of(scene)[1]
 
 
 def dense_exact(system, x0, v0, t):

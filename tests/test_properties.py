@@ -17,6 +17,7 @@ from hypothesis import assume, example, given, settings
 from hypothesis import strategies as st
 
 from springchain.numeric.driver import integrate
+from helpers import free_pieces
 from springchain.numeric.integrators import VelocityVerlet
 from springchain.numeric.integrators.base import Problem
 from springchain.numeric.modal import ModalSolution
@@ -53,22 +54,7 @@ def states(n: int, seed: int):
 
 def free_piece_list(n, ends):
     """Free connected pieces by an independent union-find."""
-    parent = list(range(n))
-
-    def root(i):
-        while parent[i] != i:
-            parent[i] = parent[parent[i]]
-            i = parent[i]
-        return i
-
-    for a, b in ends:
-        if a >= 0 and b >= 0:
-            parent[root(a)] = root(b)
-    walled = {root(max(a, b)) for a, b in ends if (a < 0) != (b < 0)}
-    groups: dict[int, list[int]] = {}
-    for i in range(n):
-        groups.setdefault(root(i), []).append(i)
-    return [np.array(g) for r, g in groups.items() if r not in walled]
+    return [np.array(g) for g in free_pieces(n, ends)]
 
 
 def spring_forces(ends, k, x):

@@ -25,7 +25,8 @@ import pytest
 import sympy as sp
 
 from springchain import symbolic_cost
-from springchain.derive.chain import ChainModel, render_chain_module
+from springchain.derive.chain import ChainModel
+from springchain.derive.chain_codegen import render_chain_module
 from springchain.derive.scene import load_scene
 from springchain.numeric import fast, scaling, scaling_report
 from springchain.numeric.chain_modal import ChainModal
