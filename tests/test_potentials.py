@@ -19,22 +19,15 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from sympy.parsing.sympy_parser import parse_expr
 
-from springchain.cli import main
+from helpers import run_cli
 
+#: Progress notes a derivation slower than a second prints on a loaded machine (not part of the error).
 PROGRESS = re.compile(r"^springchain: (deriving|loading|reading|compiling)")
 
 
-def run_cli(argv, capsys):
-    try:
-        status = main([str(a) for a in argv])
-    except SystemExit as exc:
-        status = exc.code
-    out, err = capsys.readouterr()
-    return status, out, err
-
-
 def one_line_error(status, err, *parts):
-    """Exit 2 and exactly one error line (progress notes of a slow derivation aside)."""
+    """Exit 2 and exactly one error line (progress notes of a slow derivation aside; otherwise as
+    helpers.one_line_error)."""
     assert status == 2, err
     lines = [ln for ln in err.splitlines() if not PROGRESS.match(ln)]
     assert len(lines) == 1 and lines[0].startswith("springchain: error: "), err
