@@ -239,7 +239,8 @@ def chain_mode_records(model: ChainModel, modes: ChainModes, omega2_values=None)
     import numpy as np
 
     n = model.chain.n
-    values = None if omega2_values is None else np.asarray(omega2_values, dtype=float)
+    listed = dict(omega2_values) if isinstance(omega2_values, dict) else None  # {position: ω²} of a long chain
+    values = None if omega2_values is None or listed is not None else np.asarray(omega2_values, dtype=float)
     order = None
     sub = {model.params[p]: sp.Float(v, 17) if v != int(v) else sp.Integer(int(v))
            for p, v in model.scene.parameters.items()}
@@ -251,9 +252,13 @@ def chain_mode_records(model: ChainModel, modes: ChainModes, omega2_values=None)
         order = np.argsort(fam_values, kind="stable")
         if values is None:
             values = fam_values[order]
-    if values is None:
+    if listed is not None and values is None:  # only the listed positions (a simple spectrum: open chain)
+        values = np.full(n, np.nan)
+        values[list(listed)] = np.maximum(np.asarray(list(listed.values()), dtype=float), 0.0)
+    elif values is None:
         return [], "modes not listed (the eigen-problem is too large to solve densely here)"
-    values = np.maximum(np.sort(values), 0.0)
+    else:
+        values = np.maximum(np.sort(values), 0.0)
     if n <= MAX_MODES_LISTED:
         picked, note = list(range(n)), ""
     else:
@@ -262,7 +267,7 @@ def chain_mode_records(model: ChainModel, modes: ChainModes, omega2_values=None)
         note = (f"modes lists the {e} lowest and {e} highest of the {n} modes; "
                 + ("the family omega2(j), shape(i, j) gives every one" if modes.omega2 is not None
                    else "the generated module's omega2() gives every one"))
-    scale = float(np.max(np.abs(values))) if values.size else 0.0
+    scale = float(np.nanmax(np.abs(values))) if values.size else 0.0
     records = []
     for p in picked:
         mult = int(np.count_nonzero(np.abs(values - values[p]) <= 1e-12 * max(scale, 1e-300)))

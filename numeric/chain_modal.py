@@ -32,8 +32,10 @@ Each mode then evolves exactly, ``q(t) = q0 cos(ωt) + q̇0·t·sinc(ωt)``
 of a free chain or a ring (ω = 0 exactly: sin 0) is the uniform drift.
 
 Index-dependent chains have no closed form: for them this module falls back
-to ``scipy.linalg.eigh_tridiagonal`` (O(N²) memory for the shapes; refused
-above :data:`MAX_FALLBACK` masses), and rings to the dense spectrum.
+to the modes of the bidiagonal spring factor (:mod:`numeric.chain_spectrum`: ω by bisection,
+the values ``modes`` prints, vectors by LAPACK ``dbdsqr``, both relatively accurate; O(N³)
+set-up, O(N²) memory; refused above :data:`MAX_FALLBACK` masses), and rings to the dense
+spectrum (:mod:`numeric.spectrum`).
 """
 
 from __future__ import annotations
@@ -44,7 +46,6 @@ from types import ModuleType
 
 import numpy as np
 import scipy.fft
-import scipy.linalg
 
 from ..ends import End
 from .errors import RunRefused
@@ -61,7 +62,7 @@ class Basis(enum.Enum):
     DST = "wall-wall: DST-I"
     DST_ODD = "wall-free: DST-I of size 2n, odd outputs"
     FFT = "ring: real FFT"
-    EIGENVECTORS = "index-dependent: eigenvectors (eigh_tridiagonal, or the dense SVD for a ring)"
+    EIGENVECTORS = "index-dependent: eigenvectors (bidiagonal spring factor, or the dense SVD for a ring)"
 
     @property
     def fast(self) -> bool:
@@ -173,7 +174,7 @@ class ChainModal:
         """The exact solution for a generated ``[chain]`` module's linear chain of len(x0) masses.
 
         A uniform chain uses its transform; an index-dependent one falls back
-        to eigenvectors (``eigh_tridiagonal``; the dense SVD for a ring) up to
+        to eigenvectors (the bidiagonal spring factor; the dense SVD for a ring) up to
         :data:`MAX_FALLBACK` masses.
         """
         if not getattr(module, "CHAIN", False):
@@ -203,14 +204,11 @@ class ChainModal:
 
             spec = spectrum(masses, module.spring_ends(n=n), ks)
             omega, E = spec.omega, spec.vectors
-        else:
-            diag, off = (np.asarray(b, dtype=float) for b in module.stiffness_bands(**values, n=n))
-            w2, E = scipy.linalg.eigh_tridiagonal(diag / masses, off / (r[:-1] * r[1:]))
-            omega = np.sqrt(np.maximum(w2, 0.0))
-            rigid = int(module.RIGID_MODES)
-            if rigid:  # by structure: the uniform translation, ω = 0 exactly
-                omega[:rigid] = 0.0
-                E[:, 0] = r / np.linalg.norm(r)
+        else:  # the bidiagonal spring factor: ω by bisection (the printed values), vectors by dbdsqr
+            from .chain_spectrum import chain_spectrum
+
+            spec = chain_spectrum(masses, module.spring_ends(n=n), ks)
+            omega, E = spec.omega, spec.vectors
         shape = (-1,) + (1,) * (x0.ndim - 1)
         rr = r.reshape(shape)
         q0 = np.tensordot(E.T, rr * x0, axes=1)

@@ -202,7 +202,15 @@ def solve_chain(masses: np.ndarray, ends: np.ndarray, k: np.ndarray, rigid: int)
     rs = 1.0 / np.sqrt(masses)
     if bands is not None:
         diag, off = bands
-        w2, psi = scipy.linalg.eigh_tridiagonal(diag * rs * rs, off * rs[:-1] * rs[1:])
+        # shapes (for the participation ratio) from D; ω² from the bidiagonal spring factor by LAPACK's
+        # dqds, relatively accurate (eigh_tridiagonal's small ω² lose κ(D)·ε at high contrast)
+        _, psi = scipy.linalg.eigh_tridiagonal(diag * rs * rs, off * rs[:-1] * rs[1:])
+        from .chain_spectrum import bidiagonal_factor
+        from .lapack_bidiagonal import bidiagonal_svd
+
+        f = bidiagonal_factor(masses, ends, k)
+        sigma = np.sort(bidiagonal_svd(f.d, f.e, f.upper, vectors=False)[0])[f.size - n:]
+        w2 = sigma * sigma
     else:  # a ring: the accurate dense route (spring-factor SVD; rigid modes exact by structure)
         from .spectrum import spectrum
 

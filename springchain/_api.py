@@ -75,12 +75,31 @@ def load_tables(scene: Scene) -> dict:
 
 # -- modes ------------------------------------------------------------------------------------------
 def _chain_omega2(scene: Scene, chain_modes):
-    """ω² of a chain without closed form from its generated module (None when too large)."""
+    """ω² of a chain without closed form (None when too large): every value from the generated
+    module's ``omega2()`` for a chain whose modes are all listed, else ``{position: ω²}`` of the
+    listed lowest and highest only, by bisection on the bidiagonal spring factor (the route of
+    ``omega2()``, O(n) per value; :mod:`numeric.chain_spectrum`)."""
     if chain_modes.omega2 is not None:
         return None
     from ._modules import load_module
+    from .derive.chain import MAX_MODES_LISTED, MODES_LISTED_EACH_END
+    from .ends import End
 
     module, _ = load_module(scene)
+    n = scene.chain.n
+    if n > MAX_MODES_LISTED and End(str(module.LEFT)) is not End.RING:
+        import numpy as np
+
+        from .numeric.chain_spectrum import bidiagonal_factor, singular_values
+        from .numeric.progress import phase
+
+        e = MODES_LISTED_EACH_END
+        with phase(f"modes: the {e} lowest and {e} highest of {n} (bisection on the spring factor)"):
+            p = scene.parameters
+            f = bidiagonal_factor(np.asarray(module.masses(**p), dtype=float), module.spring_ends(n=n),
+                                  np.asarray(module.spring_constants(**p), dtype=float))
+            w = singular_values(f, e, e)
+        return dict(zip(list(range(e)) + list(range(n - e, n)), (w * w).tolist()))
     try:
         return module.omega2(**scene.parameters)
     except ValueError:  # a non-uniform ring longer than the module's MAX_DENSE

@@ -208,7 +208,14 @@ def frf(scene: str | Path | Scene, input, output, omega_min: float | None = None
     if isinstance(points, bool) or not isinstance(points, int) or not 2 <= points <= MAX_POINTS:
         raise RunRefused(f"points {points!r}: accepted: a whole number 2 ... {MAX_POINTS}", quantity="points")
     system, _ = _system(sc)
-    response = frequency_response(system, i, o, lo, hi, points)
+    model, modes = None, None
+    if sc.chain is None and system.damped:  # the resonance table from the damped modes `modes` prints
+        from .derive.damping_report import damped_modes
+        from .derive.model import Model
+
+        model = Model(sc)
+        modes = [(r.omega_n, r.zeta, r.omega_d) for r in damped_modes(model, None).rows]
+    response = frequency_response(system, i, o, lo, hi, points, modes)
     notes = []
     if not system.linear:
         notes.append("nonlinear springs: the response of the linearisation about the equilibrium (their stiffness there)")
@@ -221,7 +228,7 @@ def frf(scene: str | Path | Scene, input, output, omega_min: float | None = None
         from .derive.transfer import MAX_MASSES, transfer_function
 
         if sc.n <= MAX_MASSES:
-            tf = transfer_function(Model(sc), i, o)
+            tf = transfer_function(model or Model(sc), i, o)
             if tf is None:
                 notes.append("the closed-form transfer function exceeded its time budget")
     name = lambda k: str(k) if sc.chain is not None else sc.mass_names[k]  # noqa: E731
