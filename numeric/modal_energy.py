@@ -117,19 +117,22 @@ class ModalEnergy:
 
 
 def _equilibrium(system: System) -> np.ndarray:
-    """x_eq: the module's ``equilibrium()`` (scenes with potentials), K⁻¹ M g for a linear scene with
-    gravity, else 0 (constant forces of a linear scene count too)."""
+    """x_eq: the module's ``equilibrium()`` (scenes with potentials), the cancellation-free sag of a linear
+    scene under gravity (:func:`numeric.equilibrium.equilibrium`), else 0."""
     mod, p, n = system.module, system.params, system.n
     if hasattr(mod, "equilibrium"):
         return np.asarray(mod.equilibrium(**p, n=n) if system.chain else mod.equilibrium(**p), dtype=float)
     if "gravity" not in system.effects:
         return np.zeros(n)
-    if system.chain or getattr(mod, "RIGID_MODES", 0):
-        raise RunRefused("modal energies about the sag of a chain under gravity, or of a free piece under "
-                         "gravity (no equilibrium), are not computed; accepted: scenes without gravity, or "
-                         "[masses] scenes held by walls", quantity="modal_energy")
-    return np.linalg.solve(np.asarray(mod.stiffness_matrix(**p), dtype=float),
-                           np.asarray(mod.gravity_forces(**p), dtype=float))
+    from .equilibrium import equilibrium
+
+    load = mod.gravity_forces(**p, n=n) if system.chain else mod.gravity_forces(**p)
+    eq = equilibrium(system.masses, system.spring_ends, system.stiffness, [np.asarray(load, dtype=float)])
+    if np.any(eq.acceleration != 0):
+        raise RunRefused("modal energies about an equilibrium: a free piece under gravity has none (it "
+                         "accelerates); accepted: scenes whose pieces under gravity hang from a wall",
+                         quantity="modal_energy")
+    return eq.x
 
 
 def modal_energy_record(system: System, x: dict, v: dict) -> tuple[dict[str, np.ndarray], np.ndarray]:

@@ -262,6 +262,16 @@ def test_modal_energy_constant_under_the_exact_linear_solution(tmp_path):
     assert np.max(np.abs(e - e[0])) <= 1e-12 * e.sum(axis=1).max()
 
 
+def test_modal_energy_about_the_sag_of_a_linear_scene(tmp_path):
+    """hanging (gravity from a wall): modes about x_eq = K⁻¹Mg (numeric.equilibrium); under the exact
+    solution every E_j is constant."""
+    import springchain as sc
+
+    run = sc.simulate("hanging", methods=["modal"], out=tmp_path, progress=False, modal_energy=True)
+    e = run.extra["modal_energy_modal"]
+    assert np.max(np.abs(e - e[0])) <= 1e-11 * e.sum(axis=1).max()
+
+
 def test_fput_recurrence(tmp_path):
     """The bundled fput_alpha scene: all energy in mode 1 at t = 0, most of it gone by t ≈ 3000,
     back (≥ 95 %) near t ≈ 10⁴ — the FPUT recurrence (Verlet at the scene's dt = 0.1)."""
