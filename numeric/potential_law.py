@@ -11,7 +11,7 @@ not compiled: their chains run the module's NumPy stencil.
 
 from __future__ import annotations
 
-import functools
+import inspect
 from types import ModuleType
 
 
@@ -25,17 +25,28 @@ def law_indexed(module: ModuleType) -> bool:
 
 def compiled_law(module: ModuleType, values: dict[str, float]):
     """``law(d) = V'(d)`` of the module at ``values``, compiled by numba; None when numba is missing
-    or the law depends on the spring index. One compiled law per module and parameter values in a
-    process (the kernels specialised on it are then compiled once too)."""
+    or the law depends on the spring index. One compiled law per law text and parameter values in a
+    process (modules of the same law share it, and with it the kernels specialised on it)."""
     from .fast_kernels import available
 
     if law_indexed(module) or not available():
         return None
-    return _compiled_law(module, tuple(float(values[p]) for p in module.PARAMETERS))
+    try:
+        text = inspect.getsource(module.spring_force)
+    except (OSError, TypeError):  # no source file (a module built in memory): this function only
+        text = id(module.spring_force)
+    key = (text, tuple(float(values[p]) for p in module.PARAMETERS))
+    law = _LAWS.get(key)
+    if law is None:
+        law = _LAWS[key] = _compile(module.spring_force, key[1])
+    return law
 
 
-@functools.lru_cache(maxsize=32)
-def _compiled_law(module: ModuleType, args: tuple):
+#: Compiled laws of this process by (the generated spring_force's text, parameter values).
+_LAWS: dict = {}
+
+
+def _compile(spring_force, args: tuple):
     import numba
 
     global _NOTED
@@ -45,7 +56,7 @@ def _compiled_law(module: ModuleType, args: tuple):
         note("compiling the chain kernels for this spring potential (numba, several seconds; "
              "a law's kernels are compiled in each run)")
         _NOTED = True
-    force = numba.njit(module.spring_force)
+    force = numba.njit(spring_force)
 
     @numba.njit
     def law(d):
