@@ -34,7 +34,7 @@ def compiled_law(module: ModuleType, values: dict[str, float]):
     try:
         text = inspect.getsource(module.spring_force)
     except (OSError, TypeError):  # no source file (a module built in memory): this function only
-        text = id(module.spring_force)
+        text = module.spring_force
     key = (text, tuple(float(values[p]) for p in module.PARAMETERS))
     law = _LAWS.get(key)
     if law is None:
