@@ -22,7 +22,7 @@ from dataclasses import dataclass
 
 import sympy as sp
 
-from ..ends import End
+from ..generated.contract import End
 from .errors import SceneError
 from .model import parameter_symbols
 from .potential import D, SpringLaw

@@ -21,7 +21,7 @@ from functools import cached_property
 
 import sympy as sp
 
-from ..ends import End
+from ..generated.contract import MAX_DENSE, End
 from .chain import ChainModel, ChainModes, chain_modes
 from .chain_damping_code import chain_damping_code
 from .codeprint import p
@@ -87,7 +87,7 @@ def _constants(c: _Context) -> list[str]:
     ch, model = c.chain, c.model
     return [f"N = {ch.n}", "CHAIN = True", f"LEFT = {ch.left.value!r}", f"RIGHT = {ch.right.value!r}",
             f"UNIFORM = {ch.uniform!r}", f"EFFECTS = {model.effects!r}", f"LINEAR = {model.linear!r}",
-            f"RIGID_MODES = {model.rigid_modes}", "MAX_DENSE = 4000"]
+            f"RIGID_MODES = {model.rigid_modes}", f"MAX_DENSE = {MAX_DENSE}"]
 
 
 def _masses(c: _Context) -> list[str]:

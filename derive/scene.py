@@ -26,7 +26,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..ends import END_WORDS, End
+from ..generated.contract import END_WORDS, End
 from .errors import SceneError
 from .expr import CONSTANTS, Expr, Num, accepted_form
 from .expr_tree import RESERVED_FUNCTIONS

@@ -47,12 +47,13 @@ from types import ModuleType
 import numpy as np
 import scipy.fft
 
-from ..ends import End
+from ..generated.contract import MAX_DENSE, End
+from .system import interface
 from .errors import RunRefused
 from .modal import tsinc
 
 #: Largest index-dependent chain solved through its (dense) eigenvectors.
-MAX_FALLBACK = 4000
+MAX_FALLBACK = MAX_DENSE
 
 
 class Basis(enum.Enum):
@@ -177,29 +178,30 @@ class ChainModal:
         to eigenvectors (the bidiagonal spring factor; the dense SVD for a ring) up to
         :data:`MAX_FALLBACK` masses.
         """
-        if not getattr(module, "CHAIN", False):
+        facts = interface(module)
+        if not facts.chain:
             raise RunRefused("ChainModal needs a [chain] scene's generated module; use numeric.modal for others")
-        if not bool(module.LINEAR):
-            raise RunRefused("no exact solution: this chain has cubic springs or spring potentials (use an integrator, e.g. verlet)")
-        values = dict(module.DEFAULTS)
+        if not facts.linear:
+            raise RunRefused("no exact solution: this chain has cubic springs or spring potentials "
+                             "(use an integrator, e.g. verlet)")
+        values = dict(facts.defaults)
         values.update(params or {})
         x0, v0 = _initial(x0, v0)
         n = x0.shape[0]
-        left, right = End(str(module.LEFT)), End(str(module.RIGHT))
-        if bool(module.UNIFORM) and hasattr(module, "mode_omega"):
-            return cls.transform(module.mode_omega(**values, n=n), left, right, x0, v0)
+        if facts.has("mode_omega"):
+            return cls.transform(module.mode_omega(**values, n=n), facts.left, facts.right, x0, v0)
         masses = np.asarray(module.masses(**values, n=n), dtype=float)
         ks = np.asarray(module.spring_constants(**values, n=n), dtype=float)
         if n > MAX_FALLBACK:
             raise RunRefused(f"index-dependent chain of n = {n} masses: no closed-form modes, and the "
                              f"eigenvector fallback is limited to n <= {MAX_FALLBACK}; use method 'verlet'", quantity="method")
-        return cls._eigenvectors(module, values, masses, ks, x0, v0)
+        return cls._eigenvectors(module, facts, values, masses, ks, x0, v0)
 
     @classmethod
-    def _eigenvectors(cls, module, values, masses, ks, x0, v0) -> "ChainModal":
+    def _eigenvectors(cls, module, facts, values, masses, ks, x0, v0) -> "ChainModal":
         n = masses.shape[0]
         r = np.sqrt(masses)
-        if End(str(module.LEFT)) is End.RING:
+        if facts.left is End.RING:
             from .spectrum import spectrum
 
             spec = spectrum(masses, module.spring_ends(n=n), ks)
@@ -229,16 +231,8 @@ class ChainModal:
         return q, p
 
     def at(self, t) -> tuple[np.ndarray, np.ndarray]:
-        """Positions and velocities at times ``t``.
-
-        Parameters
-        ----------
-        t : float or ndarray, shape (S,)
-
-        Returns
-        -------
-        x, v : ndarray, shape (n, ...) for scalar t, or (S, n, ...) for an array of times
-        """
+        """Positions and velocities at times ``t`` (a float, or an array of shape (S,)): x and v of
+        shape (n, ...), or (S, n, ...) for an array of times, as :meth:`numeric.modal.ModalSolution.at`."""
         t = np.asarray(t, dtype=float)
         q, p = self.modal_at(t)
         axis = t.ndim

@@ -49,17 +49,17 @@ class Elements:
         ends, c = np.zeros((0, 2), dtype=np.intp), np.zeros(0)
         rayleigh = modal = None
         if system.chain:
-            if hasattr(mod, "damper_ends"):
+            if system.has("damper_ends"):
                 ends = np.asarray(mod.damper_ends(n=n), dtype=np.intp).reshape(-1, 2)
                 c = np.asarray(mod.damper_constants(**p, n=n), dtype=float)
         else:
-            if hasattr(mod, "DAMPER_ENDS"):
+            if system.has("damper_constants"):
                 ends = np.asarray(mod.DAMPER_ENDS, dtype=np.intp).reshape(-1, 2)
                 c = np.asarray(mod.damper_constants(**p), dtype=float)
-            if hasattr(mod, "rayleigh_coefficients"):
+            if system.has("rayleigh_coefficients"):
                 a, b = (float(v) for v in mod.rayleigh_coefficients(**p))
                 rayleigh = (a, b)
-            if hasattr(mod, "modal_damping_ratios"):
+            if system.has("modal_damping_ratios"):
                 modal = np.asarray(mod.modal_damping_ratios(**p), dtype=float)
         return cls(system.masses, system.spring_ends, system.stiffness, ends, c, rayleigh, modal)
 

@@ -33,6 +33,7 @@ from dataclasses import dataclass, field
 import numpy as np
 import scipy.linalg
 
+from ..generated.contract import MAX_DENSE, End
 from .errors import RunRefused
 from .system import System
 
@@ -107,7 +108,7 @@ def operator(system: System) -> Operator:
         C = np.asarray(mod.damping_matrix(**p), dtype=float) if system.damped else None
         return Operator(system.masses, K, C, False, dense=DenseReceptance.from_elements(el))
     n = system.n
-    if str(getattr(mod, "LEFT", "")) != "ring":
+    if system.ends[0] is not End.RING:
         from .frf_chain import chain_elements
 
         impedances = chain_elements(el.masses, el.spring_ends, el.stiffness, el.damper_ends, el.damping)
@@ -120,16 +121,10 @@ def operator(system: System) -> Operator:
     K = (diag, off, _corner(n, system.spring_ends, system.stiffness))
     C = None
     if system.damped:
-        if hasattr(mod, "damping_bands"):
-            cd, co = (np.asarray(b, dtype=float) for b in mod.damping_bands(**p, n=n))
-            ends = np.asarray(mod.damper_ends(n=n)) if hasattr(mod, "damper_ends") else np.zeros((0, 2))
-            vals = np.asarray(mod.damper_constants(**p, n=n)) if hasattr(mod, "damper_constants") else np.zeros(0)
-            C = (cd, co, _corner(n, ends, vals))
-        else:
-            try:
-                C = _bands_of_dense(np.asarray(mod.damping_matrix(**p, n=n), dtype=float))
-            except ValueError as exc:
-                raise RunRefused(f"frequency response of a damped chain of {n} masses: {exc}") from None
+        try:
+            C = _bands_of_dense(np.asarray(mod.damping_matrix(**p, n=n), dtype=float))
+        except ValueError as exc:
+            raise RunRefused(f"frequency response of a damped chain of {n} masses: {exc}") from None
     return Operator(system.masses, K, C, True)
 
 
@@ -249,10 +244,10 @@ def undamped_omegas(system: System, count: int | None = None) -> np.ndarray:
 
         return spectrum(system.masses, system.spring_ends, system.stiffness).omega
     n = system.n
-    if bool(getattr(mod, "UNIFORM", False)) and hasattr(mod, "mode_omega"):
+    if system.has("mode_omega"):
         return np.sort(np.asarray(mod.mode_omega(**p, n=n), dtype=float))
-    if str(getattr(mod, "LEFT", "")) == "ring":
-        if n > getattr(mod, "MAX_DENSE", 4000):
+    if system.ends[0] is End.RING:
+        if n > MAX_DENSE:
             raise RunRefused(f"an index-dependent ring of {n} masses has no closed-form spectrum here; "
                              "give omega_min and omega_max", quantity="omega_min")
         from .spectrum import spectrum

@@ -133,10 +133,10 @@ class AugmentedLinear:
         G = modal_damping(el, w, Phi) if el.damped else None
         omegas, fc, fs = np.zeros(0), np.zeros((0, n)), np.zeros((0, n))
         loads = []  # constant forces, kept apart (their signs are summed separately)
-        if hasattr(mod, "gravity_forces"):
+        if system.has("gravity_forces"):
             loads.append(np.asarray(mod.gravity_forces(**p), dtype=float))
-        if hasattr(mod, "external_acceleration"):
-            if not getattr(mod, "FORCING_HARMONIC", False):
+        if system.has("external_acceleration"):
+            if not system.harmonic_forcing:
                 raise ValueError("external forces are not constant + harmonic: no exact solution")
             omegas, fc, fs, c0 = (np.asarray(a, dtype=float) for a in mod.forcing_harmonics(**p))
             loads.append(c0)
@@ -149,7 +149,7 @@ class AugmentedLinear:
             loads.append(-float(g0) * m)
         static = equilibrium(m, system.spring_ends, system.stiffness, loads) if loads else None
         inputs = []
-        for (tt, ff), on in zip(system.tables, getattr(mod, "TABLE_FORCE_ON", ())):
+        for (tt, ff), on in zip(system.tables, system.provided.table_force_on):
             force = np.zeros(n)
             force[on] = 1.0
             inputs.append((tt, ff, Phi.T @ force))
@@ -411,7 +411,7 @@ def frequency_response(system: System, drive: np.ndarray, force: np.ndarray) -> 
     mod, p = system.module, system.params
     K = np.asarray(mod.stiffness_matrix(**p), dtype=float)
     M = np.diag(system.masses)
-    C = np.asarray(mod.damping_matrix(**p), dtype=float) if hasattr(mod, "damping_matrix") else 0 * K
+    C = np.asarray(mod.damping_matrix(**p), dtype=float) if system.damped else 0 * K
     Z = K[None] - (drive**2)[:, None, None] * M[None] + 1j * drive[:, None, None] * C[None]
     with np.errstate(all="ignore"):
         return np.linalg.solve(Z, np.broadcast_to(force.astype(complex), (drive.shape[0], force.shape[0]))[..., None])[..., 0]

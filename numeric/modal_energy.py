@@ -25,13 +25,13 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..ends import End
+from ..generated.contract import MAX_DENSE, End
 from .chain_modal import Basis, _basis_of, _forward
 from .errors import RunRefused
 from .system import System
 
 #: Largest non-uniform scene whose modal energies are computed through dense eigenvectors.
-MAX_DENSE_MODES = 4000
+MAX_DENSE_MODES = MAX_DENSE
 
 
 @dataclass(frozen=True)
@@ -63,8 +63,8 @@ class ModalEnergy:
         n = system.n
         x_eq = _equilibrium(system)
         sqrt_m = np.sqrt(system.masses)
-        if system.chain and bool(getattr(mod, "UNIFORM", False)) and hasattr(mod, "mode_omega"):
-            left, right = End(str(mod.LEFT)), End(str(mod.RIGHT))
+        if system.chain and system.uniform and system.has("mode_omega"):
+            left, right = system.ends
             basis = _basis_of(left, right)
             omega_index = np.asarray(mod.mode_omega(**p, n=n), dtype=float)
             if basis is Basis.FFT:  # real coefficients: cos_j (j = 0 … n/2) then sin_j (0 < j < n/2)
@@ -120,7 +120,7 @@ def _equilibrium(system: System) -> np.ndarray:
     """x_eq: the module's ``equilibrium()`` (scenes with potentials), the cancellation-free sag of a linear
     scene under gravity (:func:`numeric.equilibrium.equilibrium`), else 0."""
     mod, p, n = system.module, system.params, system.n
-    if hasattr(mod, "equilibrium"):
+    if system.potential:
         return np.asarray(mod.equilibrium(**p, n=n) if system.chain else mod.equilibrium(**p), dtype=float)
     if "gravity" not in system.effects:
         return np.zeros(n)

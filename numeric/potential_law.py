@@ -18,18 +18,13 @@ from types import ModuleType
 _NOTED = False
 
 
-def law_indexed(module: ModuleType) -> bool:
-    """Whether the module's spring law depends on the spring index i."""
-    return bool(getattr(module, "POTENTIAL_LAW_INDEXED", False))
-
-
 def compiled_law(module: ModuleType, values: dict[str, float]):
-    """``law(d) = V'(d)`` of the module at ``values``, compiled by numba; None when numba is missing
-    or the law depends on the spring index. One compiled law per law text and parameter values in a
+    """``law(d) = V'(d)`` of the module at ``values``, compiled by numba; None when numba is missing.
+    For index-free laws only (the caller asks :attr:`System.law_indexed`). One compiled law per law text and parameter values in a
     process (modules of the same law share it, and with it the kernels specialised on it)."""
     from .fast_kernels import available
 
-    if law_indexed(module) or not available():
+    if not available():
         return None
     try:
         text = inspect.getsource(module.spring_force)
@@ -63,36 +58,3 @@ def _compile(spring_force, args: tuple):
         return force(d, *args)
 
     return law
-
-
-#: Chains with at least this many masses evaluate a potential's forces through the compiled kernel in
-#: every step method (below it the module's NumPy stencil is as fast, and needs no compiling).
-COMPILED_FORCE_MIN_N = 1 << 14
-
-
-def compiled_acceleration(module: ModuleType, values: dict[str, float], n: int):
-    """``a(x)`` of a potential chain through the compiled kernel (x shape (n,) or (n, B)), for the
-    step methods other than Verlet; None below :data:`COMPILED_FORCE_MIN_N` masses, without numba or
-    for an index-dependent law."""
-    if n < COMPILED_FORCE_MIN_N or law_indexed(module):
-        return None
-    from .fast import Backend, FusedVerlet
-    from .fast_kernels import available
-
-    if not available():
-        return None
-    import numpy as np
-
-    fv = FusedVerlet.from_module(module, values, n, 1.0, Backend.NUMBA)
-
-    def acceleration(x):
-        return fv.force(np.ascontiguousarray(x, dtype=np.float64))
-
-    return acceleration
-
-
-def numpy_law(module: ModuleType, values: dict[str, float]):
-    """``law(d, i) = V'(d)`` through the module's NumPy function (any law)."""
-    if law_indexed(module):
-        return lambda d, i: module.spring_force(d, i, **values)
-    return lambda d, i: module.spring_force(d, **values)

@@ -34,6 +34,7 @@ import scipy.linalg
 
 from .distributions import Dist
 from .errors import RunRefused
+from .system import interface
 
 _MODULES: dict[str, types.ModuleType] = {}
 
@@ -110,9 +111,9 @@ def realise(spec: SweepSpec, s: int):
         value = float(dist.grid_values()[idx.pop(0)]) if dist.is_grid else float(dist.draw(rng))
         params[name] = value
         varied[name] = value
-    chain = bool(getattr(mod, "CHAIN", False))
-    if chain:
-        n = int(mod.N)
+    facts = interface(mod)
+    if facts.chain:
+        n = facts.n
         masses = np.array(mod.masses(**params, n=n), dtype=float)
         ends = np.asarray(mod.spring_ends(n), dtype=np.intp).reshape(-1, 2)
         k = np.array(mod.spring_constants(**params, n=n), dtype=float)
@@ -238,8 +239,9 @@ def compute_batch(spec: SweepSpec, start: int, stop: int) -> dict:
     from threadpoolctl import threadpool_limits
 
     mod = module_of(spec.source)
-    chain = bool(getattr(mod, "CHAIN", False))
-    rigid = int(getattr(mod, "RIGID_MODES", 0)) if chain else 0
+    facts = interface(mod)
+    chain = facts.chain
+    rigid = facts.rigid_modes if chain else 0
     names = [n for n, _ in spec.vary]
     cols: dict[str, list] = {"sample": [], **{n: [] for n in names}, "omega2": []}
     if chain:

@@ -9,6 +9,7 @@ import math
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from ._defaults import DEFAULT_OUT
 from .derive.scene import Scene
 
 #: Most base grid points accepted.
@@ -105,7 +106,7 @@ class FrequencyResponse:
                           f"{self.scene.name}: receptance X_{self.output} / F_{self.input}",
                           peaks=peaks, infinite=infinite[:200], hidden=hidden[:200])
 
-    def save(self, out: str | Path = "springchain-out") -> Path:
+    def save(self, out: str | Path = DEFAULT_OUT) -> Path:
         """Write the Bode figure as ``OUT/<scene>-frf-<input>-<output>.png``; returns its path."""
         from .numeric import plots
 
@@ -198,7 +199,8 @@ def frf(scene: str | Path | Scene, input, output, omega_min: float | None = None
     sides and the figure marks ω_j by a line. Cubic springs enter by their linear part; forces,
     gravity and ground motion do not change H.
     """
-    from ._api import _system, load
+    from ._modules import system_of as _system
+    from ._scenes import load
     from .numeric.errors import RunRefused
     from .numeric.frf import frequency_response
 

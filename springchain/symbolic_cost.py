@@ -326,6 +326,7 @@ def figure(result: SymbolicResult):
     """Work seconds vs N (log–log), one line per route (and the modes share of [masses])."""
     import matplotlib
 
+    from .numeric import plots
     from .numeric.plots import new_figure
 
     fig, ax = new_figure(figsize=(8, 5))
@@ -340,11 +341,7 @@ def figure(result: SymbolicResult):
         ax.plot(*zip(*pts), "s:", color="C0", alpha=0.6, label="  of which: normal modes")
     ax.set_xscale("log")
     ax.set_yscale("log")
-    ax.set_xlabel("chain size N")
-    ax.set_ylabel("seconds of work (imports excluded)")
-    ax.set_title("Deriving the equations of motion: work vs N")
-    ax.grid(alpha=0.3, which="both")
-    ax.legend(fontsize=8)
+    plots.finish(ax, "chain size N", "seconds of work (imports excluded)", "Deriving the equations of motion: work vs N")
     return fig
 
 

@@ -334,7 +334,7 @@ def test_chain_verlet_fused_kernel_equals_plain_verlet(ends):
     from springchain.numeric.driver import integrate
     from springchain.numeric.integrators import VelocityVerlet
     from springchain.numeric.integrators.base import Problem
-    from springchain.numeric.simulate import FusedChainVerlet
+    from springchain.numeric.run.step import FusedChainVerlet
 
     scene = load_scene("ch.toml", text=chain_scene(257, *ends, mass="m*(1 + i % 2)", k="k*(1 + 0.01*i)"))
     module, _ = load_module(scene)

@@ -70,7 +70,7 @@ def check_candidates(plan, system, x0, v0, exact):
     """Every reachable step candidate meets TOL when run (within the evaluation budget)."""
     checked = 0
     for c in plan.candidates:
-        if c.steps is None or c.steps * max(c.method.evals_per_step, 1) > EVAL_BUDGET:
+        if c.steps is None or c.steps * max(c.method.traits.evals_per_step, 1) > EVAL_BUDGET:
             continue
         run = run_methods(system, x0, v0, c.dt, c.steps, [c.name])[c.name]
         err = float(np.max(np.abs(run.x - exact(run.t))))
@@ -135,7 +135,7 @@ def test_quick_bench_runs_against_the_exact_solution(name, tmp_path, capsys):
     methods = {r["method"] for r in data["records"]}
     assert {"verlet", "dop853"} <= methods
     for r in data["records"]:
-        assert np.isfinite(r["error"]) and r["error"] >= 0
+        assert np.isfinite(r["error"]) and r["error"] > 0
         if r["predicted_error"] is not None and r["error"] > 1e-12:
             # the pilot law is conservative: measured never far above predicted
             assert r["error"] <= 3 * r["predicted_error"], r

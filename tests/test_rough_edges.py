@@ -246,12 +246,14 @@ def test_progress_is_silent_for_short_phases_and_reports_long_ones(monkeypatch):
     assert "springchain: slow ... " in text and "springchain: slow: done in" in text
 
 
-def test_the_three_reporters_share_one_module():
-    from springchain.numeric import bench, driver, progress, scaling
+def test_the_reporters_share_one_module():
+    from springchain.numeric import bench_runs, chunked, driver, scaling, sweep_driver
+    from springchain.numeric.progress import Reporter
 
-    assert issubclass(driver.Progress, progress.Reporter)
-    src = Path(bench.__file__).read_text() + Path(scaling.__file__).read_text()
-    assert "sys.stderr.write" not in src and src.count("progress.line(") >= 3
+    assert issubclass(sweep_driver.Progress, Reporter) and not hasattr(driver, "Progress")
+    for mod in (bench_runs, scaling, sweep_driver, chunked, driver):
+        src = Path(mod.__file__).read_text()
+        assert "sys.stderr" not in src and "print(" not in src, mod.__name__  # only through the reporter
 
 
 def test_numba_compile_note(monkeypatch, capsys):
