@@ -82,10 +82,10 @@ def chain_module(scene_from_text, import_source, name, pot, params, n, left, rig
 
 @pytest.mark.parametrize("law", sorted(LAWS))
 def test_law_kernel_equals_numpy_stencil(law, scene_from_text, import_source, monkeypatch):
-    from springchain.numeric import potential_law
+    from springchain.numeric import fast as fast_module
     from springchain.numeric.fast import Backend, FusedVerlet, available
 
-    monkeypatch.setattr(potential_law, "COMPILED_FORCE_MIN_N", 1)  # the other step methods' force, at n = 9
+    monkeypatch.setattr(fast_module, "COMPILED_FORCE_MIN_N", 1)  # the other step methods' force, at n = 9
 
     if not available():
         pytest.skip("numba is not installed")
@@ -101,7 +101,7 @@ def test_law_kernel_equals_numpy_stencil(law, scene_from_text, import_source, mo
             assert fused.coefficients.law is not None
             a1, a2 = fused.force(x.copy()), plain.force(x.copy())
             assert np.allclose(a1, a2, rtol=1e-14, atol=1e-15 * np.max(np.abs(a2)))
-            a3 = potential_law.compiled_acceleration(mod, dict(mod.DEFAULTS), 9)(x.T.copy().T)  # not contiguous
+            a3 = fast_module.compiled_acceleration(mod, dict(mod.DEFAULTS), 9)(x.T.copy().T)  # not contiguous
             assert np.allclose(a3, a2, rtol=1e-14, atol=1e-15 * np.max(np.abs(a2)))
             s1 = [x.copy(), v.copy(), a1.copy()]
             s2 = [x.copy(), v.copy(), a2.copy()]
@@ -174,9 +174,9 @@ STEPS = {2: (0.1, 0.05, 0.025), 4: (0.2, 0.1, 0.05), 6: (0.25, 0.125, 0.0625), 8
 @pytest.mark.parametrize("method", ["verlet", "yoshida4", "blanes-moan4", "blanes-moan6", "rk4"])
 def test_convergence_slope_matches_declared_order(method, tmp_path):
     import springchain as sc
-    from springchain.numeric.integrators import INTEGRATORS
+    from springchain.numeric.run import registry
 
-    order = INTEGRATORS[method]().order
+    order = registry.method(method).traits.order
     t_end, n, c = 4.0, 64, 24.0
     errs = []
     hs = STEPS[order]
