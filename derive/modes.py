@@ -247,8 +247,10 @@ def closed_form_modes(model: Model, max_radical_degree: int = 3) -> ModeSet:
     notes: list[str] = []
     # a mirror split at best halves the problem: beyond twice the largest block nothing is solvable
     hopeless = model.scene.n - len(rigid) > 2 * MAX_SYMBOLIC_BLOCK + 1
+    # K about an equilibrium found by Newton holds numbers, not closed forms
+    numeric_k = getattr(model, "equilibrium", None) is not None and not model.equilibrium.closed_form
     try:
-        if hopeless:
+        if hopeless or numeric_k:
             raise BudgetExceeded
         for B in _blocks(model):
             # rigid translations lie in the symmetric block (uniform vectors are mirror-symmetric)
@@ -257,7 +259,8 @@ def closed_form_modes(model: Model, max_radical_degree: int = 3) -> ModeSet:
             modes.extend(_solve_block(model, B, lam, n_rigid, max_radical_degree))
         closed = True
     except BudgetExceeded:
-        why = (f"{model.scene.n} masses: symmetry blocks larger than {MAX_SYMBOLIC_BLOCK}" if hopeless else
+        why = ("K is the Hessian at a numerically found equilibrium" if numeric_k else
+               f"{model.scene.n} masses: symmetry blocks larger than {MAX_SYMBOLIC_BLOCK}" if hopeless else
                f"a factor of degree > 3, an unreadably long root, or a characteristic polynomial of more "
                f"than {MAX_DET_TERMS} terms")
         how = ("mpmath eigensolver at increasing precision, correct to float64" if model.scene.n <= MAX_MPMATH_MODES
