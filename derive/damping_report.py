@@ -32,6 +32,12 @@ from .modes import BudgetExceeded, ModeSet, time_budget
 
 #: Two successive precisions agreeing to this relative difference settle a float64 value.
 _SETTLED = 4e-16
+#: First working precision of the damped modes (digits); each retry doubles it.
+FIRST_DIGITS = 40
+#: The absolute floor near ζ = 0: a ratio that is noise at FIRST_DIGITS and below this at twice
+#: that (10^(−1.8·40)) is printed as exactly 0 (see :func:`_zero_noise`). A true ζ under it — a
+#: mode all but confined to a 1e-12 kg mass far from the only dashpot, ζ = 5e-91 — reads as 0.
+ZETA_FLOOR = 10.0 ** (-1.8 * FIRST_DIGITS)
 #: Seconds allowed to simplify closed-form damping ratios of dashpots.
 ZETA_BUDGET = 5.0
 
@@ -415,7 +421,7 @@ def damped_modes(model: Model, modes: ModeSet | None) -> DampedModes:
 def _settled_rows(model: Model) -> tuple[list[tuple], bool]:
     """:func:`_rows_at` at 40, 80, … digits until two successive precisions agree (float64 settled)."""
     prev = None
-    dps = 40
+    dps = FIRST_DIGITS
     while dps <= 640:
         rows, prop = _rows_at(model, dps)
         if prev is not None and prev[1] == prop and _settled(prev[0], rows, dps // 2):
