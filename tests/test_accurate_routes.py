@@ -427,3 +427,46 @@ def test_chain_frf_matches_60_digit_solve(tmp_path, n, ends, a, b, io):
     H = r.magnitude * np.exp(1j * np.radians(r.phase))
     want = ref.receptance(scene, r.omega[idx], i, o)
     assert np.max(np.abs(H[idx] - want) / np.abs(want)) <= FRF_REL
+
+
+@settings(max_examples=EXAMPLES, **_SETTINGS)
+@given(n=st.integers(3, 12), a=st.floats(-6, 12), b=st.floats(-6, 12), c=st.one_of(st.none(), st.floats(-6, 6)),
+       io=st.tuples(st.integers(0, 11), st.integers(0, 11)))
+@example(n=6, a=10.0, b=10.0, c=-3.0, io=(0, 3))  # contrasts 1e10: the tridiagonal + corner solve lost κ·ε
+def test_ring_frf_matches_60_digit_solve(tmp_path, n, a, b, c, io):
+    """[chain] rings (a closing spring between the last mass and the first) at contrasts up to 1e12,
+    with and without a dashpot to the wall: the certified modal route, not the tridiagonal solve."""
+    a, b = 10.0**a, 10.0**b
+    i, o = io[0] % n, io[1] % n
+    text = _chain_text(n, "ring", "ring", a, b, "0", 0.1, 2)
+    dampers = []
+    if c is not None:
+        text = text.replace("[initial]", f'[[dampers]]\nbetween = [0, "wall"]\nc = "{10.0**c!r}"\n\n[initial]')
+        dampers = [(0, -1, 10.0**c)]
+    path = _write(tmp_path, text, "iring")
+    r = sc.frf(path, input=i, output=o)
+    masses = [1.0 * (1 + a * (j % 2)) for j in range(n)]
+    springs = [(j, (j + 1) % n, 1.0 * (1 + b * (j % 3))) for j in range(n)]
+    scene = ref.Scene([str(j) for j in range(n)], masses, springs, dampers, {}, {})
+    idx = np.unique(np.linspace(0, r.omega.shape[0] - 1, 30).round().astype(int))
+    H = r.magnitude * np.exp(1j * np.radians(r.phase))
+    want = ref.receptance(scene, r.omega[idx], i, o)
+    assert np.max(np.abs(H[idx] - want) / np.abs(want)) <= FRF_REL
+
+
+def test_long_ring_frf_is_certified_or_refused(tmp_path):
+    """A ring past RING_DENSE masses: the tridiagonal solve is refined and certified per frequency
+    from the elements; at a contrast float64 cannot carry it refuses in one line."""
+    from springchain.numeric.frf import RING_DENSE
+
+    n = RING_DENSE + 50
+    path = _write(tmp_path, _chain_text(n, "ring", "ring", 1.0, 2.0, "0", 0.1, 2), "lring")
+    r = sc.frf(path, input=0, output=n // 2, points=40, omega_min=1e-3, omega_max=2e-2)  # below ω₁ ≈ 0.1
+    # far below the first elastic mode the free ring translates: |H| ≈ 1/(ω² Σm) to 1 %
+    total = sum(1.0 * (1 + 1.0 * (j % 2)) for j in range(n))
+    assert abs(abs(r.H[0]) * r.omega[0] ** 2 * total - 1) < 1e-2 and np.all(np.isfinite(r.H))
+    path = _write(tmp_path, _chain_text(n, "ring", "ring", 1e10, 1e12, "0", 0.1, 2), "lring2")
+    try:
+        r = sc.frf(path, input=0, output=n // 2, points=40)
+    except sc.RunRefused as exc:
+        assert "cannot certify" in str(exc) and "\n" not in str(exc)
