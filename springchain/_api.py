@@ -467,6 +467,7 @@ def simulate(scene: str | Path | Scene, methods: list[str] | None = None, dt: fl
                                                        progress)
     else:
         summary, t, x, v, extra, npz, figs = _kept(sc, system, names, dt, steps, record_every, options, out, figures)
+    notes = notes + sim.float64_limits(system, names, steps * dt)  # one line where float64 cannot follow
     summary.update({"scene": sc.name, "module": origin, "dt": dt, "steps": steps, "t_end": steps * dt,
                     "npz": None if npz is None else str(npz), "figures": [str(p) for p in figs],
                     "methods_that_apply": sim.applicable(system),

@@ -527,3 +527,21 @@ def test_long_damped_chain_says_zeta_is_not_computed(tmp_path):
     data = sc.modes(_write(tmp_path, text, "ldchain")).to_json()
     assert all(m["damping_ratio"] is None for m in data["modes"]) and len(data["modes"]) == 20
     assert any("damping ratios not computed" in note for note in data["notes"])
+
+
+# -- float64 limits of exact trajectories ---------------------------------------------------------------
+def test_exact_run_past_float64_limits_says_so(tmp_path, capsys):
+    """ε·ω_max·t above 1e-9: the run prints one note naming the quantity (and --json lists it), where the
+    positions are indeed off by more than 1e-9 of the amplitude against the 50-digit modal solution;
+    inside the limit no note."""
+    text = ref.scene_text("lim", [1.0, 1.0], [(-1, 0, 1e8), (0, 1, 1.0)], x0=[0.1, 0.0], dt=1000.0, steps=100)
+    path = _write(tmp_path, text, "lim")
+    run = sc.simulate(path, methods=["modal"])
+    (note,) = run.summary["notes"]
+    assert "eps*omega_max*t = 2.2e-07" in note and "\n" not in note
+    want = ref.modal_trajectory([1.0, 1.0], [(-1, 0, 1e8), (0, 1, 1.0)], [0.1, 0.0], [0.0, 0.0], run.t[-3:])
+    assert np.max(np.abs(run.x["modal"][-3:] - want)) > 1e-9 * np.max(np.abs(want))  # the note is no false alarm
+    assert main(["simulate", str(path), "--method", "modal", "--out", str(tmp_path / "o"), "--no-figures"]) == 0
+    assert "note: modal: float64 limits exceed 1e-09" in capsys.readouterr().out
+    short = _write(tmp_path, text.replace("dt = 1000.0", "dt = 0.001"), "short")
+    assert sc.simulate(short, methods=["modal"]).summary["notes"] == []
