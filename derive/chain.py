@@ -238,7 +238,7 @@ def _damping_ratios(model: ChainModel, records: list[dict], damped) -> str:
         rec.update(damping_ratio=zeta, omega_damped=wd, damping_ratio_expr=None)
     if damped is None and alpha is None:
         return (f"damping ratios not computed: dashpots on a chain of {n} masses (the dense modal "
-                "state matrix is used up to 200 masses)")
+                "state matrix is used up to 60 masses)")
     if unresolved:
         return (f"damping ratios of {unresolved} modes not given: their decay rate is below 1e-10 of what "
                 "float64 resolves in the modal damping (modes all but confined away from every dashpot)")

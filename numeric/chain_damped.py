@@ -9,8 +9,8 @@ masses, as :mod:`derive.damping_report` does for ``[masses]`` scenes past mpmath
    (:func:`numeric.elements.modal_damping`);
 2. the eigenvalues λ = −σ ± iω_d of the balanced modal state matrix ``[[0, Ω], [−Ω, −G]]`` by
    LAPACK, each pair then refined by Newton's method with residuals in extended precision
-   (:func:`numeric.linear_exact._refine_small`), so a light ζ of a low mode is not lost in
-   ε·ω_max; modes of a piece the dashpots do not touch (a zero row of G) are undamped by
+   (:func:`numeric.linear_exact._refine_small`; states of at most :data:`REFINE_MAX_STATES`), so a
+   light ζ of a low mode is not lost in ε·ω_max; modes of a piece the dashpots do not touch (a zero row of G) are undamped by
    structure, ζ = 0 exactly.
 
 ω_n = |λ|, ζ = σ/ω_n, NaN where σ is below 1e-10 of its float64 resolution (:data:`RESOLVED`: a
@@ -25,9 +25,12 @@ from __future__ import annotations
 import numpy as np
 
 #: Largest chain whose damped modes are computed from the dense modal state matrix (2N states).
-DENSE_MAX = 200
+DENSE_MAX = 60
 #: A decay rate σ is resolved when above this many ε·max|G| (its float64 uncertainty, 1e-10 relative).
 RESOLVED = 1e10 * 64
+#: Largest state (2N) whose eigenpairs are refined in extended precision (Python-level mpmath
+#: residuals: 8 s at 40 states); larger ones keep LAPACK's values with the floor widened to ε‖A‖.
+REFINE_MAX_STATES = 24
 _EPS = float(np.finfo(float).eps)
 
 
@@ -66,12 +69,16 @@ def damped_rows(masses: np.ndarray, spring_ends: np.ndarray, stiffness: np.ndarr
         A[m + np.arange(m), np.arange(m)] = -w[kept]
         A[m:, m:] = -G[np.ix_(kept, kept)]
         lam, V = scipy.linalg.eig(A)
-        lam, _ = _refine_small(A, lam, V, -1.0)
+        refined = A.shape[0] <= REFINE_MAX_STATES
+        if refined:
+            lam, _ = _refine_small(A, lam, V, -1.0)
         tiny = 1e-12 * float(np.max(np.abs(lam)))
         osc = sorted((v for v in lam if v.imag > tiny), key=abs)
         # G's entries are float64 products of the modes (normwise accurate): Re λ is known to about
-        # ε‖G‖, so a ζ below RESOLVED·ε‖G‖/ω_n is not resolved and given as NaN (said, never printed)
-        floor = RESOLVED * _EPS * float(np.max(np.abs(G)))
+        # ε‖G‖ (refined) or ε‖A‖ (LAPACK alone), so a ζ whose σ is below RESOLVED times that is not
+        # resolved and given as NaN (said, never printed)
+        norm = float(np.max(np.abs(G))) if refined else float(np.max(np.sum(np.abs(A), axis=1)))
+        floor = RESOLVED * _EPS * norm
         rows += [(float(abs(v)), float(-v.real / abs(v)) if -v.real > floor else float("nan"), float(v.imag))
                  for v in osc]
         real = [float(v.real) for v in lam if abs(v.imag) <= tiny]
