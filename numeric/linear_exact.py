@@ -60,7 +60,7 @@ MP_MAX_STATES = 64
 #: Largest state whose every eigenpair is refined (:func:`_refine_small`): beside the slow ones, the
 #: eigenvectors of weakly damped modes near the forcing's frequencies (2.9e-9 of the amplitude on a
 #: 4-mass scene with gravity, a force and ground motion at 1e10 mass contrast; 1.4e-13 refined).
-REFINE_ALL_STATES = 32
+REFINE_ALL_STATES = 16
 MP_DIGITS = 40
 _EPS = float(np.finfo(float).eps)
 
