@@ -287,12 +287,54 @@ def chain_mode_records(model: ChainModel, modes: ChainModes, omega2_values=None)
     return records, note
 
 
-def chain_report(model: ChainModel, modes: ChainModes, omega2_values=None) -> tuple[str, dict]:
+def _damping_ratios(model: ChainModel, records: list[dict], damped) -> str:
+    """Add ``damping_ratio``, ``omega_damped``, ``damping_ratio_expr`` to each listed mode of a damped
+    chain (in place, the fields of non-chain scenes) and return a note (empty when every ζ is given).
+
+    ``damped`` holds ``(ω_n, ζ, ω_d)`` of every mode ascending (the dense route of
+    ``numeric.chain_damped``, given by the caller) or None: then Rayleigh-only damping takes its
+    closed form ζ_j = α/(2ω_j) + βω_j/2 at the listed ω (a sum of positive terms), and dashpots on a
+    chain too long for the dense route leave ζ None, said in the note."""
+    import math
+
+    n = model.chain.n
+    e = MODES_LISTED_EACH_END
+    positions = list(range(n)) if len(records) == n else list(range(e)) + list(range(n - e, n))
+    alpha = beta = None
+    unresolved = 0
+    if damped is None and not model.dampers and model.rayleigh is not None:
+        sub = {model.params[p]: sp.Rational(v) for p, v in model.scene.parameters.items()}
+        alpha, beta = (float(sp.N(c.subs(sub), 30)) for c in model.rayleigh)
+    for rec, pos in zip(records, positions):
+        zeta = wd = None
+        if damped is not None:
+            _, zeta, wd = damped[pos]
+            if zeta is not None and zeta != zeta:  # NaN: below float64's resolution of the damping
+                zeta = None
+                unresolved += 1
+        elif alpha is not None:
+            w = math.sqrt(max(rec["omega2_value"], 0.0))
+            if w > 0:
+                zeta = alpha / (2 * w) + beta * w / 2
+                wd = w * math.sqrt((1 - zeta) * (1 + zeta)) if zeta < 1 else 0.0
+        rec.update(damping_ratio=zeta, omega_damped=wd, damping_ratio_expr=None)
+    if damped is None and alpha is None:
+        return (f"damping ratios not computed: dashpots on a chain of {n} masses (the dense modal "
+                "state matrix is used up to 60 masses)")
+    if unresolved:
+        return (f"damping ratios of {unresolved} modes not given: their decay rate is below 1e-10 of what "
+                "float64 resolves in the modal damping (modes all but confined away from every dashpot)")
+    return ""
+
+
+def chain_report(model: ChainModel, modes: ChainModes, omega2_values=None, damped=None) -> tuple[str, dict]:
     """Text and JSON description of a chain's derivation and spectrum.
 
     The JSON has the top-level shape of non-chain scenes (``scene, parameters, masses, modes,
     closed_form, notes``; ``masses`` is empty: chain masses are indices 0 … n−1) plus the
     chain's ``n, left, right, uniform, j_range`` and its symbolic ``family`` (omega2, shape).
+    A damped chain's listed modes carry ``damping_ratio`` and ``omega_damped`` (``damped``: the
+    ``(ω_n, ζ, ω_d)`` rows of ``numeric.chain_damped.damped_rows``, see :func:`_damping_ratios`).
     """
     sc, ch = model.scene, model.chain
     force = sp.factor_terms(model.interior_equation())
@@ -323,12 +365,19 @@ def chain_report(model: ChainModel, modes: ChainModes, omega2_values=None) -> tu
                                  if model.k3 is not None else []) + law_notes
     lines += [f"    note: {note}" for note in notes]
     records, listed_note = chain_mode_records(model, modes, omega2_values)
+    zeta_note = _damping_ratios(model, records, damped) if damping_data is not None and records else ""
+    if zeta_note:
+        notes.append(zeta_note)
     if records:  # the numbers, for every chain (a closed form or not): as --json lists them
         how = "closed form at the scene's values" if modes.omega2 is not None else \
             "numeric, the generated module's omega2()"
         lines += ["", f"Normal modes ({how}), ascending:"]
         lines += [f"    {'j = ' + str(r['j']) + ':  ' if 'j' in r else ''}ω² = {r['omega2_value']:.10g}"
-                  + (f"  (multiplicity {r['multiplicity']})" if r["multiplicity"] > 1 else "") for r in records]
+                  + (f"  (multiplicity {r['multiplicity']})" if r["multiplicity"] > 1 else "")
+                  + (f"   zeta = {r['damping_ratio']:.10g}   omega_d = {r['omega_damped']:.10g}"
+                     if r.get("damping_ratio") is not None else "") for r in records]
+        if zeta_note:
+            lines.append(f"    note: {zeta_note}")
         if listed_note:
             lines.append(f"    note: {listed_note}")
     elif listed_note:

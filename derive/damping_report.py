@@ -36,6 +36,12 @@ _SETTLED = 4e-16
 #: Largest dashpot damping ratio ``φᵀCφ / φᵀMφ`` (SymPy operations, before simplifying it) whose
 #: closed form is sought (a size, never a time: the same scene gives the same report under any load).
 MAX_ZETA_OPS = 400
+#: First working precision of the damped modes (digits); each retry doubles it.
+FIRST_DIGITS = 40
+#: The absolute floor near ζ = 0: a ratio that is noise at FIRST_DIGITS and below this at twice
+#: that (10^(−1.8·40)) is printed as exactly 0 (see :func:`_zero_noise`). A true ζ under it — a
+#: mode all but confined to a 1e-12 kg mass far from the only dashpot, ζ = 5e-91 — reads as 0.
+ZETA_FLOOR = 10.0 ** (-1.8 * FIRST_DIGITS)
 
 
 @dataclass(frozen=True)
@@ -168,10 +174,12 @@ def _rows_at(model: Model, dps: int) -> tuple[list[tuple], bool]:
             diag = _cluster_diagonal(w2, G, dps)
             rows = []
             for j in range(n):
-                w = mpmath.sqrt(w2[j])
-                if w2[j] == 0:
+                # an ω² that is noise below zero at this precision (stiffness contrast beyond the
+                # digits) reads as rigid here; the next precision settles it
+                if w2[j] <= 0:
                     rows.append((0.0, None, 0.0, None))
                     continue
+                w = mpmath.sqrt(w2[j])
                 g = diag[j]
                 wd2 = w2[j] - g * g / 4
                 rows.append((float(w), float(g / (2 * w)), float(mpmath.sqrt(wd2)) if wd2 > 0 else 0.0, None))
@@ -417,7 +425,7 @@ def damped_modes(model: Model, modes: ModeSet | None) -> DampedModes:
 def _settled_rows(model: Model) -> tuple[list[tuple], bool]:
     """:func:`_rows_at` at 40, 80, … digits until two successive precisions agree (float64 settled)."""
     prev = None
-    dps = 40
+    dps = FIRST_DIGITS
     while dps <= 640:
         rows, prop = _rows_at(model, dps)
         if prev is not None and prev[1] == prop and _settled(prev[0], rows, dps // 2):

@@ -56,6 +56,19 @@ def _chain_omega2(scene: Scene, chain_modes):
         return None
 
 
+def _chain_damped(scene: Scene, model):
+    """``(ω_n, ζ, ω_d)`` of every mode of a chain with dashpots of at most ``chain_damped.DENSE_MAX``
+    masses (:mod:`numeric.chain_damped`), else None (Rayleigh-only damping has a closed form)."""
+    from .numeric.chain_damped import DENSE_MAX, damped_rows
+
+    if not getattr(model, "dampers", None) or scene.chain.n > DENSE_MAX:
+        return None
+    from .numeric.elements import Elements
+
+    el = Elements.from_system(_system(scene)[0])
+    return damped_rows(el.masses, el.spring_ends, el.stiffness, el.damper_ends, el.damping)
+
+
 @dataclass(frozen=True)
 class Modes:
     """A scene's equations of motion and normal modes.
@@ -80,7 +93,8 @@ class Modes:
         if self.chain:
             from .derive.chain import chain_report
 
-            return chain_report(self.model, self.modes, _chain_omega2(self.scene, self.modes))[1]
+            return chain_report(self.model, self.modes, _chain_omega2(self.scene, self.modes),
+                                _chain_damped(self.scene, self.model))[1]
         from .derive.report import modes_json
 
         return modes_json(self.model, self.modes)
@@ -90,7 +104,8 @@ class Modes:
         if self.chain:
             from .derive.chain import chain_report
 
-            return chain_report(self.model, self.modes, _chain_omega2(self.scene, self.modes))[0]
+            return chain_report(self.model, self.modes, _chain_omega2(self.scene, self.modes),
+                                _chain_damped(self.scene, self.model))[0]
         from .derive.report import render_text
 
         return render_text(self.model, self.modes)
@@ -476,6 +491,7 @@ def simulate(scene: str | Path | Scene, methods: list[str] | None = None, dt: fl
         summary, t, x, v, extra, npz, figs = _kept(sc, system, names, dt, steps, record_every, options, out, figures)
     if modal_energy:
         summary["modal_energy"], figs = _modal_energies(sc, system, t, x, v, extra, npz, figs, figures, progress)
+    notes = notes + sim.float64_limits(system, names, steps * dt)  # one line where float64 cannot follow
     summary.update({"scene": sc.name, "module": origin, "dt": dt, "steps": steps, "t_end": steps * dt,
                     "npz": None if npz is None else str(npz), "figures": [str(p) for p in figs],
                     "methods_that_apply": sim.applicable(system),
