@@ -271,7 +271,8 @@ def _scalar_force(c: _Context) -> list[str]:
     model = c.model
     if not c.dense:
         return []
-    body = [f"    {q} = _p[{j}]" for j, q in enumerate(c.params)]
+    body = [f"    {c.sig}{',' if len(c.params) == 1 else ''} = "
+            + ", ".join(f"_p[{j}]" for j in range(len(c.params))) + "  # in PARAMETERS order"] if c.params else []
     body += [f"    _{s} = _x[{i}]" for i, s in enumerate(model.x)]
     first = True
     for group in _SCALAR_EFFECTS:

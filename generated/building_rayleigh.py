@@ -196,11 +196,7 @@ def scalar_force(_x, t, _out, _p):
     _p : ndarray, shape (P,)
         The parameter values in PARAMETERS order.
     """
-    F0 = _p[0]
-    alpha = _p[1]
-    beta = _p[2]
-    k = _p[3]
-    m = _p[4]
+    F0, alpha, beta, k, m = _p[0], _p[1], _p[2], _p[3], _p[4]  # in PARAMETERS order
     _x_floor1 = _x[0]
     _x_floor2 = _x[1]
     _x_floor3 = _x[2]

@@ -187,9 +187,7 @@ def scalar_force(_x, t, _out, _p):
     _p : ndarray, shape (P,)
         The parameter values in PARAMETERS order.
     """
-    k = _p[0]
-    kappa = _p[1]
-    m = _p[2]
+    k, kappa, m = _p[0], _p[1], _p[2]  # in PARAMETERS order
     _x_m1 = _x[0]
     _x_m2 = _x[1]
     _x_m3 = _x[2]
