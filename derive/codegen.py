@@ -279,6 +279,8 @@ def _scalar_force(c: _Context) -> list[str]:
         if group == (Effect.GROUND,) and model.ground is None:  # a ground table: data at run time
             continue
         exprs = model.force_expressions(*group)
+        if model.ground is not None:  # the ground term's a_g(t) stands for the scene's expression
+            exprs = [e.xreplace({sp.Function("a_g")(model.t): model.ground}) for e in exprs]
         if not first and all(e == 0 for e in exprs):
             continue
         op = "=" if first else "+="
