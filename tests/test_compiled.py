@@ -140,3 +140,17 @@ def test_second_process_compiles_nothing(tmp_path):
     assert runs[1]["compiled"] == [] and runs[1]["misses"] == 0 and runs[1]["hits"] == 1
     assert runs[0]["x"] == runs[1]["x"]
     assert list((tmp_path / "cache" / "compiled").glob("sc_*.py"))
+
+
+@pytest.mark.parametrize("name", ["dprkn6", "dprkn8", "dprkn12"])
+def test_compiled_rkn_pairs_agree_with_numpy(systems, name):
+    """Same pair, same step control: the trajectories agree far inside the tolerance (the step sequences
+    may part where an error norm within rounding of a decision flips it)."""
+    system = systems["springy"]
+    method = registry.method(name)
+    x0, v0 = _state(system.n)
+    t = np.linspace(0.0, 20.0, 21)
+    fast = method.solve(system, x0, v0, t, 1e-10, 1e-12)
+    slow = method.with_options(Options(compiled=False)).solve(system, x0, v0, t, 1e-10, 1e-12)
+    assert np.abs(fast.x - slow.x).max() <= 1e-8 * np.abs(slow.x).max()
+    assert abs(fast.force_evals - slow.force_evals) <= 0.1 * slow.force_evals

@@ -305,7 +305,123 @@ def dop853_loop(x0, v0, p, t0, t_end, rtol, atol, Ad, A, B, C, E3, E5, ts, max_s
     return y[:n].copy(), y[n:].copy(), accepted, evals
 
 
+def _rkn_norm(dx, dv, sx, sv):
+    """``sqrt((mean((dx/sx)²) + mean((dv/sv)²))/2)`` (the RKN pairs' error norm)."""
+    n = dx.shape[0]
+    ax = 0.0
+    av = 0.0
+    for r in range(n):
+        ax += (dx[r] / sx[r]) ** 2
+        av += (dv[r] / sv[r]) ** 2
+    return np.sqrt(0.5 * (ax / n + av / n))
+
+
+def rkn_loop(x0, v0, p, t_eval, rtol, atol, c, A, b, bp, e, ep, fsal, q_hat, order, xs, vs):
+    """An embedded Runge–Kutta–Nyström pair with the step control of numeric.integrators.nystrom
+    (Hairer–Nørsett–Wanner's first step, PI controller, stepping exactly onto every output time).
+    Frames go into ``xs``, ``vs`` (S, N). Returns ``(evaluations, accepted steps)``; accepted = -1
+    after a step-size underflow, -2 when the solution is not finite."""
+    SAFETY, FAC_MAX, FAC_MIN, BETA1, BETA2 = 0.9, 4.0, 0.2, 0.7, 0.4
+    n = x0.shape[0]
+    s = c.shape[0]
+    x, v = x0.copy(), v0.copy()
+    K = np.empty((s, n))
+    xi, xn, vn, ex, ev = np.empty(n), np.empty(n), np.empty(n), np.empty(n), np.empty(n)
+    sx, sv = np.empty(n), np.empty(n)
+    t = t_eval[0]
+    _store(xs, vs, 0, x, v)
+    _force(x, t, K[0], p)
+    evals = 1
+    # first step (numeric.integrators.nystrom.EmbeddedNystrom._first_step)
+    span = t_eval[t_eval.shape[0] - 1] - t_eval[0]
+    if span <= 0:
+        h = 1.0
+    else:
+        for r in range(n):
+            sx[r] = atol + rtol * abs(x[r])
+            sv[r] = atol + rtol * abs(v[r])
+        d0 = _rkn_norm(x, v, sx, sv)
+        d1 = _rkn_norm(v, K[0], sx, sv)
+        h0 = 1e-6 if (d0 < 1e-5 or d1 < 1e-5) else 0.01 * d0 / d1
+        h0 = min(h0, span)
+        for r in range(n):
+            xi[r] = x[r] + h0 * v[r]
+        _force(xi, t + h0, vn, p)
+        evals += 1
+        for r in range(n):
+            ex[r] = (vn[r] - K[0, r]) / h0
+        d2 = _rkn_norm(K[0], ex, sx, sv)
+        if max(d1, d2) <= 1e-15:
+            h1 = max(1e-6, h0 * 1e-3)
+        else:
+            h1 = (0.01 / max(d1, d2)) ** (1.0 / (order + 1))
+        h = min(100 * h0, h1, span)
+    steps = 0
+    k_ctrl = q_hat + 1.0
+    err_prev = 1.0
+    rejected = False
+    for row in range(1, t_eval.shape[0]):
+        target = t_eval[row]
+        while t < target:
+            clamped = h >= target - t
+            hs = target - t if clamped else h
+            if hs <= 1e-14 * max(abs(t), 1.0):
+                return evals, -1
+            h2 = hs * hs
+            for i in range(1, s):
+                for r in range(n):
+                    acc = 0.0
+                    for q in range(i):
+                        acc += A[i, q] * K[q, r]
+                    xi[r] = x[r] + (c[i] * hs) * v[r] + h2 * acc
+                _force(xi, t + c[i] * hs, K[i], p)
+                evals += 1
+            for r in range(n):
+                sb = 0.0
+                sbp = 0.0
+                se = 0.0
+                sep = 0.0
+                for q in range(s):
+                    sb += b[q] * K[q, r]
+                    sbp += bp[q] * K[q, r]
+                    se += e[q] * K[q, r]
+                    sep += ep[q] * K[q, r]
+                xn[r] = x[r] + hs * v[r] + h2 * sb
+                vn[r] = v[r] + hs * sbp
+                ex[r] = h2 * se
+                ev[r] = hs * sep
+                sx[r] = atol + rtol * max(abs(x[r]), abs(xn[r]))
+                sv[r] = atol + rtol * max(abs(v[r]), abs(vn[r]))
+            err = _rkn_norm(ex, ev, sx, sv)
+            if not np.isfinite(err):
+                return evals, -2
+            if err <= 1.0:
+                t = target if clamped else t + hs
+                for r in range(n):
+                    x[r] = xn[r]
+                    v[r] = vn[r]
+                steps += 1
+                if fsal:
+                    for r in range(n):
+                        K[0, r] = K[s - 1, r]
+                else:
+                    _force(x, t, K[0], p)
+                    evals += 1
+                err = max(err, 1e-10)
+                grow = SAFETY * err ** (-BETA1 / k_ctrl) * err_prev ** (BETA2 / k_ctrl)
+                grow = min(1.0 if rejected else FAC_MAX, max(FAC_MIN, grow))
+                err_prev = err
+                rejected = False
+                h_next = hs * grow
+                h = max(h, h_next) if clamped else h_next
+            else:
+                h = hs * max(FAC_MIN, SAFETY * err ** (-1.0 / k_ctrl))
+                rejected = True
+        _store(xs, vs, row, x, v)
+    return evals, steps
+
+
 #: The loops the compiled file exports (compiled with numba, cached on disk).
-LOOPS = ("verlet_loop", "kahan_verlet_loop", "splitting_loop", "rk4_loop", "dop853_loop")
+LOOPS = ("verlet_loop", "kahan_verlet_loop", "splitting_loop", "rk4_loop", "dop853_loop", "rkn_loop")
 #: The helpers the loops call (compiled too).
-HELPERS = ("_half_damp", "_store", "_total", "_rhs")
+HELPERS = ("_half_damp", "_store", "_total", "_rhs", "_rkn_norm")

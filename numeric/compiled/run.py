@@ -138,5 +138,35 @@ def dop853(system: System, x0: np.ndarray, v0: np.ndarray, t_end: float, rtol: f
     return x, v, ts[:min(accepted, max_steps)], int(evals)
 
 
-__all__ = ["route", "run_steps", "loop_name", "scalar_ready", "parameter_vector", "compile_seconds", "dop853",
+def rkn(system: System, table, x0: np.ndarray, v0: np.ndarray, t_eval: np.ndarray, rtol: float, atol: float):
+    """An embedded RKN pair (``table``, a :class:`~numeric.integrators.nystrom_tables.NystromTable`) compiled,
+    with the step control of :class:`~numeric.integrators.nystrom.EmbeddedNystrom`, onto ``t_eval``.
+
+    Returns
+    -------
+    AdaptiveResult
+        x, v shape (S, N, 1).
+    """
+    from ..errors import RunRefused
+    from ..integrators.ivp import AdaptiveResult
+
+    n = system.n
+    c = compiled(system.module)
+    tab = table.arrays
+    t_eval = np.ascontiguousarray(t_eval, dtype=np.float64)
+    xs = np.empty((t_eval.shape[0], n))
+    vs = np.empty_like(xs)
+    args = (np.ascontiguousarray(x0, dtype=float).reshape(n), np.ascontiguousarray(v0, dtype=float).reshape(n),
+            parameter_vector(system), t_eval, float(rtol), float(atol),
+            *(np.ascontiguousarray(tab[key], dtype=np.float64) for key in ("c", "A", "b", "bp", "e", "ep")),
+            bool(table.fsal), float(table.embedded_order), float(table.order), xs, vs)
+    evals, steps = timed_first_call(c, "rkn_loop", *args)
+    if steps == -1:
+        raise RunRefused(f"method {table.name!r}: step size underflow", quantity="rtol")
+    if steps == -2:
+        raise RunRefused(f"method {table.name!r}: the solution is not finite", quantity="method")
+    return AdaptiveResult(t_eval, xs[:, :, None], vs[:, :, None], int(evals), int(steps))
+
+
+__all__ = ["rkn", "route", "run_steps", "loop_name", "scalar_ready", "parameter_vector", "compile_seconds", "dop853",
            "MAX_FRAME_VALUES"]
