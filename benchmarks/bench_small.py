@@ -9,7 +9,8 @@ with BLAS pinned to one thread, side by side:
    scene: m, 3m, m and two springs k), in ns per step; the two final states are compared.
 2. **Duffing over T = 1000** (three masses, cubic springs; error = max |x − x_ref| at t = T, the
    reference Kahan–Li 8 compiled at h = 1/400, checked against the compiled DOP853 at rtol 1e-13):
-   the fixed-step methods (compiled) over a sweep of steps; SciPy's ``solve_ivp(method="DOP853")``
+   the fixed-step methods (compiled) over a sweep of steps and the RKN pairs ``dprkn8``, ``dprkn12``
+   (compiled) over tolerances; SciPy's ``solve_ivp(method="DOP853")``
    the way a user calls it (a NumPy right-hand side on (N,) arrays, the generated ``acceleration``);
    and the compiled DOP853 (:func:`springchain.numeric.compiled.run.dop853`: SciPy's tableau and
    step control in numba), each over ``rtol = 10^(−k/2)``, ``atol = rtol/1000``. For each accuracy
@@ -33,6 +34,7 @@ import numpy as np
 
 ACCURACIES = tuple(10.0 ** -k for k in range(3, 11))
 STEP_METHODS = ("verlet", "yoshida4", "blanes-moan4", "blanes-moan6", "kahan-li8")
+RKN_METHODS = ("dprkn8", "dprkn12")
 
 
 def _system(name):
@@ -147,7 +149,7 @@ def duffing(t_end: float, say=print) -> dict:
     def rhs(t, y):  # the user's call: NumPy right-hand side on (N,) arrays
         return np.concatenate((y[n:], acc(y[:n], **params)))
 
-    runs: dict[str, list] = {name: [] for name in STEP_METHODS + ("scipy-dop853", "compiled-dop853")}
+    runs: dict[str, list] = {name: [] for name in STEP_METHODS + RKN_METHODS + ("scipy-dop853", "compiled-dop853")}
     for name in STEP_METHODS:
         m = registry.method(name)
         per = max(m.traits.evals_per_step, 1.0)
@@ -159,6 +161,17 @@ def duffing(t_end: float, say=print) -> dict:
             if err < 1e-11:
                 break
             steps = int(steps * 2 ** 0.5)
+    ends = np.array([0.0, t_end])
+    for name in RKN_METHODS:  # compiled RKN pairs, stepping onto t = T only
+        m = registry.method(name, Options(progress=False))
+        m.solve(system, x0, v0, np.array([0.0, 1.0]), 1e-6, 1e-9)
+        for k in range(5, 27):
+            rtol = 10.0 ** (-k / 2)
+            sec, res = _timed(lambda: m.solve(system, x0, v0, ends, rtol, rtol * 1e-3), budget=0.3)
+            err = float(np.max(np.abs(res.x[-1, :, 0] - x_ref)))
+            runs[name].append({"rtol": rtol, "seconds": sec, "error": err})
+            if err < 1e-11:
+                break
     y0 = np.concatenate((x0, v0))
     for k in range(5, 27):
         rtol = 10.0 ** (-k / 2)
@@ -176,7 +189,7 @@ def duffing(t_end: float, say=print) -> dict:
     rows = []
     for accuracy in ACCURACIES:
         costs = {name: cost_at(rs, accuracy) for name, rs in runs.items()}
-        ours = {n: c for n, c in costs.items() if n in STEP_METHODS and c is not None}
+        ours = {n: c for n, c in costs.items() if n in STEP_METHODS + RKN_METHODS and c is not None}
         best = min(ours, key=ours.get) if ours else None
         row = {"accuracy": accuracy, "best": best, "best_seconds": ours.get(best),
                "scipy_dop853_seconds": costs["scipy-dop853"], "compiled_dop853_seconds": costs["compiled-dop853"]}

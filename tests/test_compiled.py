@@ -41,6 +41,14 @@ DUFFING_ONLY = scene_toml(
 STEP_METHODS = [m for m in registry.methods(Kind.STEP) if m.name not in ("expm", "chebyshev")]
 
 
+@pytest.fixture(autouse=True)
+def _always_compile(monkeypatch):
+    """Compile even the short runs of these tests (outside them, only runs that pay a first compile)."""
+    import springchain.numeric.compiled.run as compiled_run
+
+    monkeypatch.setattr(compiled_run, "COMPILE_MIN_EVALS", 0)
+
+
 @pytest.fixture(scope="module")
 def systems(scene_from_text):
     return {name: system_of(scene_from_text(text, f"{name}.toml"))[1]
@@ -123,7 +131,7 @@ _CHILD = textwrap.dedent("""
     from springchain.numeric.run.protocol import record
     from springchain.numeric.compiled.cache import compiled
     system, _ = system_of(load("duffing"))
-    run = record(registry.method("verlet"), system, np.full(3, 0.1), np.zeros(3), Grid(0.01, 100, 10))
+    run = record(registry.method("verlet"), system, np.full(3, 0.1), np.zeros(3), Grid(0.001, 200_000, 20_000))
     c = compiled(system.module)
     d = c.loop("verlet_loop")
     print(json.dumps({"compiled": sorted(c.compiled), "hits": sum(d.stats.cache_hits.values()),

@@ -19,6 +19,9 @@ from .cache import available, compiled, timed_first_call
 
 #: Frames × masses kept in memory by one compiled run (beyond it the NumPy driver streams).
 MAX_FRAME_VALUES = 50_000_000
+#: A loop not yet compiled in this process is compiled (or loaded from disk) only for a run of at least
+#: this many force evaluations: a first compile costs seconds, as much as ~10⁵ evaluations on NumPy.
+COMPILE_MIN_EVALS = 100_000
 
 
 def loop_name(integrator: Integrator) -> str | None:
@@ -42,11 +45,26 @@ def scalar_ready(system: System) -> bool:
             and system.ground in (None, "expression") and available())
 
 
-def route(system: System, integrator: Integrator, frames: int) -> str | None:
-    """The compiled loop for this run, or None (then the NumPy driver)."""
+def ready(system: System, loop: str) -> bool:
+    """Whether ``loop`` is compiled (or loaded) for the system's module in this process already."""
+    from .cache import _BY_MODULE
+
+    known = _BY_MODULE.get(id(system.module))
+    return bool(known and known[0] is system.module and known[1].loop(loop).signatures)
+
+
+def worth_compiling(system: System, loop: str, evals: float) -> bool:
+    """Compile for a run of ``evals`` force evaluations: when the loop is ready, or the run is long."""
+    return evals >= COMPILE_MIN_EVALS or ready(system, loop)
+
+
+def route(system: System, integrator: Integrator, frames: int, evals: float = float("inf")) -> str | None:
+    """The compiled loop for this run of about ``evals`` force evaluations, or None (then the NumPy
+    driver): small ``[masses]`` scenes, runs long enough to pay a first compile (:func:`worth_compiling`)."""
     if not scalar_ready(system) or frames * system.n > MAX_FRAME_VALUES:
         return None
-    return loop_name(integrator)
+    name = loop_name(integrator)
+    return name if name is not None and worth_compiling(system, name, evals) else None
 
 
 def parameter_vector(system: System) -> np.ndarray:
@@ -168,5 +186,5 @@ def rkn(system: System, table, x0: np.ndarray, v0: np.ndarray, t_eval: np.ndarra
     return AdaptiveResult(t_eval, xs[:, :, None], vs[:, :, None], int(evals), int(steps))
 
 
-__all__ = ["rkn", "route", "run_steps", "loop_name", "scalar_ready", "parameter_vector", "compile_seconds", "dop853",
+__all__ = ["rkn", "route", "ready", "worth_compiling", "COMPILE_MIN_EVALS", "run_steps", "loop_name", "scalar_ready", "parameter_vector", "compile_seconds", "dop853",
            "MAX_FRAME_VALUES"]

@@ -88,7 +88,8 @@ class StepMethod(Method):
             return None
         from ..compiled.run import route
 
-        return route(system, getattr(integ, "inner", integ), grid.frames)
+        return route(system, getattr(integ, "inner", integ), grid.frames,
+                     max(integ.evals_per_step, 1.0) * grid.steps)
 
     def refusal(self, system: System) -> str | None:
         why = self.integrator(system).refusal(self.problem(system))
