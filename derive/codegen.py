@@ -271,9 +271,9 @@ def _scalar_force(c: _Context) -> list[str]:
     model = c.model
     if not c.dense:
         return []
-    body = [f"    {c.sig}{',' if len(c.params) == 1 else ''} = "
-            + ", ".join(f"_p[{j}]" for j in range(len(c.params))) + "  # in PARAMETERS order"] if c.params else []
-    body += [f"    _{s} = _x[{i}]" for i, s in enumerate(model.x)]
+    call = ", ".join(["_x", "t", "_out"] + [f"_p[{j}]" for j in range(len(c.params))])
+    outer = [f"    _scalar_force_terms({call})  # the parameters in PARAMETERS order"]
+    body = [f"    _{s} = _x[{i}]" for i, s in enumerate(model.x)]
     first = True
     for group in _SCALAR_EFFECTS:
         if group == (Effect.GROUND,) and model.ground is None:  # a ground table: data at run time
@@ -287,7 +287,9 @@ def _scalar_force(c: _Context) -> list[str]:
         body += [f"    _out[{i}] {op} {c.p(e / m)}" for i, (e, m) in enumerate(zip(exprs, model.masses))
                  if first or e != 0]
         first = False
-    return function("scalar_force(_x, t, _out, _p)", _SCALAR_DOC, body)
+    return (function("scalar_force(_x, t, _out, _p)", _SCALAR_DOC, outer)
+            + function(f"_scalar_force_terms(_x, t, _out{c.kw})",
+                       "scalar_force() with the parameters as arguments (the body numba compiles).", body))
 
 
 def _incidence_lines(c: _Context, arg: str, ends: str, constants: str, *, cubic: bool,

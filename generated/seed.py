@@ -118,7 +118,11 @@ def scalar_force(_x, t, _out, _p):
     _p : ndarray, shape (P,)
         The parameter values in PARAMETERS order.
     """
-    k, m = _p[0], _p[1]  # in PARAMETERS order
+    _scalar_force_terms(_x, t, _out, _p[0], _p[1])  # the parameters in PARAMETERS order
+
+
+def _scalar_force_terms(_x, t, _out, k, m):
+    """scalar_force() with the parameters as arguments (the body numba compiles)."""
     _x_m1 = _x[0]
     _x_m2 = _x[1]
     _x_m3 = _x[2]

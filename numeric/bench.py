@@ -36,8 +36,8 @@ from typing import Callable
 
 import numpy as np
 
-from .bench_runs import (adaptive_rtols, adaptive_sweep, energy_norm, progress_reporter, report_run,
-                          selected_in_order, timed_run)
+from .bench_runs import (adaptive_rtols, adaptive_sweep, compile_note, energy_norm, progress_reporter,
+                          report_run, selected_in_order, timed_run)
 from .plan import Planner, exact_method, with_tolerance
 from .plan_pilot import check_pilot, needs_pilot
 from .progress import Reporter
@@ -260,14 +260,6 @@ def run_bench(system: System, x0: np.ndarray, v0: np.ndarray, t_end: float, dt_o
     notes.append(compile_note())
     return BenchResult(scene, t_end, exact, desc, tuple(records), horizons, tuple(notes))
 
-
-def compile_note() -> str:
-    """The one line that reports the compiled loops' compile (or disk-cache load) time, kept out of every
-    timing (each run is timed after a warm-up call)."""
-    from .compiled.run import compile_seconds
-
-    return (f"compiled loops (small [masses] scenes): {compile_seconds():.1f} s to compile or load from the "
-            f"disk cache, once, in no timing")
 
 
 # -- error against horizon ---------------------------------------------------------------------------

@@ -74,5 +74,14 @@ def adaptive_sweep(method: Method, rtols, cap: int, run: Callable[[float], Bench
     return out
 
 
-__all__ = ["energy_norm", "progress_reporter", "report_run", "timed_run", "selected_in_order", "adaptive_rtols",
+def compile_note() -> str:
+    """The one line that reports the compiled loops' compile (or disk-cache load) time, kept out of every
+    timing (each run is timed after a warm-up call)."""
+    from .compiled.run import compile_seconds
+
+    return (f"compiled loops (small [masses] scenes): {compile_seconds():.1f} s to compile or load from the "
+            f"disk cache, once, in no timing")
+
+
+__all__ = ["compile_note", "energy_norm", "progress_reporter", "report_run", "timed_run", "selected_in_order", "adaptive_rtols",
            "adaptive_sweep"]

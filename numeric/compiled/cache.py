@@ -31,6 +31,7 @@ _TAIL = """
 
 import numba as _numba
 
+_scalar_force_terms = _numba.njit(cache=True)(_scalar_force_terms)
 _force = _numba.njit(cache=True)(scalar_force)
 {binds}
 """
@@ -56,7 +57,7 @@ def source_of(module: ModuleType) -> str:
     """The compiled file's text for ``module`` (which must define ``scalar_force``)."""
     import numba
 
-    body = inspect.getsource(module.scalar_force)
+    body = inspect.getsource(module.scalar_force) + "\n\n" + inspect.getsource(module._scalar_force_terms)
     binds = "\n".join(f"{name} = _numba.njit(cache=True)({name})" for name in _template.HELPERS + _template.LOOPS)
     return (f"# compiled loops of scene {module.SCENE!r} (numba {numba.__version__}); written by "
             f"springchain.numeric.compiled.cache, do not edit\n" + inspect.getsource(_template)
