@@ -271,8 +271,10 @@ def closed_form_modes(model: Model, budget: float | None = DEFAULT_BUDGET,
     notes: list[str] = []
     # a mirror split at best halves the problem: beyond twice the largest block nothing is solvable
     hopeless = model.scene.n - len(rigid) > 2 * MAX_SYMBOLIC_BLOCK + 1
+    # K about an equilibrium found by Newton holds numbers, not closed forms
+    numeric_k = getattr(model, "equilibrium", None) is not None and not model.equilibrium.closed_form
     try:
-        if hopeless:
+        if hopeless or numeric_k:
             raise BudgetExceeded
         with time_budget(budget):
             for B in _blocks(model):
@@ -282,7 +284,8 @@ def closed_form_modes(model: Model, budget: float | None = DEFAULT_BUDGET,
                 modes.extend(_solve_block(model, B, lam, n_rigid, max_radical_degree))
         closed = True
     except BudgetExceeded:
-        why = (f"{model.scene.n} masses: symmetry blocks larger than {MAX_SYMBOLIC_BLOCK}" if hopeless else
+        why = ("K is the Hessian at a numerically found equilibrium" if numeric_k else
+               f"{model.scene.n} masses: symmetry blocks larger than {MAX_SYMBOLIC_BLOCK}" if hopeless else
                f"a factor of degree > 3, an unreadably long root, or over the {budget:g} s budget")
         how = ("mpmath eigensolver at increasing precision, correct to float64" if model.scene.n <= MAX_MPMATH_MODES
                else "spring-factor SVD, as the generated module's omega2(), relatively accurate to a few float64 ulps")

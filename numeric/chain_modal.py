@@ -182,7 +182,8 @@ class ChainModal:
         if not facts.chain:
             raise RunRefused("ChainModal needs a [chain] scene's generated module; use numeric.modal for others")
         if not facts.linear:
-            raise RunRefused("no exact solution: this chain has cubic springs (use an integrator, e.g. verlet)")
+            raise RunRefused("no exact solution: this chain has cubic springs or spring potentials "
+                             "(use an integrator, e.g. verlet)")
         values = dict(facts.defaults)
         values.update(params or {})
         x0, v0 = _initial(x0, v0)

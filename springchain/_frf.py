@@ -220,7 +220,7 @@ def frf(scene: str | Path | Scene, input, output, omega_min: float | None = None
     response = frequency_response(system, i, o, lo, hi, points, modes)
     notes = []
     if not system.linear:
-        notes.append("cubic springs: the response of the linearisation about x = 0 (their linear part)")
+        notes.append("nonlinear springs: the response of the linearisation about the equilibrium (their stiffness there)")
     if system.chain:
         notes.append("[chain] scene: tridiagonal solve per frequency; the grid is refined at the "
                      f"{min(len(response.resonances), 40)} lowest resonances in range")
