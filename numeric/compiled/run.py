@@ -7,6 +7,8 @@ the integrator's class (its scheme), never by its name.
 
 from __future__ import annotations
 
+from contextlib import contextmanager
+
 import numpy as np
 
 from ..integrators.base import Integrator
@@ -43,6 +45,20 @@ def scalar_ready(system: System) -> bool:
     per mass, without force or ground tables (dampers come in as a matrix), and numba loads."""
     return (not system.chain and system.has("scalar_force") and not system.tabulated
             and system.ground in (None, "expression") and available())
+
+
+@contextmanager
+def eager(enabled: bool = True):
+    """Within the block, compile the loop of every run (a benchmark: many runs share a loop and each is
+    timed after a warm-up, so a compile costs wall time once and no timing)."""
+    global COMPILE_MIN_EVALS
+    old = COMPILE_MIN_EVALS
+    if enabled:
+        COMPILE_MIN_EVALS = 0
+    try:
+        yield
+    finally:
+        COMPILE_MIN_EVALS = old
 
 
 def ready(system: System, loop: str) -> bool:
@@ -186,5 +202,5 @@ def rkn(system: System, table, x0: np.ndarray, v0: np.ndarray, t_eval: np.ndarra
     return AdaptiveResult(t_eval, xs[:, :, None], vs[:, :, None], int(evals), int(steps))
 
 
-__all__ = ["rkn", "route", "ready", "worth_compiling", "COMPILE_MIN_EVALS", "run_steps", "loop_name", "scalar_ready", "parameter_vector", "compile_seconds", "dop853",
+__all__ = ["eager", "rkn", "route", "ready", "worth_compiling", "COMPILE_MIN_EVALS", "run_steps", "loop_name", "scalar_ready", "parameter_vector", "compile_seconds", "dop853",
            "MAX_FRAME_VALUES"]
