@@ -258,6 +258,51 @@ def _acceleration(c: _Context) -> list[str]:
     return function(f"acceleration(_x{c.kw})", doc, body)
 
 
+#: Effects whose forces the scalar writer emits, one ``+=`` line per mass and effect (a new force
+#: term -- a potential -- is one more entry here). Springs, cubic terms and gravity form the first line.
+_SCALAR_EFFECTS = ((Effect.SPRING, Effect.CUBIC, Effect.GRAVITY), (Effect.FORCE,), (Effect.GROUND,))
+
+_SCALAR_DOC = """a(x) + a_ext(t) as straight-line scalar code (springs, cubic terms, gravity, expression forces,
+ground acceleration), written into ``_out``: compiled by numeric (numba) for the small-scene loops.
+
+Parameters
+----------
+_x : ndarray, shape (N,)
+t : float
+_out : ndarray, shape (N,)
+    Overwritten with the acceleration.
+_p : ndarray, shape (P,)
+    The parameter values in PARAMETERS order.
+"""
+
+
+def _scalar_force(c: _Context) -> list[str]:
+    """scalar_force(x, t, out, p): the per-mass forces over scalars (no NumPy calls on arrays), for
+    scenes printed per mass. Damping is not in it: the loops take -M⁻¹C as a matrix (Strang splitting)."""
+    model = c.model
+    if not c.dense or c.laws:  # spring potentials: their series tensions stay on the NumPy path for now
+        return []
+    call = ", ".join(["_x", "t", "_out"] + [f"_p[{j}]" for j in range(len(c.params))])
+    outer = [f"    _scalar_force_terms({call})  # the parameters in PARAMETERS order"]
+    body = [f"    _{s} = _x[{i}]" for i, s in enumerate(model.x)]
+    first = True
+    for group in _SCALAR_EFFECTS:
+        if group == (Effect.GROUND,) and model.ground is None:  # a ground table: data at run time
+            continue
+        exprs = model.force_expressions(*group)
+        if model.ground is not None:  # the ground term's a_g(t) stands for the scene's expression
+            exprs = [e.xreplace({sp.Function("a_g")(model.t): model.ground}) for e in exprs]
+        if not first and all(e == 0 for e in exprs):
+            continue
+        op = "=" if first else "+="
+        body += [f"    _out[{i}] {op} {c.p(e / m)}" for i, (e, m) in enumerate(zip(exprs, model.masses))
+                 if first or e != 0]
+        first = False
+    return (function("scalar_force(_x, t, _out, _p)", _SCALAR_DOC, outer)
+            + function(f"_scalar_force_terms(_x, t, _out{c.kw})",
+                       "scalar_force() with the parameters as arguments (the body numba compiles).", body))
+
+
 def _incidence_lines(c: _Context, arg: str, ends: str, constants: str, *, cubic: bool,
                      forces: bool = True) -> list[str]:
     """Body lines that form the element extensions ``_d`` (shape (S, ...)) of ``arg`` over an element
@@ -437,7 +482,7 @@ def _spring_laws(c: _Context) -> list[str]:
 
 #: The section writers of a ``[masses]`` module, in the order they appear in it.
 SECTIONS = (_constants, _element_constants, _mass_and_stiffness, _damping_matrix, _dynamical_matrix,
-            _spectrum, _spectrum_helper, _acceleration, _bound_acceleration, _damping_acceleration,
+            _spectrum, _spectrum_helper, _acceleration, _scalar_force, _bound_acceleration, _damping_acceleration,
             _external_acceleration, _gravity, _forcing_harmonics, _tables_and_ground, _energy, _spring_laws)
 
 

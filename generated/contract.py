@@ -79,6 +79,7 @@ class When(enum.Enum):
     ALWAYS = "always"
     MASSES = "[masses] scenes"
     CHAIN = "[chain] scenes"
+    PRINTED = "[masses] scenes of at most 12 masses (printed per mass)"
     UNIFORM_CHAIN = "uniform [chain] scenes (closed-form spectrum)"
     CUBIC = "[masses] scenes with cubic springs"
     CUBIC_CHAIN = "[chain] scenes with cubic springs"
@@ -165,6 +166,8 @@ ITEMS: tuple[Item, ...] = (
     Item("spring_cubic_constants", _F, "ndarray (S,): k3 of each spring", When.CUBIC_CHAIN),
     Item("cubic_constants", _F, "ndarray (S,): k3 of each spring", When.CUBIC),
     Item("acceleration", "(x, **parameters)", "ndarray (N, ...): a(x) = -M^-1 dV/dx"),
+    Item("scalar_force", "(x, t, out, p)", "None: writes a(x) + a_ext(t) into out (N,); p the parameter values "
+         "in PARAMETERS order; straight-line scalar code (numba-compilable)", When.PRINTED),
     Item("make_acceleration", _F, "callable x (N, ...) -> (N, ...): a(x) with constants bound"),
     Item("energy", "(x, v, **parameters)", "ndarray (...): T + V"),
     Item("mass_matrix", _F, "ndarray (N, N); chains: n <= MAX_DENSE"),

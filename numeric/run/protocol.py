@@ -90,12 +90,16 @@ class Options:
     spectrum : SpectrumSource
     progress : bool or None
         Progress on stderr for phases longer than about a second (None: on).
+    compiled : bool
+        Run small ``[masses]`` scenes' fixed-step methods as one compiled loop
+        (:mod:`numeric.compiled`) where one applies; False: always the NumPy driver.
     """
 
     rtol: float = DEFAULT_RTOL
     atol: float = DEFAULT_ATOL
     spectrum: SpectrumSource = SpectrumSource.SVD
     progress: bool | None = None
+    compiled: bool = True
 
     def __post_init__(self):
         try:
