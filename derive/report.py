@@ -126,6 +126,10 @@ def modes_json(model: Model, modes: ModeSet) -> dict:
         from .damping_report import damped_modes, json_fields
 
         extra = json_fields(damped_modes(model, modes), records)
+    from . import participation as part
+
+    if part.applies(model):
+        extra.update(part.json_fields(part.participation(model, modes), records))
     return {
         "scene": sc.name,
         "parameters": {k: sc.parameters[k] for k in sorted(sc.parameters)},
@@ -247,6 +251,10 @@ def render_text(model: Model, modes: ModeSet) -> str:
         from .damping_report import damped_modes, damped_mode_lines
 
         out += [""] + damped_mode_lines(model, damped_modes(model, modes))
+    from . import participation as part
+
+    if part.applies(model):
+        out += [""] + part.text_lines(part.participation(model, modes))
     notes = effect_notes(model)
     if notes:
         out += [""] + [f"{n}" for n in notes]
@@ -273,5 +281,9 @@ def render_latex(model: Model, modes: ModeSet) -> str:
         from .damping_report import damped_modes, latex_lines
 
         lines += latex_lines(damped_modes(model, modes))
+    from . import participation as part
+
+    if part.applies(model):
+        lines += part.latex_lines(part.participation(model, modes))
     lines.append(r"\end{align*}")
     return "\n".join(lines) + "\n"

@@ -144,6 +144,20 @@ class Modes:
 
         return np.array([rec["omega2_value"] for rec in self.to_json().get("modes", [])], dtype=float)
 
+    @property
+    def participation(self):
+        """Modal participation in the ground direction (Γⱼ, Mⱼ*, fractions, mass-normalised shapes).
+
+        A :class:`springchain.derive.participation.Participation` (values settled to float64 on the
+        accurate route, closed forms where they exist); None for ``[chain]`` scenes and for scenes
+        whose supports cannot move (no wall, no ``[ground]``).
+        """
+        from .derive import participation as part
+
+        if self.chain or not part.applies(self.model):
+            return None
+        return part.participation(self.model, self.modes)
+
     def parse(self, text: str):
         """An ``omega2`` or ``shape`` string of :meth:`to_json` back as a SymPy expression.
 
