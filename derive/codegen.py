@@ -413,10 +413,13 @@ def render_module(model: Model, modes: ModeSet, *, bundled: bool = True) -> str:
         w(f"def damping_acceleration(_v{kw}):")
         w(f'    """Acceleration -M^-1 C v from {what}; v and result have shape (N, ...)."""')
         if dense or model.rayleigh is not None:  # Rayleigh terms are per mass: one line each, no N x N
+            from .rayleigh_targets import binding_lines, private as rayleigh_private
+
+            lines.extend(binding_lines(model, kwcall))  # _alpha_R, _beta_R of [damping] rayleigh_targets
             w(f"    {vs} = _v")
             w("    _out = numpy.empty(numpy.shape(_v))")
             for i in range(n):
-                w(f"    _out[{i}] = {_p(damp[i] / model.masses[i])}")
+                w(f"    _out[{i}] = {_p(rayleigh_private(damp[i] / model.masses[i]))}")
             w("    return _out")
         else:
             lines.extend(_incidence_lines(model, kwcall, "_v", "_DAMPER_ENDS", "damper_constants", cubic=False))

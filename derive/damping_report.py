@@ -56,9 +56,16 @@ class DampedModes:
     model: str  # "dashpots", "rayleigh", "modal" or a combination joined by " + "
 
 
+def _values(model: Model) -> dict:
+    """Exact parameter values, and α_R, β_R of ``rayleigh_targets`` (:func:`rayleigh_targets.values`)."""
+    from .rayleigh_targets import values
+
+    return {**exact_values(model.params, model.scene.parameters), **values(model)}
+
+
 def _modal_damping(model: Model, dps: int):
     """(ω² list, G matrix) in modal coordinates at working precision ``dps``."""
-    subs = exact_values(model.params, model.scene.parameters)
+    subs = _values(model)
     n = model.scene.n
     masses = [m.subs(subs) for m in model.masses]
     springs = [(a, b, k.subs(subs)) for a, b, k, _, _ in model.springs]
@@ -168,7 +175,7 @@ def _closed_forms(model: Model, modes: ModeSet) -> list[sp.Expr | None]:
     """Closed-form ζⱼ per independent mode in ascending order (None where none is available)."""
     out: list[sp.Expr | None] = []
     j = 0
-    subs = exact_values(model.params, model.scene.parameters)
+    subs = _values(model)
     records = [(mode, shape) for mode in modes.modes for shape in mode.shapes]
     records.sort(key=lambda r: max(value(r[0].omega2, subs), 0.0) if r[0].exact else float(r[0].omega2))
     C_d = None
@@ -229,7 +236,7 @@ def _damped_modes(model: Model, modes: ModeSet | None) -> DampedModes:
     else:
         raise NotAccurate("damped modes did not settle to float64 accuracy within 640 digits")
     exprs = _closed_forms(model, modes) if prop and modes is not None else [None] * len(rows)
-    subs = exact_values(model.params, model.scene.parameters)
+    subs = _values(model)
     out = []
     for (wn, zeta, wd, lam), expr in zip(rows, exprs + [None] * (len(rows) - len(exprs))):
         if expr is not None:  # the closed form, evaluated accurately; the numeric row checks it

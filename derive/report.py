@@ -126,6 +126,10 @@ def modes_json(model: Model, modes: ModeSet) -> dict:
         from .damping_report import damped_modes, json_fields
 
         extra = json_fields(damped_modes(model, modes), records)
+        if model.rayleigh_targets is not None:
+            from .rayleigh_targets import model_fit
+
+            extra["damping"]["rayleigh_coefficients"] = model_fit(model, modes).to_json()
     from . import participation as part
 
     if part.applies(model):
@@ -234,6 +238,10 @@ def render_text(model: Model, modes: ModeSet) -> str:
                 "K = d²V/dx² =", _indent(_pretty(model.K))]
         if model.C is not None:
             out += ["", "C = d²R/dv² =", _indent(_pretty(model.C))]
+        if model.rayleigh_targets is not None:
+            from .rayleigh_targets import model_fit, text_lines as rayleigh_lines
+
+            out += [""] + rayleigh_lines(model_fit(model, modes))
         if model.modal_zeta is not None:
             out += ["", ("C += " if model.C is not None else "C = ") + "M Φ diag(2 ζ_j ω_j) Φᵀ M  (modal damping, "
                     "ζ = (" + ", ".join(sp.sstr(z) for z in model.modal_zeta) + "); Φ the M-orthonormal modes; "
@@ -281,6 +289,10 @@ def render_latex(model: Model, modes: ModeSet) -> str:
         from .damping_report import damped_modes, latex_lines
 
         lines += latex_lines(damped_modes(model, modes))
+    if model.rayleigh_targets is not None:
+        from .rayleigh_targets import latex_lines as rayleigh_latex, model_fit
+
+        lines += rayleigh_latex(model_fit(model, modes))
     from . import participation as part
 
     if part.applies(model):

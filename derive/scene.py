@@ -356,7 +356,8 @@ def _build(ld: Loader, sha: str) -> Scene:
     if chain is not None and isinstance(data.get("damping"), dict) and "modal" in data["damping"]:
         raise ld.bad("damping.modal", data["damping"]["modal"], "modal damping on a [chain] is not yet supported",
                      "rayleigh = [ALPHA, BETA] or [[dampers]] on a [chain]; modal with [masses]")
-    damping = parse_damping(ld, pnames, env, n, chain=chain is not None)
+    damping = parse_damping(ld, pnames, env, n, chain=chain is not None,
+                            elastic=None if chain is not None else n - _free_pieces(n, springs))
 
     times = np.linspace(0.0, dt * steps, 257)
     forces, table_forces = parse_forces(ld, ld.array_of_tables("forces"),
@@ -384,6 +385,23 @@ def _build(ld: Loader, sha: str) -> Scene:
                  gravity=gravity, chain=chain, x0=x0, v0=v0, dt=dt, steps=steps,
                  record_every=record_every, table_forces=table_forces, ground=ground,
                  damping=damping, chain_dampers=chain_dampers, initial_given=bool(init))
+
+
+def _free_pieces(n: int, springs) -> int:
+    """Connected pieces of the spring graph with no spring to a wall (one rigid-body mode each)."""
+    parent = list(range(n))
+
+    def find(i):
+        while parent[i] != i:
+            parent[i] = parent[parent[i]]
+            i = parent[i]
+        return i
+
+    for s in springs:
+        if WALL not in (s.a, s.b):
+            parent[find(s.a)] = find(s.b)
+    walled = {find(i) for s in springs for i in (s.a, s.b) if WALL in (s.a, s.b) and i != WALL}
+    return len({find(i) for i in range(n)} - walled)
 
 
 def _chain(ld: Loader, pnames: frozenset[str], env: dict) -> Chain:
