@@ -141,7 +141,7 @@ def fit_values(model, zeta_targets, modes) -> tuple[float, float, list[float]]:
             prev = cur
             dps *= 2
         alpha, beta, w = cur
-    for name, v, why in (("alpha", alpha, "the lower mode"), ("beta", beta, "the higher mode")):
+    for name, v, why in (("alpha", alpha, "the higher mode"), ("beta", beta, "the lower mode")):
         if v < 0:
             raise SceneError(model.scene.file, KEY,
                              f"zeta = {[sp.sstr(z) for z in zeta_targets]} at modes {list(modes)}: gives {name} = "
