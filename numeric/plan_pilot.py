@@ -110,7 +110,10 @@ def adaptive_applies(name: str, system: System) -> bool:
 
 
 def wrapped(system: System, integ: Integrator) -> Integrator:
-    """The integrator as runs use it: damping/forcing splitting around it where the scene needs it."""
+    """The integrator as runs use it: damping/forcing splitting around it where the scene needs it
+    (the implicit Newmark/HHT steps integrate damping and loads themselves)."""
+    if getattr(integ, "implicit", False):
+        return type(integ).for_system(system)
     if system.damped or system.forced:
         from .effects import EffectSplitting
 

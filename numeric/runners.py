@@ -183,6 +183,8 @@ class StepMethod(Method):
             from .simulate import FusedChainVerlet
 
             return FusedChainVerlet(system)
+        if getattr(INTEGRATORS[self.name], "implicit", False):  # Newmark, HHT: damping and loads in the step
+            return INTEGRATORS[self.name].for_system(system)
         integ = INTEGRATORS[self.name]()
         if system.damped or system.forced:
             from .effects import EffectSplitting

@@ -16,6 +16,7 @@ from .dprkn12 import DPRKN12
 from .expm import MatrixExponential
 from .ivp import DOP853, LSODA, RK45, AdaptiveMethod, AdaptiveResult
 from .kahan_li import KahanLi8
+from .newmark import HHTAlpha, NewmarkAverage, NewmarkLinear
 from .rk4 import RK4
 from .verlet import VelocityVerlet
 from .verlet_compensated import CompensatedVerlet
@@ -25,7 +26,7 @@ from .yoshida import Yoshida4
 INTEGRATORS: dict[str, type[Integrator]] = {
     cls.name: cls
     for cls in (VelocityVerlet, CompensatedVerlet, Yoshida4, BlanesMoan4, BlanesMoan6, KahanLi8, RK4,
-                MatrixExponential, ChebyshevPropagator)
+                MatrixExponential, ChebyshevPropagator, NewmarkAverage, NewmarkLinear, HHTAlpha)
 }
 
 #: Command-line names of the adaptive (tolerance-driven) methods.
@@ -35,5 +36,5 @@ __all__ = [
     "Integrator", "Problem", "State", "LinearChain", "INTEGRATORS", "ADAPTIVE",
     "VelocityVerlet", "CompensatedVerlet", "Yoshida4", "BlanesMoan4", "BlanesMoan6", "KahanLi8", "RK4",
     "MatrixExponential", "ChebyshevPropagator", "AdaptiveMethod", "AdaptiveResult",
-    "RK45", "DOP853", "LSODA", "DPRKN6", "DPRKN8", "DPRKN12",
+    "RK45", "DOP853", "LSODA", "DPRKN6", "DPRKN8", "DPRKN12", "NewmarkAverage", "NewmarkLinear", "HHTAlpha",
 ]
