@@ -269,7 +269,9 @@ class Planner:
                     costs[integ.name] = measure_step_cost(integ, problem, x0, v0, step_grid(t_end, dt_out)[0])
                 continue
             steps_.append(integ)
-            responses[integ.name] = OscillatorResponse.from_integrator(integ)
+            # implicit steps (Newmark, HHT) give their rational per-mode response in closed form
+            responses[integ.name] = (integ.response() if getattr(integ, "implicit", False)
+                                     else OscillatorResponse.from_integrator(integ))
             costs[integ.name] = measure_step_cost(integ, problem, x0, v0, h_probe)
         modal_seconds = math.nan
         grid = output_grid(t_end, dt_out)
@@ -359,6 +361,8 @@ class Planner:
     def _min_steps(self, integrator: Integrator) -> int:
         limit = integrator.stability_limit
         w = self.model.omega_max
+        if math.isinf(limit) and math.isfinite(integrator.order):
+            limit = math.pi  # unconditionally stable (Newmark, HHT): no accuracy beyond half a period per step
         if w == 0 or not math.isfinite(limit):
             return 1
         return max(1, math.floor(self.t_end * w / limit * (1 + 1e-12)) + 1)

@@ -1,4 +1,4 @@
-"""Figures of the structural-dynamics outputs: response spectra and RSA against a time history.
+"""Figures of the structural-dynamics outputs: response spectra.
 
 Each function takes arrays and returns a matplotlib Figure (made without pyplot); the caller saves it.
 """
@@ -34,25 +34,4 @@ def response_spectrum(periods: np.ndarray, zeta: np.ndarray, sd: np.ndarray, psv
     return fig
 
 
-def rsa_against_history(names: list[str], srss: np.ndarray, cqc: np.ndarray, history: np.ndarray | None,
-                        quantity: str, unit: str, title: str):
-    """Bars of a per-storey quantity: RSA by SRSS and CQC beside the time-history peak (if given).
-
-    srss, cqc, history : ndarray, shape (S,)
-    """
-    fig, ax = new_figure(figsize=(9, 4.5))
-    x = np.arange(len(names))
-    width = 0.27 if history is not None else 0.4
-    ax.bar(x - width, srss, width, label="RSA, SRSS")
-    ax.bar(x, cqc, width, label="RSA, CQC")
-    if history is not None:
-        ax.bar(x + width, history, width, label="time history (exact), peak")
-    ax.set_xticks(x, names)
-    ax.set_ylabel(f"{quantity} [{unit}]")
-    ax.set_title(title)
-    ax.grid(alpha=0.3, axis="y")
-    ax.legend(fontsize=8)
-    return fig
-
-
-__all__ = ["response_spectrum", "rsa_against_history"]
+__all__ = ["response_spectrum"]
