@@ -62,7 +62,8 @@ def run_pilot_bench(system: System, x0: np.ndarray, v0: np.ndarray, t_end: float
              f"the exact solution; the exact solution over the output grid took about "
              f"{planner.exact_seconds:.3g} s"]
     if system.damped:
-        notes.append("damping: every step method runs inside the damping splitting (order at most 2)")
+        notes.append("damping: every step method runs inside the damping splitting (order at most 2), but the "
+                     "implicit newmark, newmark-linear and hht, which integrate it in their step")
     for name in planner.laws:
         integ_cls = INTEGRATORS[name]
         stages = max(integ_cls.evals_per_step, 1.0)
