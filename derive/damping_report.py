@@ -294,7 +294,10 @@ def latex_lines(dm: DampedModes) -> list[str]:
     for j, r in enumerate(dm.rows, start=1):
         if r.zeta is None:
             continue
-        rhs = sp.latex(r.zeta_expr) + rf" \approx {r.zeta:.10g}" if r.zeta_expr is not None else f"{r.zeta:.10g}"
+        from .rayleigh_targets import LATEX_NAMES
+
+        rhs = (sp.latex(r.zeta_expr, symbol_names=LATEX_NAMES) + rf" \approx {r.zeta:.10g}"
+               if r.zeta_expr is not None else f"{r.zeta:.10g}")
         extra = (rf", & \lambda_{{{j}}} &= {r.eigenvalue.real:.10g} \pm {r.eigenvalue.imag:.10g}\,i"
                  if r.eigenvalue is not None else "")
         out.append(rf"\\ \zeta_{{{j}}} &= {rhs}{extra}")

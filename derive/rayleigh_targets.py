@@ -34,6 +34,8 @@ from .errors import SceneError
 #: The model's symbols for the coefficients (non-ASCII: no parameter can take these names).
 ALPHA = sp.Symbol("α_R", nonnegative=True)
 BETA = sp.Symbol("β_R", nonnegative=True)
+#: How LaTeX prints them (pdflatex has no α).
+LATEX_NAMES = {ALPHA: r"\alpha_{R}", BETA: r"\beta_{R}"}
 #: What generated code binds them to.
 PRIVATE = {ALPHA: sp.Symbol("_alpha_R", real=True), BETA: sp.Symbol("_beta_R", real=True)}
 KEY = "damping.rayleigh_targets"

@@ -271,7 +271,11 @@ def render_text(model: Model, modes: ModeSet) -> str:
 
 def render_latex(model: Model, modes: ModeSet) -> str:
     """The derivation as a LaTeX fragment (amsmath)."""
-    L = sp.latex
+    from functools import partial
+
+    from .rayleigh_targets import LATEX_NAMES
+
+    L = partial(sp.latex, symbol_names=LATEX_NAMES)  # α_R, β_R of rayleigh_targets as \alpha_{R}, \beta_{R}
     lines = [r"\begin{align*}",
              rf"T &= {L(model.T)} \\",
              rf"V &= {L(model.V)} \\"]

@@ -72,6 +72,8 @@ def test_values_and_zeta_of_every_mode(tmp_path):
     assert data["modes"][2]["damping_ratio"] == pytest.approx(0.05, rel=1e-14)
     text = m.to_text()
     assert "Rayleigh damping from targets" in text and "α_R" in text
+    latex = m.to_latex()
+    assert "\\alpha_{R}" in latex and "α" not in latex and "β" not in latex  # pdflatex-safe
     # closed forms (in k, m) evaluate to the same values
     ae, be = (m.parse(fit[k]) for k in ("alpha_expr", "beta_expr"))
     subs = {s: {"k": 4000000, "m": 10000}[s.name] for s in ae.free_symbols | be.free_symbols}
