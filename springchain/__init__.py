@@ -13,8 +13,8 @@ The public API (each name loads what it needs on first use, so ``import springch
     h = sc.frf("building", input="floor3", output="floor3")  # h.omega, h.magnitude, h.phase, h.plot()
     sc.animate("seed", mode=2, out="springchain-out")          # a GIF of mode 2 oscillating
     sc.rayleigh_coefficients("building", zeta=(0.05, 0.05), modes=(1, 3))  # .alpha, .beta, closed forms
-    sc.response_spectrum("scenes/quake-record.csv", zeta=[0.02, 0.05])   # SD, PSV, PSA (exact)
-    sc.rsa("building_quake", spectrum="scenes/quake-record.csv")         # SRSS and CQC peaks
+    sc.response_spectrum("quake-record", zeta=[0.02, 0.05])   # SD, PSV, PSA (exact); a CSV path or bundled record
+    sc.rsa("building_quake", spectrum="quake-record")         # SRSS and CQC peaks
 
 Subpackages: :mod:`springchain.derive` (SymPy), :mod:`springchain.numeric` (NumPy/SciPy),
 :mod:`springchain.generated` (generated modules of the bundled scenes).

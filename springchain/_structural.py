@@ -39,6 +39,22 @@ def _header(path: Path, key: str) -> tuple[str, ...]:
     return ()
 
 
+def resolve_csv(path: str | Path) -> Path:
+    """An existing CSV path, else a bundled data file of that name (``quake-record`` or
+    ``quake-record.csv``: the scenes' folder); otherwise the path as given (reading it then fails
+    with the one-line error)."""
+    from ._scenes import bundled_scene_dir
+
+    p = Path(path)
+    if p.exists() or len(p.parts) > 1:
+        return p
+    for name in (p.name, p.name + ".csv"):
+        candidate = bundled_scene_dir() / name
+        if candidate.is_file() and candidate.suffix == ".csv":
+            return candidate
+    return p
+
+
 def read_record(path: str | Path, key: str = "RECORD"):
     """An accelerogram CSV (header ``t,a``; seconds, m/s²) as a :class:`numeric.response_spectrum.Record`.
 
@@ -52,7 +68,7 @@ def read_record(path: str | Path, key: str = "RECORD"):
     from .derive.loads import read_table
     from .numeric.response_spectrum import Record
 
-    p = Path(path).resolve()
+    p = resolve_csv(path).resolve()
     table = read_table(str(p), key, p.name, "a")
     return Record(table.t, table.y, p.stem)
 
@@ -61,7 +77,7 @@ def read_spectrum_file(path: str | Path, key: str = "--spectrum"):
     """``("record", Record)`` or ``("design", (periods, sa), name)`` by the file's header."""
     from .derive.loads import read_table
 
-    p = Path(path).resolve()
+    p = resolve_csv(path).resolve()
     cols = _header(p, key)
     if cols == RECORD_COLUMNS:
         return "record", read_record(p, key), p.stem
@@ -243,7 +259,8 @@ def response_spectrum(record, zeta=0.05, periods=None) -> SpectrumResult:
     Parameters
     ----------
     record : str, Path, Record or (t, a)
-        A CSV file with the header ``t,a`` (seconds, m/s²; the ``[ground]`` table format), a
+        A CSV file with the header ``t,a`` (seconds, m/s²; the ``[ground]`` table format) or the
+        name of a bundled record (``"quake-record"``), a
         :class:`~springchain.numeric.response_spectrum.Record`, or two arrays.
     zeta : float or sequence of float
         Damping ratios, 0 <= ζ < 1 (default 0.05).

@@ -329,7 +329,7 @@ def add_structural_commands(sub) -> None:
                                      "input (closed-form one-step maps of the damped oscillator, no time-stepping "
                                      "error; the peak between samples is refined, free vibration after the record "
                                      "is included). Writes DIR/<record>-spectrum.png and .json.")
-    sp_.add_argument("record", help="the accelerogram CSV (header t,a)")
+    sp_.add_argument("record", help="the accelerogram CSV (header t,a), or a bundled record's name (quake-record)")
     sp_.add_argument("--zeta", type=_zeta, action="append", metavar="Z",
                      help="damping ratio, repeatable (default: 0.05)")
     sp_.add_argument("--periods", metavar="A:B:N|T1,T2,...",
@@ -348,7 +348,8 @@ def add_structural_commands(sub) -> None:
                                     "and the floor displacements, inter-storey drifts, spring forces (storey shears) "
                                     "and base shear combined by SRSS and by CQC (Der Kiureghian's correlation).")
     rs.add_argument("scene", help="a scene file (TOML) or the name of a bundled scene, e.g. building_quake")
-    rs.add_argument("--spectrum", required=True, metavar="FILE", help="record (t,a) or design spectrum (T,Sa) CSV")
+    rs.add_argument("--spectrum", required=True, metavar="FILE",
+                    help="record (t,a) or design spectrum (T,Sa) CSV, or a bundled record's name (quake-record)")
     rs.add_argument("--combine", choices=("cqc", "srss"), default="cqc",
                     help="the combination the result leads with (both are printed; default: %(default)s)")
     rs.add_argument("--json", action="store_true", help="print one JSON object and nothing else")
