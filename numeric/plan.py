@@ -262,7 +262,8 @@ class Planner:
         steps_, responses, costs, props = [], {}, {}, []
         h_probe = min(dt_out, 0.5 / max(model.omega_max, 1e-300))
         for cls_ in INTEGRATORS.values():
-            integ = cls_()
+            # implicit steps (Newmark, HHT) are built on the system: they solve with its springs
+            integ = cls_.for_system(system) if getattr(cls_, "implicit", False) else cls_()
             if not math.isfinite(integ.order):
                 if exact and problem.linear is not None:
                     props.append(integ)
