@@ -172,3 +172,28 @@ def test_chain_banded_solve(tmp_path):
                           out=tmp_path / f"o{dt}", progress=False)
         errs.append(float(np.max(np.abs(run.x["newmark"] - run.x["verlet"]))))
     assert errs[1] < errs[0] / 3
+
+
+def test_energy_on_a_linear_chain(seed_system):
+    """On the seed chain (given as a bare matrix problem: the tangent is probed): average
+    acceleration conserves the energy to roundoff, linear acceleration keeps its error bounded, HHT
+    only loses energy."""
+    A = seed_system.acceleration(np.eye(3))
+    K = -seed_system.masses[:, None] * A
+    m = seed_system.masses
+    x0, v0 = np.array([0.3, -0.2, 0.5]), np.array([0.1, 0.4, -0.5])
+    v0 = v0 - (m @ v0) / m.sum()
+
+    def energy(tr):
+        x, v = tr.x[..., 0], tr.v[..., 0]
+        return 0.5 * np.einsum("i,si->s", m, v * v) + 0.5 * np.einsum("si,ij,sj->s", x, K, x)
+
+    prob = Problem(lambda x: A @ x)
+    steps = 20_000
+    e = energy(integrate(NewmarkAverage(), prob, x0, v0, 0.3, steps, record_every=10))
+    assert np.max(np.abs(e / e[0] - 1)) <= 1e-12
+    e = energy(integrate(NewmarkLinear(), prob, x0, v0, 0.3, steps, record_every=10))
+    err = np.abs(e / e[0] - 1)
+    assert err[:101].max() > 1e-6 and err.max() < 1.5 * err[:101].max()
+    e = energy(integrate(HHTAlpha(), prob, x0, v0, 0.3, steps, record_every=10))
+    assert np.all(np.diff(e[::100]) < 0) and e[-1] < e[0]

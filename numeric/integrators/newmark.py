@@ -228,6 +228,38 @@ class StructuralOperator:
         return solve
 
 
+class ProbedOperator:
+    """The operator of a bare problem (no spring list): the tangent of ``problem.acceleration`` by
+    central differences (dense, N <= DENSE_MAX), always with Newton iterations on the exact
+    residual, so the approximate tangent only slows convergence, never changes the step."""
+
+    cubic = True  # "nonlinear": never trust one solve
+    damping = None
+    sparse = False
+
+    def __init__(self, acceleration, n: int, external=None):
+        if n > DENSE_MAX:
+            raise RunRefused(f"an implicit step on a bare problem of {n} unknowns: accepted: at most {DENSE_MAX}, "
+                             "or a scene's system (for_system)", quantity="method")
+        self.acc, self.n, self.external = acceleration, n, external
+
+    def tangent(self, x=None):
+        x = np.zeros((self.n, 1)) if x is None else np.asarray(x, dtype=float)[:, :1]
+        step = 1e-6 * np.maximum(1.0, np.abs(x[:, 0]))
+        cols = np.empty((self.n, self.n))
+        for j in range(self.n):  # dense, small problems only
+            e = np.zeros((self.n, 1))
+            e[j, 0] = step[j]
+            cols[:, j] = (self.acc(x + e) - self.acc(x - e))[:, 0] / (2 * step[j])
+        return cols
+
+    def damping_apply(self, v):
+        return 0.0 * v
+
+    def system_matrix(self, A, c1: float, c2: float):
+        return StructuralOperator.system_matrix(self, A, c1, c2)
+
+
 class NewmarkFamily(Integrator):
     """HHT-α / Newmark-β step (see the module docstring). Subclasses set :attr:`parameters`.
 
@@ -258,13 +290,20 @@ class NewmarkFamily(Integrator):
         return cls(StructuralOperator.from_system(system), **kw)
 
     # -- the protocol ---------------------------------------------------------------------
-    def _operator(self, problem: Problem) -> StructuralOperator:
+    def _operator(self, problem: Problem, n: int | None = None):
         if self.operator is not None:
             return self.operator
-        if problem.linear is None:
-            raise RunRefused(f"method {self.name!r} needs the scene's springs to solve its implicit step: run it "
-                             "through springchain.simulate (or build it with for_system)", quantity="method")
-        return StructuralOperator.from_linear_chain(problem.linear, problem.external)
+        if problem.linear is not None:
+            return StructuralOperator.from_linear_chain(problem.linear, problem.external)
+        cache = getattr(self, "_probed", None)
+        if cache is None or cache[0] is not problem:
+            size = n if n is not None else (cache[1].n if cache is not None else None)
+            if size is None:
+                raise RunRefused(f"method {self.name!r}: call init() before kernel() on a bare problem",
+                                 quantity="method")
+            cache = (problem, ProbedOperator(problem.acceleration, size, problem.external))
+            self._probed = cache
+        return cache[1]
 
     def check(self, problem: Problem) -> None:
         if problem.damping is not None and (self.operator is None or self.operator.damping is None):
@@ -275,9 +314,9 @@ class NewmarkFamily(Integrator):
 
     def init(self, problem: Problem, x0: np.ndarray, v0: np.ndarray) -> State:
         self.check(problem)
-        op = self._operator(problem)
         x0 = np.array(x0, dtype=float)
         v0 = np.array(v0, dtype=float)
+        op = self._operator(problem, x0.shape[0])
         f0 = problem.acceleration(x0) + op.damping_apply(v0)
         ext = self._external(problem, op)
         a0 = f0 + (np.reshape(ext(0.0), (-1, 1)) if ext is not None else 0.0)
@@ -298,6 +337,7 @@ class NewmarkFamily(Integrator):
         hh_pred, h_pred = (0.5 - b) * h * h, (1 - g) * h
         bh2, gh = b * h * h, g * h
         linear = op.cubic is None
+        probed = isinstance(op, ProbedOperator)
 
         def e_at(t):
             return np.reshape(ext(t), (-1, 1)) if ext is not None else 0.0
@@ -313,7 +353,7 @@ class NewmarkFamily(Integrator):
             rhs = (1 + al) * (gt + op.damping_apply(vt)) + const
             a1 = solve(rhs)
             if not linear:
-                a1 = self._newton(op, acc, xt, vt, a1, const, al, bh2, gh, c1, c2, i)
+                a1 = self._newton(op, acc, xt, vt, a1, const, al, bh2, gh, c1, c2, i, None if not probed else solve)
             x1 = xt + bh2 * a1
             v1 = vt + gh * a1
             if al == 0.0:
@@ -324,14 +364,15 @@ class NewmarkFamily(Integrator):
         return step
 
     @staticmethod
-    def _newton(op, acc, xt, vt, a1, const, al, bh2, gh, c1, c2, i):
-        """Newton's method on R(a) = a − (1+α)(g(x̃ + βh²a) + D(ṽ + γh a)) − const (cubic springs)."""
+    def _newton(op, acc, xt, vt, a1, const, al, bh2, gh, c1, c2, i, fixed=None):
+        """Newton's method on R(a) = a − (1+α)(g(x̃ + βh²a) + D(ṽ + γh a)) − const (cubic springs);
+        ``fixed``: one factorisation for every iteration (a probed tangent: a chord method)."""
         scale = max(float(np.max(np.abs(a1))), 1e-300)
         prev = math.inf
         for _ in range(MAX_NEWTON):
             x1, v1 = xt + bh2 * a1, vt + gh * a1
             R = a1 - (1 + al) * (acc(x1) + op.damping_apply(v1)) - const
-            solve = op.system_matrix(op.tangent(x1), c1, c2)
+            solve = fixed if fixed is not None else op.system_matrix(op.tangent(x1), c1, c2)
             da = solve(R)
             a1 = a1 - da
             scale = max(scale, float(np.max(np.abs(a1))))
