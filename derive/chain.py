@@ -21,6 +21,7 @@ from dataclasses import dataclass
 
 import sympy as sp
 
+from .printing import sstr
 from ..ends import End
 from .codegen import _p, header, privatize, regenerate_command
 from .model import parameter_symbols
@@ -176,8 +177,9 @@ def chain_mode_records(model: ChainModel, modes: ChainModes, omega2_values=None)
     else:
         e = MODES_LISTED_EACH_END
         picked = list(range(e)) + list(range(n - e, n))
-        note = (f"modes lists the {e} lowest and {e} highest of the {n} modes; the family "
-                "omega2(j), shape(i, j) gives every one")
+        note = (f"modes lists the {e} lowest and {e} highest of the {n} modes; "
+                + ("the family omega2(j), shape(i, j) gives every one" if modes.omega2 is not None
+                   else "the generated module's omega2() gives every one"))
     scale = float(np.max(np.abs(values))) if values.size else 0.0
     records = []
     for p in picked:
@@ -212,10 +214,10 @@ def chain_report(model: ChainModel, modes: ChainModes, omega2_values=None) -> tu
              + ("uniform" if ch.uniform else "index-dependent"),
              "Parameters: " + ", ".join(f"{k} = {sc.parameters[k]:g}" for k in sorted(sc.parameters)),
              "",
-             f"Element i:  T_i = {sp.sstr(model.mass * model.v0**2 / 2)}",
-             f"            V_i = {sp.sstr(model.element_potential(model.x0, model.xp, model.i))}",
+             f"Element i:  T_i = {sstr(model.mass * model.v0**2 / 2)}",
+             f"            V_i = {sstr(model.element_potential(model.x0, model.xp, model.i))}",
              "Interior equation (Euler-Lagrange on elements i-1 and i):",
-             f"    {sp.sstr(model.mass)}*a_i = {sp.sstr(force)}"]
+             f"    {sstr(model.mass)}*a_i = {sstr(force)}"]
     from .loadgen import chain_load_lines
 
     lines += chain_load_lines(model)
@@ -226,14 +228,24 @@ def chain_report(model: ChainModel, modes: ChainModes, omega2_values=None) -> tu
     if modes.omega2 is not None:
         lo, hi = modes.j_range
         lines += ["", f"Normal modes ({modes.boundary}, closed form), j = {lo} ... {hi}:",
-                  f"    ω_j² = {sp.sstr(modes.omega2)}",
-                  f"    shape_j(i) = {sp.sstr(modes.shape)}"]
+                  f"    ω_j² = {sstr(modes.omega2)}",
+                  f"    shape_j(i) = {sstr(modes.shape)}"]
     lines += [f"    note: {note}" for note in modes.notes]
     if model.k3 is not None:
         lines.append("    note: cubic springs: modes of the linearization; no exact solution")
     notes = list(modes.notes) + (["cubic springs: modes of the linearization; no exact solution"]
                                  if model.k3 is not None else [])
     records, listed_note = chain_mode_records(model, modes, omega2_values)
+    if records:  # the numbers, for every chain (a closed form or not): as --json lists them
+        how = "closed form at the scene's values" if modes.omega2 is not None else \
+            "numeric, the generated module's omega2()"
+        lines += ["", f"Normal modes ({how}), ascending:"]
+        lines += [f"    {'j = ' + str(r['j']) + ':  ' if 'j' in r else ''}ω² = {r['omega2_value']:.10g}"
+                  + (f"  (multiplicity {r['multiplicity']})" if r["multiplicity"] > 1 else "") for r in records]
+        if listed_note:
+            lines.append(f"    note: {listed_note}")
+    elif listed_note:
+        lines.append(f"    note: {listed_note}")
     data = {"scene": sc.name, "parameters": {k: sc.parameters[k] for k in sorted(sc.parameters)},
             "masses": [], "modes": records, "closed_form": modes.closed_form,
             "notes": notes + ([listed_note] if listed_note else []),

@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import sympy as sp
 
+from .printing import sstr
 from .chain_dampers import ALONG, GROUND, SINGLE
 from .codegen import _p
 from .damping_code import rayleigh_coefficients_lines
@@ -108,16 +109,16 @@ def chain_damping_report_lines(model, modes) -> tuple[list[str], dict | None]:
     for kind, a, b, c, key in model.dampers:
         where = {ALONG: "beside every spring, between i and i+1", GROUND: "from every mass i to the ground",
                  SINGLE: f"between {'wall' if a < 0 else a} and {'wall' if b < 0 else b}"}[kind]
-        lines.append(f"    {key}: c = {sp.sstr(c)}  {where}")
+        lines.append(f"    {key}: c = {sstr(c)}  {where}")
     parts = (["dashpots"] if model.dampers else []) + (["rayleigh"] if model.rayleigh is not None else [])
     data: dict = {"model": " + ".join(parts), "zeta_family": None}
     if model.rayleigh is not None:
         alpha, beta = model.rayleigh
-        lines.append(f"    [damping]: Rayleigh C = alpha*M + beta*K with alpha = {sp.sstr(alpha)}, beta = {sp.sstr(beta)}")
+        lines.append(f"    [damping]: Rayleigh C = alpha*M + beta*K with alpha = {sstr(alpha)}, beta = {sstr(beta)}")
         if not model.dampers and modes.omega2 is not None:
             wj = sp.sqrt(modes.omega2)
             zeta = alpha / (2 * wj) + beta * wj / 2
-            lines.append(f"    zeta_j = alpha/(2 omega_j) + beta*omega_j/2 = {sp.sstr(zeta)}")
+            lines.append(f"    zeta_j = alpha/(2 omega_j) + beta*omega_j/2 = {sstr(zeta)}")
             data["zeta_family"] = sp.sstr(zeta)
     return lines, data
 

@@ -82,12 +82,25 @@ def privatize(source: str) -> str:
     return source + "\n\n# Private aliases used by the function bodies above.\n" + "\n".join(aliases) + "\n"
 
 
-def regenerate_command(scene_file: str, bundled: bool) -> str:
-    """The command line that regenerates a module (only safe file names are shown)."""
-    name = scene_file.replace("\\", "/").rsplit("/", 1)[-1]
+def regenerate_command(scene_file: str, bundled: bool = False) -> str:
+    """The command line that regenerates a module (only safe file names are shown).
+
+    A function of the scene file's name and of its folder's name only (``scenes/NAME`` when the folder
+    is called ``scenes``, as the bundled scenes' is, installed or in a clone; else ``NAME``): never of
+    where springchain is installed or of the current folder, so a scene renders the same text anywhere.
+    ``bundled`` is accepted for compatibility and changes nothing.
+    """
+    from pathlib import Path
+
+    path = Path(scene_file.replace("\\", "/"))
+    name = path.name
     if not _SAFE_FILE.match(name):
         return "springchain derive SCENE"
-    return f"springchain derive scenes/{name}" if bundled else f"springchain derive {name}"
+    try:
+        folder = path.resolve().parent.name
+    except (OSError, RuntimeError):
+        folder = path.parent.name
+    return f"springchain derive scenes/{name}" if folder == "scenes" else f"springchain derive {name}"
 
 
 def header(scene_name: str, sha256: str, command: str) -> str:

@@ -23,6 +23,7 @@ from dataclasses import dataclass
 import mpmath
 import sympy as sp
 
+from .printing import latex, sstr
 from .accurate import NotAccurate, _eig_dynamical, _mp, exact_values, value
 from .model import Model
 from .modes import BudgetExceeded, ModeSet, time_budget
@@ -283,7 +284,7 @@ def damped_mode_lines(model: Model, dm: DampedModes) -> list[str]:
         elif not dm.proportional:
             line += f"   (overdamped: real eigenvalues, sigma = {r.zeta * r.omega_n:.10g})"
         if r.zeta_expr is not None:
-            line += f"   zeta = {sp.sstr(r.zeta_expr)}"
+            line += f"   zeta = {sstr(r.zeta_expr)}"
         out.append(line)
     return out
 
@@ -296,7 +297,7 @@ def latex_lines(dm: DampedModes) -> list[str]:
             continue
         from .rayleigh_targets import LATEX_NAMES
 
-        rhs = (sp.latex(r.zeta_expr, symbol_names=LATEX_NAMES) + rf" \approx {r.zeta:.10g}"
+        rhs = (latex(r.zeta_expr, symbol_names=LATEX_NAMES) + rf" \approx {r.zeta:.10g}"
                if r.zeta_expr is not None else f"{r.zeta:.10g}")
         extra = (rf", & \lambda_{{{j}}} &= {r.eigenvalue.real:.10g} \pm {r.eigenvalue.imag:.10g}\,i"
                  if r.eigenvalue is not None else "")

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import enum
 import unicodedata
 
 #: Longest file name, key or message shown; longer parts are cut with "...".
@@ -31,7 +32,9 @@ def one_line(text: object, limit: int = MAX_PART) -> str:
 
 
 def show(value: object, limit: int = 60) -> str:
-    """A short ``repr`` of a rejected value for an error message."""
+    """A short ``repr`` of a rejected value for an error message (an enum member as its word: ``'free'``)."""
+    if isinstance(value, enum.Enum):
+        value = value.value
     text = repr(value)
     if len(text) > limit:
         text = text[: limit - 3] + "..."

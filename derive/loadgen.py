@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import sympy as sp
 
+from .printing import sstr
 from .codegen import _array, _p
 from .forcing import decompose
 
@@ -108,14 +109,14 @@ def forcing_harmonics_of(forces, t):
 
 def chain_load_lines(model) -> list[str]:
     """The loads' terms, each traced to its scene entry (forces name masses by index)."""
-    lines = [f"    + {sp.sstr(f)} on mass {on}  [{key}]" for on, f, key in model.forces]
+    lines = [f"    + {sstr(f)} on mass {on}  [{key}]" for on, f, key in model.forces]
     lines += [f"    + f_table{key[7:-1]}(t) on mass {on}  [{key}] (table, linear between rows, zero outside)"
               for on, key in model.table_forces]
     if model.g is not None:
-        lines.append(f"    + {sp.sstr(model.mass * model.g)} on every mass i  [gravity]")
+        lines.append(f"    + {sstr(model.mass * model.g)} on every mass i  [gravity]")
     if model.scene.ground is not None:
-        lines.append(f"    - {sp.sstr(model.mass)}*a_g(t) on every mass i  [ground]"
-                     + (f", a_g(t) = {sp.sstr(model.ground)}" if model.ground is not None else " (table)")
+        lines.append(f"    - {sstr(model.mass)}*a_g(t) on every mass i  [ground]"
+                     + (f", a_g(t) = {sstr(model.ground)}" if model.ground is not None else " (table)")
                      + "; coordinates relative to the ground")
     return (["Loads:"] + lines) if lines else []
 

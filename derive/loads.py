@@ -85,7 +85,9 @@ def read_table(scene_file: str, key: str, value, column: str) -> Table:
     def bad(what, why: str) -> SceneError:
         return SceneError(scene_file, key, f"{show(what)}: {why}; accepted: {form}")
 
-    if not isinstance(value, str) or not value or "\x00" in value:
+    if not isinstance(value, str):  # from Python (scene_from_dict): arrays, not a file
+        return table_from_arrays(scene_file, key, value, column)
+    if not value or "\x00" in value:
         raise bad(value, "not a file name")
     base = Path(scene_file).parent if scene_file else Path(".")
     path = base / value
@@ -142,12 +144,51 @@ def read_table(scene_file: str, key: str, value, column: str) -> Table:
                 raise bad(value, f"row {r + 1} {line[:40]!r}: {cell.strip()[:20]!r} is not a finite number "
                                  f"of size at most {MAX_TABLE_VALUE:g}")
             data[r, c] = number
+    _check_times(data, lambda why: bad(value, why))
+    return Table(str(path), data[:, 0].copy(), data[:, 1].copy())
+
+
+def _check_times(data: np.ndarray, bad) -> None:
     dt = np.diff(data[:, 0])
     if not np.all(dt > 0):
         r = int(np.argmax(~(dt > 0))) + 2
-        raise bad(value, f"times not strictly increasing at row {r} (t = {data[r - 1, 0]:g} after "
-                         f"{data[r - 2, 0]:g})")
-    return Table(str(path), data[:, 0].copy(), data[:, 1].copy())
+        raise bad(f"times not strictly increasing at row {r} (t = {data[r - 1, 0]:g} after {data[r - 2, 0]:g})")
+
+
+def table_from_arrays(scene_file: str, key: str, value, column: str) -> Table:
+    """A table given as data from Python: an array of shape (R, 2) (columns t and ``column``) or a
+    dict ``{"t": ..., column: ...}``; the checks of a CSV table (finite, at least 2 rows, times
+    strictly increasing)."""
+    form = (f"a CSV file name, an array of shape (R, 2) (columns t, {column}) or a dict "
+            f"{{'t': [...], '{column}': [...]}}, R >= 2, finite, times strictly increasing")
+
+    def bad(why: str) -> SceneError:
+        return SceneError(scene_file, key, f"{show(value)}: {why}; accepted: {form}")
+
+    if isinstance(value, dict) and sorted(map(str, value)) != sorted(["t", column]):
+        raise bad(f"keys {sorted(map(str, value))}")
+    try:
+        if isinstance(value, dict):
+            t, y = (np.asarray(value[c]) for c in ("t", column))
+            raw = np.stack([t, y], axis=1) if t.ndim == 1 and t.shape == y.shape else None
+        else:
+            raw = np.asarray(value)
+    except (ValueError, TypeError):
+        raw = None
+    if raw is None or raw.dtype.kind not in "iuf" or raw.ndim != 2 or raw.shape[1] != 2:
+        what = "not numbers in two columns" if raw is None or raw.dtype.kind not in "iuf" else f"shape {raw.shape}"
+        raise bad(what)
+    data = raw.astype(float)
+    if data.shape[0] < 2:
+        raise bad(f"{data.shape[0]} rows (at least 2 needed)")
+    if data.shape[0] > MAX_TABLE_ROWS:
+        raise bad(f"more than {MAX_TABLE_ROWS} rows")
+    off = ~np.isfinite(data) | (np.abs(data) > MAX_TABLE_VALUE)
+    if off.any():
+        r = int(np.argmax(off.any(axis=1)))
+        raise bad(f"row {r + 1}: {data[r].tolist()} is not two finite numbers of size at most {MAX_TABLE_VALUE:g}")
+    _check_times(data, bad)
+    return Table("<array>", data[:, 0].copy(), data[:, 1].copy())
 
 
 def parse_forces(ld, entries: list[dict], *, chain_n: int | None, index: dict[str, int],
@@ -202,5 +243,5 @@ def parse_ground(ld, pnames: frozenset[str], env: dict, times: np.ndarray) -> Gr
     return Ground(None, read_table(ld.file, "ground.table", g["table"], "a"))
 
 
-__all__ = ["Table", "TableForce", "Ground", "read_table", "parse_forces", "parse_ground", "FORCE_KEYS",
+__all__ = ["Table", "TableForce", "Ground", "read_table", "table_from_arrays", "parse_forces", "parse_ground", "FORCE_KEYS",
            "GROUND_KEYS"]

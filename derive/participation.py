@@ -27,6 +27,8 @@ from dataclasses import dataclass
 import mpmath
 import sympy as sp
 
+from .printing import latex
+
 from .accurate import MAX_MPMATH_MODES, NotAccurate, _eig_dynamical, exact_values, value
 from .model import Model
 from .modes import BudgetExceeded, ModeSet, time_budget
@@ -310,8 +312,8 @@ def latex_lines(p: Participation) -> list[str]:
     out = []
     for j, g in enumerate(p.gamma):
         ge, me = p.gamma_expr[j], p.effective_mass_expr[j]
-        gt = (sp.latex(ge) + rf" \approx {g:.10g}") if ge is not None else f"{g:.10g}"
-        mt = (sp.latex(me) + rf" \approx {p.effective_mass[j]:.10g}") if me is not None else \
+        gt = (latex(ge) + rf" \approx {g:.10g}") if ge is not None else f"{g:.10g}"
+        mt = (latex(me) + rf" \approx {p.effective_mass[j]:.10g}") if me is not None else \
             f"{p.effective_mass[j]:.10g}"
         out.append(rf"\\ \Gamma_{{{j + 1}}} &= {gt}, & M^*_{{{j + 1}}} &= {mt}")
     return out

@@ -28,6 +28,8 @@ from dataclasses import dataclass
 import mpmath
 import sympy as sp
 
+from .printing import latex
+
 from .accurate import MAX_MPMATH_MODES, _eig_dynamical, exact_values, value
 from .errors import SceneError
 
@@ -231,8 +233,8 @@ def text_lines(f: RayleighFit) -> list[str]:
 
 
 def latex_lines(f: RayleighFit) -> list[str]:
-    a = (sp.latex(f.alpha_expr) + rf" \approx {f.alpha:.10g}") if f.alpha_expr is not None else f"{f.alpha:.10g}"
-    b = (sp.latex(f.beta_expr) + rf" \approx {f.beta:.10g}") if f.beta_expr is not None else f"{f.beta:.10g}"
+    a = (latex(f.alpha_expr) + rf" \approx {f.alpha:.10g}") if f.alpha_expr is not None else f"{f.alpha:.10g}"
+    b = (latex(f.beta_expr) + rf" \approx {f.beta:.10g}") if f.beta_expr is not None else f"{f.beta:.10g}"
     return [rf"\\ \alpha_R &= {a}, & \beta_R &= {b}"]
 
 

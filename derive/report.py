@@ -12,6 +12,7 @@ import sympy as sp
 from .accurate import exact_values, value
 from .model import Effect, Model
 from .modes import ModeSet
+from .printing import MATRIX_LATEX, MATRIX_TEXT, ScenePrinter, latex, sstr
 
 MAX_MATRIX = 8  # larger matrices are described, not printed
 #: Larger scenes print T, V, R as element sums (first ... last) and sums in stored order.
@@ -32,8 +33,8 @@ def _num(expr, model: Model) -> float:
 
 
 def _text(expr) -> str:
-    """``sstr`` of an expression; a Python float (a numeric fallback's shape) as its repr."""
-    return repr(expr) if isinstance(expr, float) else sp.sstr(expr)
+    """``sstr`` of an expression (``%`` for Mod); a Python float (a numeric fallback's shape) as its repr."""
+    return repr(expr) if isinstance(expr, float) else sstr(expr)
 
 
 def _pretty(mat: sp.Matrix) -> str:
@@ -48,10 +49,8 @@ def _printer(model: Model):
     """``sstr`` for this scene's expressions. Past MAX_FULL_SUMS masses sums print in their stored
     order (``order="none"``): SymPy's display sort costs more than the whole derivation there."""
     if model.scene.n <= MAX_FULL_SUMS:
-        return sp.sstr
-    from sympy.printing.str import StrPrinter
-
-    return StrPrinter({"order": "none"}).doprint
+        return sstr
+    return ScenePrinter({"order": "none"}).doprint
 
 
 def equation_lines(model: Model) -> list[str]:
@@ -86,9 +85,9 @@ def _energy_line(name: str, model: Model, terms: list, what: str) -> str:
 def _energy_lines(model: Model) -> list[str]:
     """The T, V (and R) lines of the text report: in full, or element sums past MAX_FULL_SUMS masses."""
     if model.scene.n <= MAX_FULL_SUMS:
-        out = [f"T = {sp.sstr(model.T)}", f"V = {sp.sstr(model.V)}"]
+        out = [f"T = {sstr(model.T)}", f"V = {sstr(model.V)}"]
         if model.dissipation_terms:
-            out.append(f"R = {sp.sstr(model.R)}   (Rayleigh dissipation)")
+            out.append(f"R = {sstr(model.R)}   (Rayleigh dissipation)")
         return out
     v_terms = [e for key, e in model.potential_terms if key != "gravity"]
     if model.g is not None:
@@ -161,7 +160,7 @@ def effect_notes(model: Model) -> list[str]:
         eq = static_equilibrium(model)
         if eq is not None:
             notes.append("gravity: static equilibrium (sag) x_eq = K^-1 M g = ("
-                         + ", ".join(sp.sstr(e) for e in eq) + "); modes are about x_eq")
+                         + ", ".join(sstr(e) for e in eq) + "); modes are about x_eq")
         elif model.free_components:
             notes.append("gravity: a free piece has no equilibrium; its centre of mass accelerates: "
                          "x_cm(t) = x_cm0 + v_cm*t + g*t**2/2 (the exact solution includes it)")
@@ -194,12 +193,12 @@ def _load_notes(model: Model) -> list[str]:
              for (_, _, key), tf in zip(model.table_forces, model.scene.table_forces)]
     ground = model.scene.ground
     if ground is not None:
-        what = (f"a_g(t) = {sp.sstr(model.ground)}" if model.ground is not None else
+        what = (f"a_g(t) = {sstr(model.ground)}" if model.ground is not None else
                 f"a_g(t) is the table {Path(ground.table.file).name} ({ground.table.t.shape[0]} rows), "
                 "linear between rows, zero outside")
         notes.append(f"ground: {what}; coordinates are relative to the ground (walls move with it)")
         if model.ground_motion is not None:
-            notes.append(f"ground: x_g(t) = {sp.sstr(model.ground_motion[1])} (x_g(0) = v_g(0) = 0)")
+            notes.append(f"ground: x_g(t) = {sstr(model.ground_motion[1])} (x_g(0) = v_g(0) = 0)")
     return notes
 
 
@@ -209,7 +208,7 @@ def mode_lines(model: Model, modes: ModeSet) -> list[str]:
         value = _num(mode.omega2, model)
         tag = "  rigid-body: uniform translation of a free piece" if mode.rigid else ""
         mult = f"  (multiplicity {mode.multiplicity})" if mode.multiplicity > 1 else ""
-        lines.append(f"ω² = {sp.sstr(mode.omega2)}   (= {value:.10g} at the scene's values){mult}{tag}")
+        lines.append(f"ω² = {sstr(mode.omega2)}   (= {value:.10g} at the scene's values){mult}{tag}")
         for s in mode.shapes:
             lines.append(f"    shape ({', '.join(_text(c) for c in s)})")
     return lines
@@ -224,35 +223,36 @@ def render_text(model: Model, modes: ModeSet) -> str:
            "Coordinates: " + ", ".join(str(x) for x in model.x)
            + " (displacements from the springs' rest configuration)",
            "", *_energy_lines(model)]
-    lhs = "M x''" + (" + C x'" if model.damped else "") + " + K x" + (
+    M, K, C, D = (MATRIX_TEXT[k] for k in "MKCD")  # bold: never read like a parameter named K
+    lhs = f"{M} x''" + (f" + {C} x'" if model.damped else "") + f" + {K} x" + (
         " + f_nl(x)" if Effect.CUBIC in model.effects else "")
     rhs = " + ".join([*(["F(t)"] if model.forces else []), *(["F_table(t)"] if model.table_forces else []),
-                      *(["M g"] if model.g is not None else [])]) or "0"
+                      *([f"{M} g"] if model.g is not None else [])]) or "0"
     if sc.ground is not None:
-        rhs = ("" if rhs == "0" else rhs + " ") + "- M 1 a_g(t)"
+        rhs = ("" if rhs == "0" else rhs + " ") + f"- {M} 1 a_g(t)"
     out += ["L = T - V", "", f"Equations of motion: {lhs} = {rhs}",
             "Per mass (Euler-Lagrange; each term traced to its scene entry):"]
     out += ["    " + line for line in equation_lines(model)]
     if n <= MAX_MATRIX:
-        out += ["", "M = d²T/dv² =", _indent(_pretty(model.M)), "",
-                "K = d²V/dx² =", _indent(_pretty(model.K))]
+        out += ["", f"{M} = d²T/dv² (mass matrix) =", _indent(_pretty(model.M)), "",
+                f"{K} = d²V/dx² (stiffness matrix) =", _indent(_pretty(model.K))]
         if model.C is not None:
-            out += ["", "C = d²R/dv² =", _indent(_pretty(model.C))]
+            out += ["", f"{C} = d²R/dv² (damping matrix) =", _indent(_pretty(model.C))]
         if model.rayleigh_targets is not None:
             from .rayleigh_targets import model_fit, text_lines as rayleigh_lines
 
             out += [""] + rayleigh_lines(model_fit(model, modes))
         if model.modal_zeta is not None:
-            out += ["", ("C += " if model.C is not None else "C = ") + "M Φ diag(2 ζ_j ω_j) Φᵀ M  (modal damping, "
-                    "ζ = (" + ", ".join(sp.sstr(z) for z in model.modal_zeta) + "); Φ the M-orthonormal modes; "
+            out += ["", (f"{C} += " if model.C is not None else f"{C} = ") + f"{M} Φ diag(2 ζ_j ω_j) Φᵀ {M}  (modal "
+                    "damping, ζ = (" + ", ".join(sstr(z) for z in model.modal_zeta) + "); Φ the M-orthonormal modes; "
                     "numeric: damping_matrix() of the generated module)"]
-        out += ["", "D = M^-1/2 K M^-1/2 =", _indent(_pretty(model.D))]
+        out += ["", f"{D} = {M}^-1/2 {K} {M}^-1/2 (dynamical matrix) =", _indent(_pretty(model.D))]
     else:
-        out += ["", f"M, K, D: {n}x{n} (not printed; see the generated module)"]
+        out += ["", f"{M}, {K}, {D}: {n}x{n} (not printed; see the generated module)"]
     if Effect.CUBIC in model.effects:
         out += ["", "Nonlinear (cubic) springs: the modes below are those of the linearization "
                     "about x = 0; the exact modal solution does not apply."]
-    out += ["", "Normal modes, K φ = ω² M φ (shapes in physical coordinates, any scale):"]
+    out += ["", f"Normal modes, {K} φ = ω² {M} φ (shapes in physical coordinates, any scale):"]
     out += ["    " + line for line in mode_lines(model, modes)]
     out += [f"    note: {note}" for note in modes.notes]
     if model.damped:
@@ -275,7 +275,10 @@ def render_latex(model: Model, modes: ModeSet) -> str:
 
     from .rayleigh_targets import LATEX_NAMES
 
-    L = partial(sp.latex, symbol_names=LATEX_NAMES)  # α_R, β_R of rayleigh_targets as \alpha_{R}, \beta_{R}
+    # multi-letter names upright; the matrices bold (never like a parameter named K); α_R, β_R of
+    # rayleigh_targets as \alpha_{R}, \beta_{R}
+    L = partial(latex, symbol_names=LATEX_NAMES)
+    M, K, D = MATRIX_LATEX["M"], MATRIX_LATEX["K"], MATRIX_LATEX["D"]
     lines = [r"\begin{align*}",
              rf"T &= {L(model.T)} \\",
              rf"V &= {L(model.V)} \\"]
@@ -284,8 +287,8 @@ def render_latex(model: Model, modes: ModeSet) -> str:
     for i in range(len(model.scene.mass_names)):  # as the text: m_i a_i = the traced forces
         rhs = sp.Add(*(t.force for t in model.terms if t.coordinate == i))
         lines.append(rf"{L(model.masses[i] * model.a[i])} &= {L(rhs)} \\")
-    lines += [rf"M &= {L(model.M)} \\", rf"K &= {L(model.K)} \\",
-              rf"D &= M^{{-1/2}} K M^{{-1/2}} = {L(model.D)}"]
+    lines += [rf"{M} &= {L(model.M)} \\", rf"{K} &= {L(model.K)} \\",
+              rf"{D} &= {M}^{{-1/2}} {K} {M}^{{-1/2}} = {L(model.D)}"]
     for mode in modes.modes:
         for s in mode.shapes:
             lines.append(rf"\\ \omega^2 &= {L(mode.omega2)}, & \phi &= {L(sp.Matrix(s).T)}")

@@ -15,6 +15,7 @@ point, exactly 0) is refused. SymPy is not imported here.
 
 from __future__ import annotations
 
+import contextvars
 import hashlib
 import math
 import os
@@ -51,6 +52,8 @@ MAX_FILE_BYTES = 64 * 2**20
 #: Largest description (characters).
 MAX_DESCRIPTION = 2000
 MAX_STEPS = 10**12
+#: True while the loader builds a Scene (any other construction is validated or refused).
+_BUILDING = contextvars.ContextVar("springchain_scene_building", default=False)
 MAX_CHAIN = 10**7
 
 TOP_KEYS = ("name", "description", "parameters", "masses", "springs", "dampers", "forces",
@@ -144,6 +147,37 @@ class Scene:
     chain_dampers: tuple = ()
     #: Whether the file has an ``[initial]`` table (without one the scene starts at rest).
     initial_given: bool = True
+    #: What the scene was built from (the TOML data as a dict): :meth:`with_parameters`,
+    #: :meth:`with_initial` and ``dataclasses.replace`` rebuild the scene from it, validated.
+    source: object = field(default=None, repr=False, compare=False)
+
+    def __post_init__(self):
+        # Built by the loader: trusted. Otherwise this is ``dataclasses.replace(scene, ...)`` or a
+        # direct call: the change goes through the loader's validation, or is refused.
+        if not _BUILDING.get():
+            from .scene_edit import validate_replaced
+
+            validate_replaced(self)
+
+    def with_parameters(self, values: dict | None = None, /, **more) -> "Scene":
+        """A new scene with some parameter values changed, validated like a scene file.
+
+        ``scene.with_parameters(k=4.0, m=2.0)`` (or a dict). Every function of springchain
+        (modes, simulate, frf, plan, bench, sweep, animate, the generated-module cache) uses
+        the new values. Raises :class:`SceneError` (one line) for an unknown name or a value
+        the scene file would not accept (e.g. a mass that becomes negative).
+        """
+        from .scene_edit import with_parameters
+
+        return with_parameters(self, {**(values or {}), **more})
+
+    def with_initial(self, x=None, v=None) -> "Scene":
+        """A new scene with another initial state (``x``, ``v``: arrays of shape (N,), lists, or, for
+        ``[chain]`` scenes, expressions of ``i`` and ``n``), validated like ``[initial]``.
+        A state left out (None) keeps the scene's."""
+        from .scene_edit import with_initial
+
+        return with_initial(self, x=x, v=v)
 
     def __repr__(self) -> str:  # short: the arrays and expressions are attributes
         form = (f"chain n={self.chain.n} ({self.chain.left.value}-{self.chain.right.value})" if self.chain
@@ -231,10 +265,26 @@ def load_scene(path: str | Path, text: str | None = None) -> Scene:
         raise SceneError(file, None, "a TOML value too large to read (e.g. a number of thousands of "
                                      "digits); accepted: numbers of ordinary size") from None
     sha = hashlib.sha256(raw).hexdigest()
+    return build_scene(data, file, sha)
+
+
+class SceneSource(dict):
+    """The TOML data a Scene was built from, and the Scene built (what ``dataclasses.replace`` compares to)."""
+
+    __slots__ = ("scene",)
+
+
+def build_scene(data: dict, file: str, sha: str) -> Scene:
+    """Validate TOML-shaped ``data`` (as :func:`load_scene` reads it) into a Scene whose cache key is ``sha``."""
+    token = _BUILDING.set(True)
     try:
-        return _build(Loader(file, data), sha)
+        scene = _build(Loader(file, SceneSource(data)), sha)
+        scene.source.scene = scene
+        return scene
     except RecursionError:
         raise SceneError(file, None, "nested too deeply; accepted: a flat scene file") from None
+    finally:
+        _BUILDING.reset(token)
 
 
 def _build(ld: Loader, sha: str) -> Scene:
@@ -384,7 +434,7 @@ def _build(ld: Loader, sha: str) -> Scene:
                  springs=tuple(springs), dampers=tuple(dampers), forces=tuple(forces),
                  gravity=gravity, chain=chain, x0=x0, v0=v0, dt=dt, steps=steps,
                  record_every=record_every, table_forces=table_forces, ground=ground,
-                 damping=damping, chain_dampers=chain_dampers, initial_given=bool(init))
+                 damping=damping, chain_dampers=chain_dampers, initial_given=bool(init), source=data)
 
 
 def _free_pieces(n: int, springs) -> int:
@@ -430,6 +480,16 @@ def _chain(ld: Loader, pnames: frozenset[str], env: dict) -> Chain:
 
 
 def _initial(ld: Loader, key: str, value, n: int, chain: bool, pnames, env) -> np.ndarray:
+    if isinstance(value, np.ndarray):  # from Python (Scene.with_initial): checked as a whole, no loop
+        if value.dtype.kind not in "iuf" or value.shape != (n,):
+            raise ld.bad(key, value, f"an array of {value.dtype} with shape {value.shape} for {n} masses",
+                         f"an array of {n} finite numbers (one per mass, in mass order)")
+        out = value.astype(float)
+        bad = ~np.isfinite(out)
+        if bad.any():
+            j = int(np.argmax(bad))
+            raise ld.bad(f"{key}[{j}]", float(out[j]), "not a finite number", "a finite number")
+        return out
     if isinstance(value, list):
         if len(value) != n:
             raise ld.bad(key, value, f"{len(value)} values for {n} masses",

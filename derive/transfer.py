@@ -12,6 +12,7 @@ from dataclasses import dataclass
 
 import sympy as sp
 
+from .printing import latex, sstr
 from .model import Model
 from .modes import BudgetExceeded, time_budget
 
@@ -59,7 +60,7 @@ class TransferFunction:
         """Two lines: the symbolic ratio, and the ratio at the scene's values."""
         lhs = f"H(s) = X_{self.output}(s)/F_{self.input}(s)"
         n, d = self.at_values()
-        sym = lambda e: _descending(sp.Poly(e, self.s), _coefficient(sp.sstr), "s")  # noqa: E731
+        sym = lambda e: _descending(sp.Poly(e, self.s), _coefficient(sstr), "s")  # noqa: E731
         return (f"{lhs} = ({sym(self.numerator)}) / ({sym(self.denominator)})\n"
                 f"{' ' * (len(lhs) + 1)}= ({n}) / ({d})   (at the scene's values)\n")
 
@@ -67,7 +68,7 @@ class TransferFunction:
         """``H(s) = \\frac{...}{...}`` (amsmath), polynomials in descending powers of s."""
         lhs = (r"H(s) = \frac{X_{\mathrm{" + self.output.replace("_", r"\_") + r"}}(s)}{F_{\mathrm{"
                + self.input.replace("_", r"\_") + r"}}(s)}")
-        tex = lambda e: _descending(sp.Poly(e, self.s), _coefficient(sp.latex, r"\left(", r"\right)"), "s",  # noqa: E731
+        tex = lambda e: _descending(sp.Poly(e, self.s), _coefficient(latex, r"\left(", r"\right)"), "s",  # noqa: E731
                                     power=lambda k: f"s^{{{k}}}", times=" ")
         return ("\\begin{align*}\n" + lhs + " &= \\frac{" + tex(self.numerator) + "}{"
                 + tex(self.denominator) + "}\n\\end{align*}\n")

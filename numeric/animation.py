@@ -57,9 +57,79 @@ def _write(fig, update, frames: int, fps: float, path: Path) -> Path:
     return path
 
 
+#: Space between the drawings of two pieces that no spring joins (rest spacing 1).
+PIECE_GAP = 1.5
+#: Height of the ground under a mass whose wall spring is drawn downwards.
+GROUND_Y = -0.45
+
+
+def _pieces(n: int, ends: np.ndarray) -> list[list[int]]:
+    """Masses of each piece (joined by springs between masses), in mass order, pieces by first mass."""
+    parent = list(range(n))
+
+    def root(a: int) -> int:
+        while parent[a] != a:
+            parent[a] = parent[parent[a]]
+            a = parent[a]
+        return a
+
+    for a, b in ends:
+        if a >= 0 and b >= 0:
+            parent[root(int(a))] = root(int(b))
+    groups: dict[int, list[int]] = {}
+    for i in range(n):
+        groups.setdefault(root(i), []).append(i)
+    return sorted(groups.values(), key=lambda g: g[0])
+
+
+def layout(n: int, spring_ends) -> tuple[np.ndarray, list[tuple[int, int, str, float]]]:
+    """Where to draw masses and walls so that every piece is drawn as it is connected.
+
+    Each piece (masses joined by springs) gets its own stretch of the line, masses in scene order at
+    spacing 1, :data:`PIECE_GAP` between pieces; a wall spring of a piece's first (last) mass goes
+    to a wall just left (right) of it, any other wall spring straight down to the ground. No spring
+    is drawn across a mass of another piece.
+
+    Returns
+    -------
+    rest : ndarray, shape (N,)
+        Rest position of each mass on the drawing.
+    walls : list of (spring index, mass, side, x)
+        Every wall spring: side ``"left"``, ``"right"`` (wall at x) or ``"below"`` (ground under the mass).
+    """
+    ends = np.asarray(spring_ends, dtype=np.intp).reshape(-1, 2)
+    wall_springs: dict[int, list[int]] = {}
+    for j, (a, b) in enumerate(ends):
+        if (a < 0) != (b < 0):
+            wall_springs.setdefault(int(b if a < 0 else a), []).append(j)
+    rest = np.zeros(n)
+    walls: list[tuple[int, int, str, float]] = []
+    cursor = 0.0
+    for piece in _pieces(n, ends):
+        first, last = piece[0], piece[-1]
+        todo = {m: list(wall_springs.get(m, ())) for m in piece}
+        left = todo[first].pop(0) if todo[first] else None
+        right = todo[last].pop(0) if todo[last] else None
+        cursor += 1.0 if left is not None else 0.0
+        rest[piece] = cursor + np.arange(len(piece))
+        if left is not None:
+            walls.append((left, first, "left", rest[first] - 1.0))
+        if right is not None:
+            walls.append((right, last, "right", rest[last] + 1.0))
+        walls += [(j, m, "below", rest[m]) for m in piece for j in todo[m]]
+        cursor = rest[last] + (1.0 if right is not None else 0.0) + PIECE_GAP + 1.0
+    return rest, walls
+
+
+def _zigzag_down(x: float, top: float, turns: int = 4, width: float = 0.06) -> tuple[np.ndarray, np.ndarray]:
+    """A spring drawn from the ground (y = GROUND_Y) up to a mass at (x, top)."""
+    ys, xs = _zigzag(GROUND_Y, top, turns, width)
+    return x + xs, ys
+
+
 def line_animation(path: Path, displacement: np.ndarray, labels: list[str], spring_ends: np.ndarray,
                    masses: np.ndarray, title: str, fps: float) -> Path:
-    """Masses as dots at rest positions 0, 1, …, N−1 displaced along the line, springs between them.
+    """Masses as dots displaced along the line, springs between them, each piece on its own stretch.
 
     Parameters
     ----------
@@ -75,26 +145,25 @@ def line_animation(path: Path, displacement: np.ndarray, labels: list[str], spri
         Dot areas scale with the masses.
     """
     frames, n = displacement.shape
-    rest = np.arange(n, dtype=float)
     ends = np.asarray(spring_ends, dtype=np.intp).reshape(-1, 2)
+    rest, walls = layout(n, ends)
+    at_wall = {j: (side, x) for j, _, side, x in walls}
     fig, ax = new_figure(figsize=(6.4, 2.6))
     size = 60 + 140 * (masses / masses.max()) if masses.size else masses
-
-    def anchor(a: int, b: int) -> float:  # a wall beside the end mass nearer to it
-        return -1.0 if b <= (n - 1) / 2 else float(n)
-
-    walls = sorted({anchor(a, b) if a < 0 else anchor(b, a) for a, b in ends if (a < 0) != (b < 0)})
-    for w in walls:
-        ax.axvline(w, color="0.3", lw=3, label="wall" if w == walls[0] else None)
+    for k, (_, m, side, x) in enumerate(walls):
+        if side == "below":
+            ax.plot([x - 0.25, x + 0.25], [GROUND_Y, GROUND_Y], color="0.3", lw=3,
+                    label="wall / ground" if k == 0 else None)
+        else:
+            ax.plot([x, x], [-0.35, 0.35], color="0.3", lw=3, label="wall / ground" if k == 0 else None)
     lines = [ax.plot([], [], color="0.45", lw=1, label="spring" if j == 0 else None)[0] for j in range(len(ends))]
     dots = ax.scatter(rest, np.zeros(n), s=size, color="C0", zorder=3, label="mass (area ∝ m)")
     stamp = ax.text(0.01, 0.95, "", transform=ax.transAxes, va="top", fontsize=9)
-    lo = min([-0.5, *walls]) - 0.5
-    hi = max([n - 0.5, *walls]) + 0.5
-    ax.set_xlim(lo, hi)
+    xs_all = [*rest, *(x for *_, x in walls)]
+    ax.set_xlim(min(xs_all) - 1.0, max(xs_all) + 1.0)
     ax.set_ylim(-0.6, 0.8)
     ax.set_yticks([])
-    ax.set_xlabel("rest position (spacing 1) + scaled displacement [-]")
+    ax.set_xlabel("rest position (spacing 1; pieces apart) + scaled displacement [-]")
     ax.set_ylabel("(springs, masses)")
     ax.set_title(title, fontsize=10)
     ax.legend(fontsize=7, loc="upper right", ncol=3)
@@ -102,11 +171,12 @@ def line_animation(path: Path, displacement: np.ndarray, labels: list[str], spri
     def update(f: int) -> None:
         pos = rest + displacement[f]
         dots.set_offsets(np.column_stack([pos, np.zeros(n)]))
-        for line, (a, b) in zip(lines, ends):
-            if a < 0 or b < 0:
+        for j, (line, (a, b)) in enumerate(zip(lines, ends)):
+            if j in at_wall:
+                side, x = at_wall[j]
                 m = b if a < 0 else a
-                xs, ys = _zigzag(anchor(m, -1), pos[m])
-            elif abs(a - b) == 1:
+                xs, ys = _zigzag_down(pos[m], 0.0) if side == "below" else _zigzag(x, pos[m])
+            elif abs(rest[a] - rest[b]) == 1.0:
                 xs, ys = _zigzag(pos[a], pos[b])
             else:
                 xs, ys = _arc(pos[a], pos[b])
@@ -116,25 +186,52 @@ def line_animation(path: Path, displacement: np.ndarray, labels: list[str], spri
     return _write(fig, update, frames, fps, path)
 
 
-def profile_animation(path: Path, index: np.ndarray, displacement: np.ndarray, labels: list[str], title: str,
-                      ylabel: str, fps: float) -> Path:
-    """A chain's displacement profile x(i) per frame, at the (decimated) indices ``index``.
+def profile_envelopes(rows, limit: int = MAX_PROFILE_POINTS) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Per frame, the min–max envelope of a chain's profile over ``limit`` bins of masses.
+
+    rows : iterable of ndarray, shape (N,) each (read one at a time: memory stays O(limit) per frame)
+
+    Returns
+    -------
+    centre : ndarray, shape (P,); low, high : ndarray, shape (F, P)
+        Every mass when N <= limit (low == high); otherwise each bin's extremes, so a feature
+        narrower than a bin keeps its true height (a decimated line would miss it).
+    """
+    from .plots import envelope
+
+    lows, highs, centre = [], [], None
+    for y in rows:
+        centre, lo, hi = envelope(np.asarray(y, dtype=float), limit)
+        lows.append(lo)
+        highs.append(hi)
+    return centre, np.array(lows), np.array(highs)
+
+
+def profile_animation(path: Path, centre: np.ndarray, low: np.ndarray, high: np.ndarray, labels: list[str],
+                      title: str, ylabel: str, fps: float, n: int) -> Path:
+    """A chain's displacement profile x(i) per frame, as drawn by :func:`profile_envelopes`.
 
     Parameters
     ----------
-    index : ndarray of int, shape (P,)
-    displacement : ndarray, shape (F, P)
+    centre : ndarray, shape (P,)
+        Mass index of each point (a bin's centre when the chain is longer than P).
+    low, high : ndarray, shape (F, P)
+        Per frame, the smallest and largest displacement in each bin (equal for unbinned chains).
     labels : list of str, length F
+    n : int
+        Masses in the chain.
     """
-    frames = displacement.shape[0]
+    frames = low.shape[0]
+    binned = centre.shape[0] < n
     fig, ax = new_figure(figsize=(6.4, 3.0))
-    (line,) = ax.plot(index, displacement[0], color="C0", lw=1.2, marker="." if index.shape[0] <= 60 else None,
-                      label=f"x(i) at {index.shape[0]} of {int(index[-1]) + 1} masses" if index.shape[0] < int(index[-1]) + 1
-                      else "x(i)")
+    label = (f"x(i): min–max over bins of {n / centre.shape[0]:.3g} masses" if binned else "x(i)")
+    (line_hi,) = ax.plot(centre, high[0], color="C0", lw=1.0, marker="." if centre.shape[0] <= 60 else None,
+                         label=label)
+    (line_lo,) = ax.plot(centre, low[0], color="C0", lw=1.0, visible=binned)
     stamp = ax.text(0.01, 0.95, "", transform=ax.transAxes, va="top", fontsize=9)
-    top = float(np.max(np.abs(displacement))) or 1.0
+    top = float(max(np.max(np.abs(low)), np.max(np.abs(high)))) or 1.0
     ax.set_ylim(-1.15 * top, 1.15 * top)
-    ax.set_xlim(float(index[0]), float(index[-1]) if index[-1] > index[0] else 1.0)
+    ax.set_xlim(0.0, float(n - 1) if n > 1 else 1.0)
     ax.set_xlabel("mass index i")
     ax.set_ylabel(ylabel)
     ax.set_title(title, fontsize=10)
@@ -142,7 +239,8 @@ def profile_animation(path: Path, index: np.ndarray, displacement: np.ndarray, l
     ax.legend(fontsize=7, loc="upper right")
 
     def update(f: int) -> None:
-        line.set_ydata(displacement[f])
+        line_hi.set_ydata(high[f])
+        line_lo.set_ydata(low[f])
         stamp.set_text(labels[f])
 
     return _write(fig, update, frames, fps, path)

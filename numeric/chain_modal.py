@@ -152,9 +152,9 @@ class ChainModal:
         try:
             left, right = End(left), End(right)
         except ValueError:
-            raise ValueError(f"chain ends must be free/wall on each side or ring on both, got {left!r}, {right!r}") from None
+            raise ValueError(f"chain ends must be free/wall on each side or ring on both, got {str(left)!r}, {str(right)!r}") from None
         if (left is End.RING) != (right is End.RING):
-            raise ValueError(f"chain ends must be free/wall on each side or ring on both, got {left!r}, {right!r}")
+            raise ValueError(f"chain ends must be free/wall on each side or ring on both, got {str(left)!r}, {str(right)!r}")
         n = x0.shape[0]
         omega = np.asarray(mode_omega, dtype=float)
         if omega.shape != (n,):

@@ -136,6 +136,11 @@ class Plan:
     def as_json(self) -> dict:
         return {"recommended": self.recommended.as_json(), "candidates": [c.as_json() for c in self.candidates]}
 
+    def _repr_html_(self) -> str:  # a notebook shows the table ``springchain plan`` prints
+        from .html import plan_table
+
+        return plan_table(self)
+
 
 @dataclass(frozen=True)
 class StepCost:

@@ -34,7 +34,7 @@ from .integrators import ADAPTIVE, INTEGRATORS
 from .integrators.base import Integrator, Problem
 from .plan import MAX_MASSES, SAFETY, AdaptiveLaw, Candidate, ExactModal, Plan, StepCost, adaptive_atol, \
     calibrate_adaptive, measure_step_cost
-from .system import System
+from .system import LOADED_CHAIN_EXACT_MAX, System
 from .timing import measure
 
 #: Largest ``steps × N`` of one pilot run (the pilot horizon is shortened beyond it).
@@ -59,10 +59,20 @@ def check_pilot(system: System, what: str) -> None:
                              f"{'nonlinear' if not system.linear else 'index-dependent'})")
         return
     if not system.exact_available:
-        why = ("cubic springs" if not system.linear else
-               "a loaded [chain] too long for its dense exact solution" if system.chain else
-               "forces or ground acceleration that are not constant + harmonic")
-        raise RunRefused(f"{what} measures against the exact solution; this scene has none ({why})")
+        mod = system.module
+        drivers = [word for word, on in (("dampers", system.damped),
+                                         ("forces", hasattr(mod, "external_acceleration") or system.tabulated),
+                                         ("ground motion", system.ground is not None),
+                                         ("gravity", "gravity" in system.effects)) if on]
+        lacks = ("with cubic springs there is none" if not system.linear else
+                 f"a loaded [chain] of more than {LOADED_CHAIN_EXACT_MAX} masses has none (it is dense)" if system.chain
+                 else "forces or ground accelerations that are not constant + harmonic in t have none")
+        raise RunRefused(f"{what}: this scene's {' and '.join(drivers)} put it outside the closed-form error models, "
+                         f"so {what} calibrates every method by pilot runs against the exact solution, and {lacks}; "
+                         "accepted: linear springs with forces and ground acceleration constant + harmonic (or "
+                         "tables), or a scene without dampers, forces, gravity and ground motion (cubic springs "
+                         "are then planned from their linearization); compare methods here with `springchain "
+                         "simulate --method NAME`")
 
 
 class ExactReference:

@@ -69,17 +69,36 @@ def differences(t: np.ndarray, dx: np.ndarray, dv: np.ndarray, names, label: str
     return fig
 
 
-def energy(t: np.ndarray, energies: dict[str, np.ndarray], e0: float):
-    """Relative energy error (E(t) − E(0)) / |E(0)| per method."""
+def energy(t: np.ndarray, energies: dict[str, np.ndarray], e0: float | None = None, *, conserved: bool = True,
+           work: np.ndarray | None = None):
+    """Energy of every method, labelled with what is plotted.
+
+    conserved : bool
+        No dampers, forces or ground motion: the error E(t) − E(0) is plotted, relative to |E(0)|
+        when E(0) ≠ 0, in joules otherwise. Else E(t) itself [J] (it changes by the work of forces
+        and damping), and ``work`` (shape (S,), if given) as the curve E(0) + W(t).
+    e0 : float, optional
+        E(0) (default: the first method's first value).
+    """
     fig, ax = new_figure(figsize=(9, 4.5))
-    scale = abs(e0) if e0 != 0 else 1.0
-    for method, e in energies.items():
-        ax.plot(t, (e - e0) / scale, label=method, **STYLES.get(method, {}))
+    e0 = float(next(iter(energies.values()))[0]) if e0 is None else e0
+    if conserved:
+        scale = abs(e0) if e0 != 0 else 1.0
+        for method, e in energies.items():
+            ax.plot(t, (e - e0) / scale, label=method, **STYLES.get(method, {}))
+        ax.set_ylabel("(E(t) − E(0)) / |E(0)|" if e0 != 0 else "E(t) − E(0) [J]")
+        ax.set_title("Energy error (no dampers or forces: E is conserved)")
+    else:
+        for method, e in energies.items():
+            ax.plot(t, e, label=f"E(t), {method}", **STYLES.get(method, {}))
+        if work is not None:
+            ax.plot(t, e0 + work, color="k", ls=":", lw=1.2,
+                    label="E(0) + W(t): work of forces and damping (trapezoid on the recorded times)")
+        ax.set_ylabel("energy E(t) = T + V [J]")
+        ax.set_title("Energy E(t): not conserved, it changes by the work of forces and damping")
     ax.set_xlabel("time t [s]")
-    ax.set_ylabel("(E(t) − E(0)) / |E(0)|")
-    ax.set_title("Energy error")
     ax.grid(alpha=0.3)
-    ax.legend()
+    ax.legend(fontsize=8)
     return fig
 
 
@@ -91,18 +110,83 @@ def save(fig, path) -> None:
         fig.savefig(tmp, dpi=110, format=str(path).rsplit(".", 1)[-1])
 
 
+#: Profiles of more masses than this are drawn as a min–max envelope per bin of masses.
+PROFILE_POINTS = 2000
+#: A feature narrower than this fraction of the chain gets a zoomed panel at full resolution.
+NARROW = 0.05
+
+
+def envelope(y: np.ndarray, bins: int = PROFILE_POINTS) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Smallest and largest value of ``y`` in each of ``bins`` runs of consecutive masses.
+
+    A plain decimation (every k-th mass) misses or shrinks a feature narrower than k masses; the
+    envelope keeps every extreme, so a narrow pulse is drawn at its true height.
+
+    Returns
+    -------
+    centre, low, high : ndarray, shape (B,)
+        Bin centres (mass index) and the extremes of ``y`` in each bin; ``B = min(bins, N)``.
+    """
+    y = np.asarray(y, dtype=float)
+    n = y.shape[0]
+    starts = np.unique(np.linspace(0, n, min(bins, n) + 1).astype(np.intp)[:-1])
+    ends = np.append(starts[1:], n)
+    return 0.5 * (starts + ends - 1), np.minimum.reduceat(y, starts), np.maximum.reduceat(y, starts)
+
+
+def narrow_window(rows: list[np.ndarray], fraction: float = NARROW) -> tuple[int, int] | None:
+    """``(first, last)`` mass index around where the profiles exceed 5 % of their peak, when that
+    stretch is narrower than ``fraction`` of the chain (None otherwise, or for an all-zero profile)."""
+    top = max((float(np.max(np.abs(r))) for r in rows), default=0.0)
+    if top == 0.0:
+        return None
+    hit = np.flatnonzero(np.any([np.abs(r) > 0.05 * top for r in rows], axis=0))
+    n = rows[0].shape[0]
+    lo, hi = int(hit[0]), int(hit[-1])
+    if hi - lo + 1 > fraction * n:
+        return None
+    pad = max(10, (hi - lo + 1) // 2)
+    return max(0, lo - pad), min(n - 1, hi + pad)
+
+
 def profiles(snapshots: dict[float, np.ndarray], quantity: str = "displacement x", unit: str = "m"):
-    """Chain profiles x(i) at a few times. snapshots: time -> ndarray, shape (N,)."""
-    fig, ax = new_figure(figsize=(9, 4.5))
-    for t, y in snapshots.items():
-        ax.plot(np.arange(y.shape[0]), y, lw=1, label=f"t = {t:g} s")
+    """Chain profiles x(i) at a few times. snapshots: time -> ndarray, shape (N,).
+
+    Up to :data:`PROFILE_POINTS` masses every mass is drawn; longer chains as a min–max envelope
+    per bin of masses (a narrow feature keeps its height), and a feature narrower than
+    :data:`NARROW` of the chain gets a second panel at full resolution.
+    """
+    rows = list(snapshots.values())
+    n = rows[0].shape[0] if rows else 0
+    window = narrow_window(rows) if n > PROFILE_POINTS else None
+    fig, axes = new_figure(2 if window else 1, 1, figsize=(9, 7 if window else 4.5), squeeze=False)
+    ax = axes[0, 0]
+    for j, (t, y) in enumerate(snapshots.items()):
+        if n > PROFILE_POINTS:
+            c, lo, hi = envelope(y)
+            ax.fill_between(c, lo, hi, color=f"C{j % 10}", alpha=0.6, lw=0.6, label=f"t = {t:g} s (min–max per "
+                            f"{n / c.shape[0]:.3g} masses)")
+        else:
+            ax.plot(np.arange(n), y, lw=1, label=f"t = {t:g} s")
     ax.set_xlabel("mass index i")
     ax.set_ylabel(f"{quantity} [{unit}]")
-    ax.set_title("Chain profile")
+    ax.set_title(f"Chain profile ({n} masses)")
     ax.grid(alpha=0.3)
     # matplotlib's "best" legend place scans every point: seconds for 10^6-mass profiles
-    big = sum(y.shape[0] for y in snapshots.values()) > 100_000
-    ax.legend(fontsize=8, **({"loc": "upper right"} if big else {}))
+    ax.legend(fontsize=8, **({"loc": "upper right"} if n > 100_000 else {}))
+    if window:
+        lo, hi = window
+        zoom = axes[1, 0]
+        idx = np.arange(lo, hi + 1)
+        for j, (t, y) in enumerate(snapshots.items()):
+            zoom.plot(idx, y[lo:hi + 1], color=f"C{j % 10}", lw=1, marker="." if idx.shape[0] <= 200 else None,
+                      label=f"t = {t:g} s")
+        zoom.set_xlabel("mass index i (every mass)")
+        zoom.set_ylabel(f"{quantity} [{unit}]")
+        zoom.set_title(f"Zoom: masses {lo} … {hi}, where the profile exceeds 5 % of its peak")
+        zoom.grid(alpha=0.3)
+        zoom.legend(fontsize=8)
+        ax.axvspan(lo, hi, color="0.85", zorder=0, label=None)
     return fig
 
 

@@ -7,6 +7,7 @@ from pathlib import Path
 
 import numpy as np
 
+from .strict_json import jsonable  # the one definition (null for non-finite), kept importable here
 from .scaling import PER_MASS_COLUMNS, SECONDS_COLUMNS, ScalingResult
 
 
@@ -116,16 +117,3 @@ def write(result: ScalingResult, out: Path, *, json_name: str = "scaling.json", 
     atomic_write_text(paths[1], markdown(result))
     plots.save(figure(result), paths[2])
     return paths
-
-
-def jsonable(obj):
-    """The result's JSON form with NumPy scalars as Python numbers and non-finite floats as null."""
-    if isinstance(obj, dict):
-        return {k: jsonable(v) for k, v in obj.items()}
-    if isinstance(obj, (list, tuple)):
-        return [jsonable(v) for v in obj]
-    if isinstance(obj, float) and not math.isfinite(obj):
-        return None
-    if isinstance(obj, (np.floating, np.integer)):
-        return jsonable(obj.item())
-    return obj

@@ -300,7 +300,11 @@ def write_figures(out: Path, scene_name: str, names, system: System, runs: dict[
             plots.save(fig, paths[-1])
     energies = {m: system.energy(r.x.T, r.v.T) for m, r in runs.items()}
     e0 = float(next(iter(energies.values()))[0])
-    fig = plots.energy(t, energies, e0)
+    conserved = not (system.damped or system.forced)
+    from .energy_balance import work
+
+    ref = runs.get(EXACT, next(iter(runs.values())))  # the work along the exact run, else the first
+    fig = plots.energy(t, energies, e0, conserved=conserved, work=None if conserved else work(system, t, ref.v))
     paths.append(out / f"{scene_name}-energy.png")
     plots.save(fig, paths[-1])
     return paths
@@ -379,7 +383,8 @@ def stream_methods(system: System, x0: np.ndarray, v0: np.ndarray, h: float, ste
                 paths.append(out / f"{scene_name}-{name}-profiles.png")
                 plots.save(fig, paths[-1])
             energies = {name: rec.energy for name, rec in recorders.items()}
-            fig = plots.energy(t, energies, float(next(iter(energies.values()))[0]))
+            fig = plots.energy(t, energies, float(next(iter(energies.values()))[0]),
+                               conserved=not (system.damped or system.forced))
             paths.append(out / f"{scene_name}-energy.png")
             plots.save(fig, paths[-1])
     summary["npz"] = str(npz)

@@ -185,6 +185,39 @@ def run(spec: SweepSpec, out: Path, batch: int, client=None, progress: bool = Tr
             "seconds": time.perf_counter() - t0}
 
 
+def seconds_per_sample(spec: SweepSpec) -> float:
+    """Seconds one sample takes in this process: sample 0 computed twice (the first pays the imports and
+    the module's compilation), the second timed; nothing is written."""
+    compute_batch(spec, 0, 1)
+    t0 = time.perf_counter()
+    compute_batch(spec, 0, 1)
+    return time.perf_counter() - t0
+
+
+def run_in_process(spec: SweepSpec, out: Path, batch: int, progress: bool = True,
+                   max_batches: int | None = None) -> dict:
+    """Compute unfinished batches here, on Dask's synchronous scheduler (no worker process, no thread),
+    writing each part file as it is done; at most ``max_batches`` of them (None: all).
+
+    Returns ``{"batches", "computed", "skipped", "seconds"}`` (``skipped``: finished before this call).
+    """
+    import dask
+
+    t0 = time.perf_counter()
+    plan = batches(spec.total, batch)
+    done = finished(out, len(plan))
+    todo = [bt for bt in plan if bt[0] not in done][:max_batches]
+    prog = Progress(sum(e - s for _, s, e in todo), enabled=progress)
+    prog.skipped = spec.total - prog.total
+    for b, s, e in todo:
+        (cols,) = dask.compute(dask.delayed(compute_batch, pure=False)(spec, s, e), scheduler="synchronous")
+        write_part(out, b, cols)
+        prog.add(len(cols["sample"]))
+    if todo:
+        prog.add(0, force=True)
+    return {"batches": len(plan), "computed": len(todo), "skipped": len(done), "seconds": time.perf_counter() - t0}
+
+
 def read(out: Path, columns: list[str] | None = None):
     """The finished rows as a pyarrow Table, in sample order (reads only ``columns``)."""
     import pyarrow.parquet as pq
@@ -197,5 +230,5 @@ def read(out: Path, columns: list[str] | None = None):
     return pa.concat_tables([pq.read_table(p, columns=columns) for p in parts])
 
 
-__all__ = ["run", "read", "batches", "finished", "check_manifest", "write_part", "local_cluster", "part_path",
+__all__ = ["run", "run_in_process", "seconds_per_sample", "read", "batches", "finished", "check_manifest", "write_part", "local_cluster", "part_path",
            "Progress", "PARTS", "MANIFEST"]

@@ -8,16 +8,21 @@ checked against a transfer-matrix computation in tests/test_sweep.py.
 
 from __future__ import annotations
 
-import json
 from pathlib import Path
 
 import numpy as np
 
 from . import plots
 from .files import atomic_write_text
+from .strict_json import dumps
 from .sweep_driver import read
 
 QUANTILES = (0.05, 0.25, 0.5, 0.75, 0.95)
+#: What ``participation_ratio`` means (README, summary.json and the figure say the same).
+PR_CONVENTION = ("normalised: 1 / (N * sum_i psi_i^4) of each mass-weighted mode psi (sum_i psi_i^2 = 1), i.e. "
+                 "the participation number 1 / sum_i psi_i^4 divided by N: 1 for a mode spread evenly over all N "
+                 "masses, 1/N for a mode on one mass")
+GAMMA_MISSING = "γ is not computed for rings (no open-chain transfer matrix): null in summary.json"
 
 
 def matsuda_ishii(omega2, k: float, mbar: float, sigma2: float) -> np.ndarray:
@@ -82,36 +87,44 @@ def summarise(out: Path, scene: str, law: dict | None = None) -> tuple[dict, lis
     if chain:
         pr = _column(table, "participation_ratio")
         gamma = _column(table, "inverse_localisation_length")
-        summary["participation_ratio"] = {"mean": pr.mean(axis=0).tolist()}
+        summary["participation_ratio"] = {"mean": pr.mean(axis=0).tolist(), "convention": PR_CONVENTION}
         summary["inverse_localisation_length"] = {"mean": gamma.mean(axis=0).tolist()}
         centres, g_mean, counts = binned(omega, gamma)
         summary["inverse_localisation_length"]["binned"] = {"omega": centres.tolist(), "mean": g_mean.tolist(),
                                                             "count": counts.tolist()}
+        if not centres.size:
+            summary["inverse_localisation_length"]["note"] = GAMMA_MISSING
         if law:
             summary["matsuda_ishii"] = dict(law, formula="gamma = sigma2 * omega^2 / (8 * k * mbar)")
         paths.append(out / "localisation.png")
-        fig, (a1, a2) = plots.new_figure(1, 2, figsize=(11, 4.5))
+        # no γ (rings): one panel, not an empty one with a legend entry
+        fig, axes = plots.new_figure(1, 2 if centres.size else 1, figsize=(11 if centres.size else 6.5, 4.5),
+                                     squeeze=False)
+        a1 = axes[0, 0]
         pc, pm, _ = binned(omega, pr)
         step = max(1, omega.size // 20000)
         a1.plot(omega.ravel()[::step], pr.ravel()[::step], ".", ms=1, alpha=0.3, color="0.5", label="modes")
         a1.plot(pc, pm, "-o", ms=3, color="C0", label="mean per ω bin")
         a1.set_xlabel("ω [rad/s]")
-        a1.set_ylabel("participation ratio")
-        a1.set_title("Participation ratio (1 = extended, → 0 localised)")
+        a1.set_ylabel("participation ratio 1/(N Σψ⁴)")
+        a1.set_title("Participation ratio (1 = spread over all masses, 1/N = one mass)"
+                     + ("" if centres.size else f"\n{GAMMA_MISSING}"), fontsize=10)
         a1.grid(alpha=0.3)
         a1.legend(fontsize=8)
-        a2.loglog(centres, g_mean, "o", ms=4, color="C1", label="γ: transfer matrix, mean per ω bin")
-        if law and centres.size:
-            w = np.geomspace(max(centres[0], 1e-3), centres[-1], 100)
-            a2.loglog(w, matsuda_ishii(w**2, **law), "k--",
-                      label=f"Matsuda–Ishii σ²ω²/(8km̄), σ² = {law['sigma2']:.3g}")
-        a2.set_xlabel("ω [rad/s]")
-        a2.set_ylabel("inverse localisation length γ [1/site]")
-        a2.set_title("Inverse localisation length")
-        a2.grid(alpha=0.3, which="both")
-        a2.legend(fontsize=8)
+        if centres.size:
+            a2 = axes[0, 1]
+            a2.loglog(centres, g_mean, "o", ms=4, color="C1", label="γ: transfer matrix, mean per ω bin")
+            if law:
+                w = np.geomspace(max(centres[0], 1e-3), centres[-1], 100)
+                a2.loglog(w, matsuda_ishii(w**2, **law), "k--",
+                          label=f"Matsuda–Ishii σ²ω²/(8km̄), σ² = {law['sigma2']:.3g}")
+            a2.set_xlabel("ω [rad/s]")
+            a2.set_ylabel("inverse localisation length γ [1/site]")
+            a2.set_title("Inverse localisation length")
+            a2.grid(alpha=0.3, which="both")
+            a2.legend(fontsize=8)
         plots.save(fig, paths[1])
-    atomic_write_text(out / "summary.json", json.dumps(summary, indent=1) + "\n")
+    atomic_write_text(out / "summary.json", dumps(summary, indent=1) + "\n")  # strict: NaN (e.g. γ of a ring) as null
     return summary, paths
 
 

@@ -5,6 +5,8 @@ The public API (each name loads what it needs on first use, so ``import springch
 
     import springchain as sc
     scene = sc.load("seed")            # a path or a bundled scene's name
+    s4 = scene.with_parameters(k=4.0).with_initial(x=[0.1, 0, 0])  # new validated scenes
+    sc.scene_from_dict({"name": "two", "parameters": {...}, ...})  # the TOML schema as a dict
     m = sc.modes(scene)                # equations and modes; m.to_json(), m._repr_latex_()
     run = sc.simulate(scene)           # run.t (S,), run.x["modal"] (S, N), run.plot(), run.save(path)
     sc.plan(scene, tol=1e-6)           # the cheapest method and step for a tolerance
@@ -31,6 +33,7 @@ _LAZY = {
     "SceneError": ".derive.errors", "RunRefused": ".numeric.errors", "Scene": ".derive.scene",
     "bundled_scenes": "._scenes", "sweep": "._sweep", "SweepResult": "._sweep",
     "frf": "._frf", "FrequencyResponse": "._frf", "animate": "._animate", "Animation": "._animate",
+    "scene_from_dict": ".derive.scene_edit",
     "rayleigh_coefficients": "._structural", "response_spectrum": "._structural", "rsa": "._structural",
     "SpectrumResult": "._structural", "RSA": "._structural",
 }

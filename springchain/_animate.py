@@ -44,6 +44,11 @@ class Animation:
         extra = f", ω = {self.omega:.8g} rad/s" if self.omega is not None else ""
         return f"animated {self.what}{extra}: {self.frames} frames"
 
+    def _repr_html_(self) -> str:  # the GIF inline
+        from ._display import animation_html
+
+        return animation_html(self)
+
 
 def _check(frames, fps):
     from .numeric.errors import RunRefused
@@ -103,7 +108,13 @@ def animate(scene: str | Path | Scene, mode: int | None = None, method: str | No
                 len(free_pieces(system.n, system.spring_ends))
             mode = min(rigid, system.n - 1)  # the lowest elastic mode
         omega, shape, rigid = anim.mode_shape(system, int(mode))
-        disp, labels = anim.mode_frames(shape, frames)
+        if chain:  # the envelope of the shape once; each frame scales it by cos(phase): never F × N
+            centre, lo, hi = anim.profile_envelopes([shape])
+            c = np.cos(2 * np.pi * np.arange(frames) / frames)[:, None]
+            envelopes = (centre, np.minimum(c * lo, c * hi), np.maximum(c * lo, c * hi))
+            disp, labels = envelopes[2], anim.mode_frames(shape[:1], frames)[1]
+        else:
+            disp, labels = anim.mode_frames(shape, frames)
         kind, what = "mode", f"mode {mode}"
         label = ("rigid-body mode (ω = 0): a uniform translation, shown back and forth" if rigid
                  else f"ω = {omega:.6g} rad/s, period {2 * math.pi / omega:.4g} s")
@@ -119,8 +130,9 @@ def animate(scene: str | Path | Scene, mode: int | None = None, method: str | No
             out.mkdir(parents=True, exist_ok=True)
             with tempfile.TemporaryDirectory(dir=out, prefix=".animate-") as tmp:
                 run = simulate(sc, [method], steps=steps, record_every=every, out=tmp, progress=False)
-                idx = anim.decimate(system.n)
-                disp = np.array(run.x[method][:, idx])
+                xs = run.x[method]
+                envelopes = anim.profile_envelopes(xs[r] for r in range(min(frames, xs.shape[0])))
+                disp = envelopes[1]
         else:
             run = simulate(sc, [method], steps=steps, record_every=every, progress=False)
             disp = np.asarray(run.x[method])
@@ -131,11 +143,8 @@ def animate(scene: str | Path | Scene, mode: int | None = None, method: str | No
         title = f"{sc.name}: {method}, t = 0 ... {t[min(frames, t.shape[0]) - 1]:.4g} s"
         path = out / f"{sc.name}-{method}.gif"
     if chain:
-        idx = anim.decimate(system.n)
-        if kind == "mode":
-            disp = disp[:, idx]
         ylabel = "mode shape (largest component 1) [-]" if kind == "mode" else "displacement x [m]"
-        anim.profile_animation(path, idx, disp, labels, title, ylabel, fps)
+        anim.profile_animation(path, *envelopes, labels[:envelopes[1].shape[0]], title, ylabel, fps, system.n)
         scale = 1.0
     else:
         scale = anim.display_scale(disp)

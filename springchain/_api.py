@@ -23,14 +23,15 @@ DEFAULT_OUT = "springchain-out"
 
 
 # -- scenes -----------------------------------------------------------------------------------------
-def load(source: str | Path | Scene) -> Scene:
+def load(source: str | Path | Scene | dict) -> Scene:
     """Read and validate a scene.
 
     Parameters
     ----------
-    source : str, Path or Scene
+    source : str, Path, Scene or dict
         A path to a TOML scene file, or the name of a bundled scene (``"seed"``,
-        ``"building"``, ...). A :class:`Scene` is returned as it is.
+        ``"building"``, ...). A :class:`Scene` is returned as it is; a dict goes through
+        :func:`scene_from_dict`.
 
     Returns
     -------
@@ -43,6 +44,10 @@ def load(source: str | Path | Scene) -> Scene:
     """
     if isinstance(source, Scene):
         return source
+    if isinstance(source, dict):
+        from .derive.scene_edit import scene_from_dict
+
+        return scene_from_dict(source)
     from .derive.scene import load_scene
 
     from .numeric.progress import phase
@@ -57,8 +62,8 @@ def _system(scene: Scene):
     from ._modules import load_module
     from .numeric.system import System
 
-    module, origin = load_module(scene)
-    return System.from_module(module, **load_tables(scene)), origin
+    module, origin = load_module(scene)  # keyed by the scene's whole content: a changed scene has its own
+    return System.from_module(module, scene.parameters, **load_tables(scene)), origin
 
 
 def load_tables(scene: Scene) -> dict:
@@ -116,7 +121,7 @@ class Modes:
         if self.chain:
             from .derive.chain import chain_report
 
-            return chain_report(self.model, self.modes)[0]
+            return chain_report(self.model, self.modes, _chain_omega2(self.scene, self.modes))[0]
         from .derive.report import render_text
 
         return render_text(self.model, self.modes)
@@ -124,9 +129,9 @@ class Modes:
     def to_latex(self) -> str:
         """What ``springchain modes SCENE --latex`` prints (amsmath)."""
         if self.chain:
-            import sympy as sp
+            from .derive.printing import latex
 
-            return "\\begin{align*}\n\\omega_j^2 &= " + sp.latex(self.modes.omega2) + "\n\\end{align*}\n" \
+            return "\\begin{align*}\n\\omega_j^2 &= " + latex(self.modes.omega2) + "\n\\end{align*}\n" \
                 if self.modes.omega2 is not None else self.to_text()
         from .derive.report import render_latex
 
@@ -167,6 +172,13 @@ class Modes:
         See :func:`parse_expression`.
         """
         return parse_expression(text, self.scene)
+
+    def to_dataframe(self):
+        """A ``pandas.DataFrame``, one row per listed mode: ``omega2`` (text), ``omega2_value``, ``omega``,
+        ``multiplicity``, ``shape`` and ``shape_<mass>`` columns. Needs ``pip install "springchain[data]"``."""
+        from ._data import modes_dataframe
+
+        return modes_dataframe(self)
 
     def __str__(self) -> str:
         return self.to_text()
@@ -293,13 +305,23 @@ class Simulation:
         return spring_series(self.scene, self.x[method])[2]
 
     def plot(self, quantity: str = "x"):
-        """A matplotlib Figure of every mass's position (``"x"``) or velocity (``"v"``), all methods."""
+        """A matplotlib Figure of every mass's position (``"x"``) or velocity (``"v"``), all methods
+        (the first 12 masses; ``[chain]`` scenes: the profile at a few times)."""
+        import numpy as np
+
         from .numeric import plots
 
         if quantity not in ("x", "v"):
             raise ValueError(f"quantity {quantity!r}: accepted: 'x' or 'v'")
         series = self.x if quantity == "x" else self.v
         label, unit = ("position x", "m") if quantity == "x" else ("velocity v", "m/s")
+        if self.scene.chain is not None:  # a chain: its profile at a few recorded times (first method)
+            first = next(iter(series.values()))
+            rows = sorted({int(r) for r in np.linspace(0, first.shape[0] - 1, min(5, first.shape[0])).round()})
+            fig = plots.profiles({float(self.t[r]): np.asarray(first[r]) for r in rows},
+                                 "displacement x" if quantity == "x" else "velocity v", unit)
+            fig.axes[0].set_title(f"{self.scene.name}: profile ({next(iter(series))}, {self.scene.n} masses)")
+            return fig
         names = self.scene.mass_names if len(self.scene.mass_names) <= 12 else self.scene.mass_names[:12]
         cut = {m: s[:, : len(names)] for m, s in series.items()}
         return plots.trajectories(self.t, cut, names, label, unit,
@@ -308,6 +330,36 @@ class Simulation:
     def __repr__(self) -> str:
         return (f"Simulation(scene={self.scene.name!r}, methods={self.methods}, samples={len(self.t)}, "
                 f"masses={self.scene.n})")
+
+    # data out and notebook display (springchain._data, springchain._display)
+    def to_xarray(self):
+        """An ``xarray.Dataset``: dims ``time``, ``mass`` (mass names; indices for ``[chain]``), one variable per
+        quantity and method (``x_modal``, ``v_verlet``, ...), attributes ``scene``, ``dt``, ``units``.
+        Needs ``pip install "springchain[data]"``."""
+        from ._data import simulation_xarray
+
+        return simulation_xarray(self)
+
+    def to_dataframe(self):
+        """A long ``pandas.DataFrame``: columns ``method, quantity, time, mass, value, unit``."""
+        from ._data import simulation_dataframe
+
+        return simulation_dataframe(self)
+
+    def _repr_html_(self) -> str:
+        from ._display import simulation_html
+
+        return simulation_html(self)
+
+    def _repr_png_(self) -> bytes:
+        from ._display import simulation_png
+
+        return simulation_png(self)
+
+    def _repr_mimebundle_(self, include=None, exclude=None) -> dict:  # both, from one drawing
+        from ._display import simulation_bundle
+
+        return simulation_bundle(self)
 
 
 def _check_memory(scene: Scene, steps: int, record_every: int, methods: int, key: str) -> None:

@@ -117,6 +117,27 @@ class FrequencyResponse:
         return (f"FrequencyResponse(scene={self.scene.name!r}, input={self.input!r}, output={self.output!r}, "
                 f"frequencies={len(self.omega)})")
 
+    def to_dataframe(self):
+        """A ``pandas.DataFrame``: ``omega`` [rad/s], ``H`` (complex) [m/N], ``magnitude``, ``phase_deg``."""
+        from ._data import frf_dataframe
+
+        return frf_dataframe(self)
+
+    def _repr_html_(self) -> str:  # the resonance table and the Bode figure
+        from ._display import frf_html
+
+        return frf_html(self)
+
+    def _repr_png_(self) -> bytes:
+        from ._display import frf_png
+
+        return frf_png(self)
+
+    def _repr_mimebundle_(self, include=None, exclude=None) -> dict:  # both, from one drawing
+        from ._display import frf_bundle
+
+        return frf_bundle(self)
+
 
 def mass_index(scene: Scene, value, what: str) -> int:
     """The 0-based index of the mass ``value`` names (a name; an index for ``[chain]`` scenes)."""

@@ -91,10 +91,12 @@ def check(scene: Scene, out_dir: Path | None = None) -> tuple[bool, str]:
     """Whether the module on disk equals a fresh render. Writes nothing."""
     path = module_path(scene, out_dir)
     fresh = derive(scene).source
+    default = out_dir is None or Path(out_dir).resolve() == (Path.cwd() / "generated").resolve()
+    fix = f"run `springchain derive {scene.file}" + ("" if default else f" --out {out_dir}") + "`"
     if not path.exists():
-        return False, f"{path}: missing (run `springchain derive {scene.file}`)"
+        return False, f"{path}: missing ({fix})"
     if path.read_text(encoding="utf-8") != fresh:
-        return False, f"{path}: stale (run `springchain derive {scene.file}`)"
+        return False, f"{path}: stale ({fix})"
     return True, f"{path}: fresh"
 
 

@@ -12,6 +12,9 @@ from .numeric.errors import RunRefused
 
 #: Default output folder of a sweep.
 DEFAULT_SWEEP_OUT = "springchain-sweep"
+#: A sweep whose remaining samples would take less than this in-process (predicted from two probe
+#: samples) runs in-process: starting worker processes costs seconds of its own.
+IN_PROCESS_SECONDS = 10.0
 RESERVED = ("sample", "omega2", "participation_ratio", "inverse_localisation_length")
 
 
@@ -49,12 +52,25 @@ class SweepResult:
 
         return read(self.out, columns)
 
+    def to_pandas(self, columns: list[str] | None = None):
+        """The rows as a ``pandas.DataFrame`` (sample order; list columns hold one array per sample).
+        Needs ``pip install "springchain[data]"``."""
+        from ._data import sweep_pandas
+
+        return sweep_pandas(self, columns)
+
+    def _repr_html_(self) -> str:  # the summary table
+        from ._display import sweep_html
+
+        return sweep_html(self)
+
     def to_json(self) -> dict:
         """What ``springchain sweep --json`` prints."""
         return {"out": str(self.out), "parquet": str(self.parquet), "rows": self.rows,
                 "summary": str(self.out / "summary.json"), "figures": [str(p) for p in self.figures],
                 "batches": self.run["batches"], "computed_batches": self.run["computed"],
                 "skipped_batches": self.run["skipped"], "seconds": self.run["seconds"],
+                "scheduler": self.run.get("scheduler"),
                 "settings": self.manifest}
 
 
@@ -84,6 +100,19 @@ def _pairs(items, flag: str, names) -> list[tuple[str, object]]:
             raise RunRefused(f"{flag} {name}: given twice; accepted: each name once")
         seen.add(name)
     return out
+
+
+def _refuse_unguarded(workers: int, predicted: float) -> None:
+    """Refuse, at once, to start worker processes from a script's top level outside the guard."""
+    from ._guard import GUARD, unguarded_call
+
+    where = unguarded_call()
+    if where is not None:
+        script, line = where
+        raise RunRefused(f"sweep: {script}, line {line}: starting {workers} worker processes from the top level of a "
+                         f"script without `{GUARD}` would run the whole script again in each of them; accepted: "
+                         f"the script's work under `{GUARD}`, or workers=1 (in-process, about {predicted:.0f} s here)",
+                         quantity="workers")
 
 
 def _law(scene: Scene, system, disorder, vary) -> dict | None:
@@ -120,7 +149,11 @@ def sweep(scene: str | Path | Scene, vary=(), disorder=(), samples: int = 100, *
     batch : int, optional
         Realisations per Dask task (default: about 64 batches in all).
     workers : int, optional
-        Processes of the embedded LocalCluster (default: the cores).
+        Processes of the embedded LocalCluster (default: the cores). ``workers=1`` runs in this
+        process (Dask's synchronous scheduler), and so does a small study: one predicted (from two
+        probe samples) to take less than ``IN_PROCESS_SECONDS`` here. A script that
+        starts worker processes needs ``if __name__ == "__main__":`` around its work (the workers
+        import the script again); without it the sweep is refused at once, in one line.
     scheduler : str, optional
         Address of a running ``dask scheduler`` (``tcp://HOST:PORT``) instead.
     out : str or Path
@@ -175,8 +208,19 @@ def sweep(scene: str | Path | Scene, vary=(), disorder=(), samples: int = 100, *
 
     own = []
     n_batches = len(sweep_driver.batches(total, batch))
+    left = n_batches - len(sweep_driver.finished(out, n_batches))
+    runs = []
     try:
-        if client is None and len(sweep_driver.finished(out, n_batches)) < n_batches:
+        if client is None and scheduler is None and left:
+            # here, on Dask's synchronous scheduler: workers=1, or a study that two probe samples (the
+            # first pays the imports) predict to be cheaper than starting worker processes
+            done = sweep_driver.finished(out, n_batches)
+            todo = sum(e - s for b, s, e in sweep_driver.batches(total, batch) if b not in done)
+            predicted = 0.0 if workers == 1 else sweep_driver.seconds_per_sample(spec) * todo
+            if predicted < IN_PROCESS_SECONDS:
+                runs.append(sweep_driver.run_in_process(spec, out, batch, progress))
+                left = 0
+        if left and client is None:
             from dask.distributed import Client
 
             if scheduler is not None:
@@ -187,14 +231,22 @@ def sweep(scene: str | Path | Scene, vary=(), disorder=(), samples: int = 100, *
                                      "of a running `dask scheduler`, e.g. tcp://127.0.0.1:8786") from None
                 own.append(client)
             else:
+                _refuse_unguarded(workers or os.cpu_count() or 1, predicted)
                 cluster = sweep_driver.local_cluster(workers or os.cpu_count() or 1)
                 own.append(cluster)
                 client = Client(cluster)
                 own.append(client)
-        run = sweep_driver.run(spec, out, batch, client, progress=progress)
+        runs.append(sweep_driver.run(spec, out, batch, client, progress=progress))
     finally:
         for obj in reversed(own):
             obj.close()
+    run = {"batches": n_batches, "computed": sum(r["computed"] for r in runs), "skipped": runs[0]["skipped"],
+           "seconds": sum(r["seconds"] for r in runs),
+           "scheduler": ("none: every batch was already done" if not any(r["computed"] for r in runs) else
+                         "an existing client" if client is not None and not own else
+                         f"Dask scheduler {scheduler}" if scheduler is not None else
+                         f"LocalCluster, {workers or os.cpu_count() or 1} worker processes" if own else
+                         "in-process (Dask's synchronous scheduler)")}
     summary, figures = sweep_summary.summarise(out, sc.name, _law(sc, system, disorder, vary) if sc.chain else None)
     return SweepResult(out, summary["samples"], summary, tuple(figures), run, manifest)
 

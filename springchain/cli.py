@@ -7,7 +7,6 @@ SymPy is imported only by the subcommands that derive.
 from __future__ import annotations
 
 import argparse
-import json
 import math
 import sys
 import time
@@ -17,6 +16,13 @@ from . import __version__
 from .derive.errors import SceneError
 
 EXIT_USAGE = 2
+
+
+def _dumps(obj, **kwargs) -> str:
+    """Strict JSON (no NaN or Infinity: null), for every ``--json``."""
+    from .numeric.strict_json import dumps
+
+    return dumps(obj, **kwargs)
 
 
 class _Parser(argparse.ArgumentParser):
@@ -61,6 +67,44 @@ def _whole(flag):
     return conv
 
 
+#: The commands that take a SCENE, and so ``--set NAME=VALUE``.
+SCENE_COMMANDS = ("derive", "modes", "simulate", "bench", "plan", "sweep", "frf", "animate", "rsa")
+
+
+def _set_values(items: list[str]) -> dict[str, float]:
+    """``--set NAME=VALUE`` options as {name: number} (names are checked against the scene later)."""
+    values = {}
+    for item in items:
+        name, eq, text = item.partition("=")
+        name = name.strip()
+        try:
+            value = float(text) if eq and name else None
+        except ValueError:
+            value = None
+        if value is None or not math.isfinite(value):
+            raise SceneError(None, "--set", f"{item!r}: not NAME=NUMBER; accepted: a parameter and a finite "
+                                            "number, e.g. --set k=4 (repeatable)")
+        if name in values:
+            raise SceneError(None, "--set", f"{item!r}: {name} given twice; accepted: each parameter once")
+        values[name] = value
+    return values
+
+
+def _apply_set(args) -> None:
+    """Replace ``args.scene`` by the scene(s) with the ``--set`` parameter values (validated as a file)."""
+    from ._api import load
+    from ._scenes import bundled_scenes
+    from .derive.scene_edit import with_parameters
+
+    values = _set_values(args.set)
+    how = "with --set " + " ".join(f"{k}={v:g}" for k, v in values.items())
+    one = lambda source: with_parameters(load(source), values, how)  # noqa: E731
+    if isinstance(args.scene, list):  # derive: several scenes, default every bundled one
+        args.scene = [one(s) for s in (args.scene or bundled_scenes())]
+    else:
+        args.scene = one(args.scene if args.scene is not None else "seed")
+
+
 # -- commands: parse, call the API, print -------------------------------------------------------
 def cmd_derive(args) -> int:
     from . import _modules
@@ -72,7 +116,7 @@ def cmd_derive(args) -> int:
         raise SceneError(None, "SCENE", "nothing to derive: no scene given and no bundled scenes found; "
                                         "accepted: scene files, e.g. `springchain derive my_scene.toml`")
     scenes = [load(p) for p in sources]  # validate everything before writing anything
-    out = Path(args.out) if args.out else (None if args.check else Path.cwd() / "generated")
+    out = Path(args.out) if args.out else Path.cwd() / "generated"  # --check reads where derive writes
     status = 0
     for scene in scenes:
         t0 = time.perf_counter()
@@ -95,7 +139,7 @@ def cmd_modes(args) -> int:
 
     m = modes(args.scene)
     if args.json:
-        print(json.dumps(m.to_json(), indent=2))
+        print(_dumps(m.to_json(), indent=2))
     elif args.latex:
         print(m.to_latex(), end="")
     else:
@@ -143,7 +187,7 @@ def _simulate(args, scene) -> "object":
 def cmd_simulate(args) -> int:
     result = _simulate(args, args.scene)
     if args.json:
-        print(json.dumps(result.summary, indent=2))
+        print(_dumps(result.summary, indent=2))
     else:
         _print_simulation(result)
     return 0
@@ -180,7 +224,7 @@ def cmd_bench(args) -> int:
                    progress=not args.no_progress)
     paths = write_outputs(result, Path(args.out))
     if args.json:
-        print(json.dumps(result.as_json(), indent=1, default=float))
+        print(_dumps(result.as_json(), indent=1))
     else:
         print(markdown_table(result), end="")
         for path in paths:
@@ -194,7 +238,7 @@ def cmd_plan(args) -> int:
     scene = load(args.scene)
     result = plan(scene, args.tol, args.t_end)
     if args.json:
-        print(json.dumps(result.as_json(), indent=2))
+        print(_dumps(result.as_json(), indent=2))
         return 0
     horizon = args.t_end if args.t_end is not None else scene.dt * scene.steps
     print(f"plan for {scene.name!r}: largest position error <= {args.tol:g} over t = 0 ... {horizon:g} "
@@ -234,7 +278,7 @@ def cmd_scaling(args) -> int:
         sym = symbolic_cost.run(small, symbolic_cost.DEFAULT_CHAIN_SIZES, progress=say)
         paths += symbolic_cost.write(sym, out)
     if args.json:
-        print(json.dumps({"scaling": scaling_report.jsonable(result.to_json()),
+        print(_dumps({"scaling": scaling_report.jsonable(result.to_json()),
                           "symbolic": None if sym is None else scaling_report.jsonable(sym.to_json()),
                           "files": [str(p) for p in paths]}, indent=1))
         return 0
@@ -253,11 +297,11 @@ def cmd_sweep(args) -> int:
                    seed=args.seed, batch=args.batch, workers=args.workers, scheduler=args.scheduler,
                    out=args.out, progress=not args.no_progress)
     if args.json:
-        print(json.dumps(result.to_json(), indent=1))
+        print(_dumps(result.to_json(), indent=1))
         return 0
     r = result.run
     print(f"sweep of {result.summary['scene']!r}: {result.rows} samples x {result.summary['modes']} modes; "
-          f"{r['computed']} batches computed, {r['skipped']} already done, {r['seconds']:.2f} s")
+          f"{r['computed']} batches computed, {r['skipped']} already done, {r['seconds']:.2f} s ({r['scheduler']})")
     print(f"  wrote {result.parquet}")
     print(f"  wrote {result.out / 'summary.json'}")
     for p in result.figures:
@@ -271,7 +315,7 @@ def cmd_frf(args) -> int:
     result = frf(args.scene, args.input, args.output, args.omega_min, args.omega_max, args.points)
     path = result.save(args.out)
     if args.json:
-        print(json.dumps(result.to_json()))
+        print(_dumps(result.to_json()))
         return 0
     print(result.to_text(), end="")
     print(f"wrote {path}")
@@ -304,7 +348,7 @@ def cmd_spectrum(args) -> int:
     result = response_spectrum(read_record(args.record), zeta=args.zeta or [0.05], periods=periods)
     paths = result.save(args.out)
     if args.json:
-        print(json.dumps(result.to_json()))
+        print(_dumps(result.to_json()))
         return 0
     print(result.to_text(), end="")
     for p in paths:
@@ -316,7 +360,7 @@ def cmd_rsa(args) -> int:
     from ._structural import rsa
 
     result = rsa(args.scene, args.spectrum, combine=args.combine)
-    print(json.dumps(result.to_json()) if args.json else result.to_text(), end="\n" if args.json else "")
+    print(_dumps(result.to_json()) if args.json else result.to_text(), end="\n" if args.json else "")
     return 0
 
 
@@ -376,11 +420,12 @@ def build_parser() -> argparse.ArgumentParser:
 
     d = sub.add_parser("derive", help="generate NumPy modules from scenes",
                        description="Derive each scene and write DIR/<name>.py (plain NumPy, deterministic). "
-                                   "With no SCENE: every bundled scene.")
+                                   "With no SCENE: every bundled scene. --check compares with the same DIR.")
     d.add_argument("scene", nargs="*", help="scene files or bundled names (default: all bundled scenes)")
     d.add_argument("--out", help="folder for the modules (default: ./generated under the current folder)")
     d.add_argument("--check", action="store_true",
-                   help="write nothing; exit 1 if a module on disk differs from a fresh render")
+                   help="write nothing; exit 1 if a module in the same folder derive writes to (--out, default "
+                        "./generated) differs from a fresh render")
     d.set_defaults(func=cmd_derive)
 
     m = sub.add_parser("modes", help="print equations of motion and closed-form normal modes",
@@ -533,6 +578,11 @@ def build_parser() -> argparse.ArgumentParser:
     an.add_argument("--out", default="springchain-out", metavar="DIR", help="output folder (default: %(default)s)")
     an.set_defaults(func=cmd_animate)
     add_structural_commands(sub)
+    for name in SCENE_COMMANDS:  # one option, the same on every command that takes a SCENE
+        sub.choices[name].add_argument(
+            "--set", action="append", metavar="NAME=VALUE",
+            help="use VALUE for the scene's parameter NAME instead of the file's, repeatable (e.g. --set k=4 "
+                 "--set m=2); checked like the scene file")
     return p
 
 
@@ -559,6 +609,8 @@ def main(argv: list[str] | None = None) -> int:
         sys.stderr.write("springchain: interrupted\n")
         return 130
     try:
+        if getattr(args, "set", None):
+            _apply_set(args)
         return args.func(args)
     except SceneError as exc:
         sys.stderr.write(f"springchain: error: {exc}\n")

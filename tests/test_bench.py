@@ -78,7 +78,8 @@ def test_quick_bench_predicted_vs_measured(quick_bench):
 def test_quick_bench_files(quick_bench):
     data, out = quick_bench
     md = (out / "bench-seed.md").read_text()
-    assert "| method | setting | error | predicted error |" in md and "## Targets" in md
+    assert "| method | setting | error | predicted error |" in md and "## Cheapest run per accuracy" in md
+    assert "required" not in md  # no project targets for users (issue 23)
     saved = json.loads((out / "bench-seed.json").read_text())
     assert len(saved["records"]) == len(data["records"])
     for name in ("bench-seed-work-precision.png", "bench-seed-horizon.png"):
