@@ -226,7 +226,7 @@ def float64_closed_form(exprs: list, params: dict):
     """The *naive* route, for benchmarks only: ``exprs`` lambdified to NumPy float64.
 
     This is how ω² were evaluated before issue 9 (cancelling in float64 on hard
-    scenes); :mod:`springchain.bench_modes` times it beside the generated
+    scenes); ``benchmarks/modes.py`` times it beside the generated
     ``omega2()`` and reports its error.
 
     Parameters

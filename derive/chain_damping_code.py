@@ -13,92 +13,94 @@ from __future__ import annotations
 
 import sympy as sp
 
-from .printing import sstr
 from .chain_dampers import ALONG, GROUND, SINGLE
-from .codegen import _p
+from .codeprint import p
 from .damping_code import rayleigh_coefficients_lines
+from .module_text import function
+from .printing import sstr
 
 
 def chain_damping_code(model, sig: str, kw: str) -> list[str]:
     """Lines of the damping functions of a chain module (empty without damping)."""
     if not model.dampers and model.rayleigh is None:
         return []
-    i = sp.Symbol("i")
     head = f"{sig}, " if sig else ""
-    out: list[str] = []
-    w = out.append
-    out.extend(rayleigh_coefficients_lines(model, sig))
+    kwn = _with_n(kw)
+    ends, consts = _dashpot_list(model, kw)
+    out = rayleigh_coefficients_lines(model, sig)
+    out += function("damper_ends(n=N)",
+                    "Ends (mass indices, -1 = ground) of every dashpot in damper_constants() order, shape (D, 2).",
+                    ["    _parts = [", *(f"        {e},  # {why}" for e, why in ends), "    ]",
+                     "    return numpy.concatenate(_parts).astype(numpy.intp)"])
+    out += function(f"damper_constants({head}n=N)", "Damping coefficient of each dashpot in damper_ends() order, shape (D,).",
+                    ["    return numpy.concatenate([", *(f"        {c}," for c in consts), "    ]).astype(float)"])
+    out += function(f"damping_acceleration(_v, {sig})",
+                    "Acceleration -M^-1 C v of the dashpots, by the dashpot list (O(n), no n x n);\n"
+                    "v and result have shape (n, ...).",
+                    ["    _v = numpy.asarray(_v, dtype=float)",
+                     "    n = _v.shape[0]",
+                     "    _ends = damper_ends(n)",
+                     "    _a, _b = _ends[:, 0], _ends[:, 1]",
+                     "    _shape = (-1,) + (1,) * (_v.ndim - 1)",
+                     f"    _c = damper_constants({kwn}).reshape(_shape)",
+                     "    _ve = numpy.concatenate([_v, numpy.zeros((1,) + _v.shape[1:])])  # row -1 = ground",
+                     "    _s = _c * (_ve[_a] - _ve[_b])",
+                     "    _f = numpy.zeros_like(_v)",
+                     "    _ia, _ib = numpy.flatnonzero(_a >= 0), numpy.flatnonzero(_b >= 0)",
+                     "    numpy.add.at(_f, _a[_ia], -_s[_ia])",
+                     "    numpy.add.at(_f, _b[_ib], _s[_ib])",
+                     f"    return _f / masses({kwn}).reshape(_shape)"])
+    return out + function(f"damping_matrix({head}n=N)",
+                          "Dense C of every dashpot (and Rayleigh damping), shape (n, n); only for n <= MAX_DENSE.",
+                          ["    if n > _MAX_DENSE:",
+                           "        raise _ValueError(f'damping_matrix: n = {n} > MAX_DENSE = {_MAX_DENSE}; use damper_ends()')",
+                           "    _ends = damper_ends(n)",
+                           f"    _c = damper_constants({kwn})",
+                           "    _C = numpy.zeros((n, n))",
+                           "    for _ci, _si in ((0, 1.0), (1, -1.0)):",
+                           "        for _cj, _sj in ((0, 1.0), (1, -1.0)):",
+                           "            _ok = (_ends[:, _ci] >= 0) & (_ends[:, _cj] >= 0)",
+                           "            numpy.add.at(_C, (_ends[_ok, _ci], _ends[_ok, _cj]), _si * _sj * _c[_ok])",
+                           "    return _C"])
+
+
+def _with_n(kw: str) -> str:
+    """The parameters passed on, then ``n=n`` (only ``n=n`` for a scene without parameters)."""
+    return f"{kw}, n=n" if kw else "n=n"
+
+
+def _dashpot_list(model, kw: str) -> tuple[list[tuple[str, str]], list[str]]:
+    """The dashpots as generated expressions: ``[(ends (D_e, 2), scene key)]`` and their constants (D_e,).
+
+    ``[[dampers]]`` families and single dashpots in scene order, then Rayleigh damping as α·m(i)
+    from every mass to the ground and β·k beside every spring (zero coefficients left out).
+    """
+    i = sp.Symbol("i")
+    kwn = _with_n(kw)
     ends, consts = [], []
     for kind, a, b, c, key in model.dampers:
-        expr = _p(c.subs(model.i, i))
+        expr = p(c.subs(model.i, i))
         if kind == ALONG:
-            ends.append(f"numpy.stack([numpy.arange(n - 1), numpy.arange(1, n)], axis=1)  # {key}")
+            ends.append(("numpy.stack([numpy.arange(n - 1), numpy.arange(1, n)], axis=1)", key))
             consts.append(f"(lambda i: numpy.broadcast_to(numpy.asarray({expr}, dtype=float), (n - 1,)))"
                           "(numpy.arange(n - 1, dtype=float))")
         elif kind == GROUND:
-            ends.append(f"numpy.stack([numpy.arange(n), numpy.full(n, -1)], axis=1)  # {key}")
+            ends.append(("numpy.stack([numpy.arange(n), numpy.full(n, -1)], axis=1)", key))
             consts.append(f"(lambda i: numpy.broadcast_to(numpy.asarray({expr}, dtype=float), (n,)))"
                           "(numpy.arange(n, dtype=float))")
         else:
             assert kind == SINGLE
-            ends.append(f"numpy.array([[{a}, {b}]])  # {key}")
+            ends.append((f"numpy.array([[{a}, {b}]])", key))
             consts.append(f"numpy.array([{expr}], dtype=float)")
     if model.rayleigh is not None:
         alpha, beta = model.rayleigh
         if alpha != 0:
-            ends.append("numpy.stack([numpy.arange(n), numpy.full(n, -1)], axis=1)  # damping: alpha*M")
-            consts.append(f"rayleigh_coefficients({kw})[0] * masses({kw}, n=n)")
+            ends.append(("numpy.stack([numpy.arange(n), numpy.full(n, -1)], axis=1)", "damping: alpha*M"))
+            consts.append(f"rayleigh_coefficients({kw})[0] * masses({kwn})")
         if beta != 0:
-            ends.append("spring_ends(n)  # damping: beta*K")
-            consts.append(f"rayleigh_coefficients({kw})[1] * spring_constants({kw}, n=n)")
-    w("")
-    w("")
-    w("def damper_ends(n=N):")
-    w('    """Ends (mass indices, -1 = ground) of every dashpot in damper_constants() order, shape (D, 2)."""')
-    w("    _parts = [")
-    out.extend(f"        {e.split('  #')[0]},  #{e.split('  #')[1]}" for e in ends)
-    w("    ]")
-    w("    return numpy.concatenate(_parts).astype(numpy.intp)")
-    w("")
-    w("")
-    w(f"def damper_constants({head}n=N):")
-    w('    """Damping coefficient of each dashpot in damper_ends() order, shape (D,)."""')
-    w("    return numpy.concatenate([")
-    out.extend(f"        {c}," for c in consts)
-    w("    ]).astype(float)")
-    w("")
-    w("")
-    w(f"def damping_acceleration(_v, {sig}):")
-    w('    """Acceleration -M^-1 C v of the dashpots, by the dashpot list (O(n), no n x n);')
-    w('    v and result have shape (n, ...)."""')
-    w("    _v = numpy.asarray(_v, dtype=float)")
-    w("    n = _v.shape[0]")
-    w("    _ends = damper_ends(n)")
-    w("    _a, _b = _ends[:, 0], _ends[:, 1]")
-    w("    _shape = (-1,) + (1,) * (_v.ndim - 1)")
-    w(f"    _c = damper_constants({kw}, n=n).reshape(_shape)")
-    w("    _ve = numpy.concatenate([_v, numpy.zeros((1,) + _v.shape[1:])])  # row -1 = ground")
-    w("    _s = _c * (_ve[_a] - _ve[_b])")
-    w("    _f = numpy.zeros_like(_v)")
-    w("    _ia, _ib = numpy.flatnonzero(_a >= 0), numpy.flatnonzero(_b >= 0)")
-    w("    numpy.add.at(_f, _a[_ia], -_s[_ia])")
-    w("    numpy.add.at(_f, _b[_ib], _s[_ib])")
-    w(f"    return _f / masses({kw}, n=n).reshape(_shape)")
-    w("")
-    w("")
-    w(f"def damping_matrix({head}n=N):")
-    w('    """Dense C of every dashpot (and Rayleigh damping), shape (n, n); only for n <= MAX_DENSE."""')
-    w("    if n > _MAX_DENSE:")
-    w("        raise _ValueError(f'damping_matrix: n = {n} > MAX_DENSE = {_MAX_DENSE}; use damper_ends()')")
-    w("    _ends = damper_ends(n)")
-    w(f"    _c = damper_constants({kw}, n=n)")
-    w("    _C = numpy.zeros((n, n))")
-    w("    for _ci, _si in ((0, 1.0), (1, -1.0)):")
-    w("        for _cj, _sj in ((0, 1.0), (1, -1.0)):")
-    w("            _ok = (_ends[:, _ci] >= 0) & (_ends[:, _cj] >= 0)")
-    w("            numpy.add.at(_C, (_ends[_ok, _ci], _ends[_ok, _cj]), _si * _sj * _c[_ok])")
-    w("    return _C")
-    return out
+            ends.append(("spring_ends(n)", "damping: beta*K"))
+            consts.append(f"rayleigh_coefficients({kw})[1] * spring_constants({kwn})")
+    return ends, consts
 
 
 def chain_damping_report_lines(model, modes) -> tuple[list[str], dict | None]:

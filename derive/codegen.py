@@ -1,129 +1,253 @@
-"""Render a derived model as a plain NumPy module (a string; writing is separate).
+"""Render a derived ``[masses]`` model as a plain NumPy module (a string; writing is separate).
 
 The text is a pure function of the scene: parameters in sorted order, no
 timestamps, no versions, SymPy's printer for every expression. No scene text
 reaches the source except validated identifiers (scene, mass and parameter
 names) and numbers printed by SymPy. Each function takes the parameters as
 keyword arguments, so one module serves any parameter values.
+
+The module is :func:`derive.module_text.module_head` (the header every generated module
+shares) followed by the section writers in :data:`SECTIONS`, one per concern: constants,
+element constants, matrices, spectrum, acceleration, damping, forces, gravity, tables and
+ground, energy. Each is a function ``(context) -> list[str]`` of a :class:`_Context` that
+returns nothing when the scene does not declare its effect.
+
+Adding an effect (see STYLE.md: a scene type, its Lagrangian term, its section writer, the
+contract entry numeric reads) touches this file in one place: write ``_my_effect(c)`` returning
+the lines of its functions (:func:`derive.module_text.function` writes one) and put it in
+:data:`SECTIONS` where its functions belong; effect writers shared with ``[chain]`` modules live
+in their own module (:mod:`derive.loadgen`, :mod:`derive.damping_code`) and are listed the same way.
 """
 
 from __future__ import annotations
 
-import re
+from dataclasses import dataclass, field
+from functools import cached_property
 
 import sympy as sp
-from sympy.printing.numpy import NumPyPrinter
 
+from .codeprint import array, matrix, p
+from .damping_code import damping_matrix_lines, matrix_damping_acceleration_lines
+from .forcing import harmonic_table
+from .loadgen import ground_lines, table_force_lines
 from .model import Effect, Model
+from .module_text import function, module_head, pasted, render
 from .modes import ModeSet
-from .spring_factor import accurate_modes_function, helper_source  # noqa: F401 (re-exported)
+from .spring_factor import helper_source
 from .stable_forms import stable_closed_forms
 
 #: Scenes with more masses get matrices assembled from the spring list, not printed entry by entry.
 MAX_PRINTED_MATRIX = 12
 
-_SAFE_FILE = re.compile(r"^[A-Za-z0-9_.\-]{1,100}$")
+
+@dataclass(frozen=True)
+class _Context:
+    """What every section writer of a ``[masses]`` module reads (built once per render)."""
+
+    model: Model
+    modes: ModeSet
+    _printed: dict = field(default_factory=dict, repr=False, compare=False)
+
+    @cached_property
+    def params(self) -> tuple[str, ...]:
+        return tuple(self.model.params)  # sorted
+
+    @cached_property
+    def sig(self) -> str:
+        """The parameters as a signature: ``c, k, m``."""
+        return ", ".join(self.params)
+
+    @cached_property
+    def kw(self) -> str:
+        """The signature after a leading argument: ``, c, k, m`` (empty without parameters)."""
+        return (", " + self.sig) if self.params else ""
+
+    @cached_property
+    def kwcall(self) -> str:
+        """The parameters passed on: ``c=c, k=k, m=m``."""
+        return ", ".join(f"{q}={q}" for q in self.params)
+
+    @cached_property
+    def dense(self) -> bool:
+        """Whether matrices and per-mass expressions are printed (else assembled from element lists)."""
+        return self.model.scene.n <= MAX_PRINTED_MATRIX
+
+    @cached_property
+    def stable(self):
+        """Float64-stable closed forms ``(omega2, shapes)``, or None (then the spring-factor helper)."""
+        return stable_closed_forms(self.modes)
+
+    @cached_property
+    def cubic(self) -> bool:
+        return any(k3 is not None for *_, k3, _ in self.model.springs)
+
+    @cached_property
+    def accurate_helper(self) -> bool:
+        """Whether the module carries ``_accurate_modes()`` (and so imports scipy.linalg)."""
+        return self.stable is None or self.model.modal_zeta is not None
+
+    @cached_property
+    def _private(self) -> dict:
+        # coordinates print under private names (_x_m1), so no parameter can shadow them
+        return {s: sp.Symbol("_" + s.name, **s.assumptions0) for s in (*self.model.x, *self.model.v)}
+
+    def p(self, expr) -> str:
+        """Print once per distinct expression (a long uniform chain repeats ``m`` and ``k``)."""
+        text = self._printed.get(expr)
+        if text is None:
+            text = self._printed[expr] = p(expr.xreplace(self._private) if isinstance(expr, sp.Basic) else expr)
+        return text
+
+    def unpack(self, symbols) -> str:
+        """``_x_m1, _x_m2 = _x``'s left side for coordinates ``symbols``."""
+        return ", ".join("_" + str(s) for s in symbols) + ("," if len(symbols) == 1 else "")
+
+    def per_mass(self, exprs, *, skip_zero: bool = False) -> list[str]:
+        """``_out[i] = expr_i / m_i`` for each mass (the printed per-mass form)."""
+        return [f"    _out[{i}] = {self.p(e / m)}" for i, (e, m) in enumerate(zip(exprs, self.model.masses))
+                if not (skip_zero and e == 0)]
 
 
-class _Printer(NumPyPrinter):
-    """NumPy printer that names symbols as they are (scene names are never keywords) and
-    never prints a Python builtin (``abs``), so that a parameter may take any such name."""
-
-    def _print_Symbol(self, expr):
-        return expr.name
-
-    def _print_Abs(self, expr):
-        return f"numpy.abs({self._print(expr.args[0])})"
+def _doc(model: Model) -> str:
+    return (f"Equations of motion and normal modes of scene {model.scene.name!r}.\n\n"
+            "Coordinates are displacements from the springs' rest configuration, in the order\n"
+            "of MASS_NAMES; arrays of states have shape (N, ...) (a batch in trailing axes).\n"
+            "Every function takes the parameters PARAMETERS as keyword arguments.\n")
 
 
-def _printer() -> NumPyPrinter:
-    return _Printer({"fully_qualified_modules": True, "allow_unknown_functions": False})
+# -- sections ----------------------------------------------------------------------------------
+def _constants(c: _Context) -> list[str]:
+    """The scene's shape: masses, effects, element ends, closed form, rigid pieces."""
+    model, sc = c.model, c.model.scene
+    dampers = (["#: Damper ends as mass indices; -1 is a wall.",
+                f"DAMPER_ENDS = {tuple((a, b) for a, b, *_ in model.dampers)!r}"] if model.dampers else [])
+    return [f"MASS_NAMES = {tuple(sc.mass_names)!r}",
+            f"N = {sc.n}",
+            f"EFFECTS = {tuple(sorted(e.value for e in model.effects))!r}",
+            f"LINEAR = {sc.linear!r}",
+            "#: Spring ends as mass indices; -1 is a wall.",
+            f"SPRING_ENDS = {tuple((a, b) for a, b, *_ in model.springs)!r}",
+            *dampers,
+            f"CLOSED_FORM = {c.modes.closed_form!r}",
+            f"RIGID_MODES = {len(model.free_components)}",
+            "#: Mass indices of each free piece (no spring to a wall): one rigid-body mode each.",
+            f"RIGID_PIECES = {tuple(tuple(sorted(piece)) for piece in model.free_components)!r}"]
 
 
-_PRIVATE_MODULES = ((re.compile(r"\bnumpy\."), "_np."), (re.compile(r"\bscipy\.linalg\."), "_linalg."))
+def _element_constants(c: _Context) -> list[str]:
+    """masses(), spring_constants() and, when declared, cubic_constants() and damper_constants()."""
+    model = c.model
+    out = function(f"masses({c.sig})", "Masses, shape (N,).", [f"    return {array([c.p(m) for m in model.masses])}"])
+    out += function(f"spring_constants({c.sig})", "Linear stiffness of each spring in SPRING_ENDS order, shape (S,).",
+                    [f"    return {array([c.p(k) for _, _, k, _, _ in model.springs])}"])
+    if c.cubic:
+        k3s = [c.p(k3 if k3 is not None else 0) for *_, k3, _ in model.springs]
+        out += function(f"cubic_constants({c.sig})", "Cubic coefficient k3 of each spring (0 where linear), shape (S,).",
+                        [f"    return {array(k3s)}"])
+    if model.dampers:
+        out += function(f"damper_constants({c.sig})",
+                        "Damping coefficient of each damper in DAMPER_ENDS order, shape (D,).",
+                        [f"    return {array([c.p(d) for _, _, d, _ in model.dampers])}"])
+    return out
 
 
-def private_modules(text: str) -> str:
-    """Refer to NumPy and scipy.linalg by private names (``_np``, ``_linalg``)."""
-    for pattern, repl in _PRIVATE_MODULES:
-        text = pattern.sub(repl, text)
-    return text
+def _mass_and_stiffness(c: _Context) -> list[str]:
+    """mass_matrix() and stiffness_matrix(): printed, or assembled past MAX_PRINTED_MATRIX masses."""
+    m = matrix(c.model.M) if c.dense else f"numpy.diag(masses({c.kwcall}))"
+    k = matrix(c.model.K) if c.dense else f"_assemble(_SPRING_ENDS, spring_constants({c.kwcall}))"
+    return (function(f"mass_matrix({c.sig})", "M = d²T/dv², shape (N, N).", [f"    return {m}"])
+            + function(f"stiffness_matrix({c.sig})", "K = d²V/dx² at x = 0, shape (N, N).", [f"    return {k}"]))
 
 
-def _p(expr) -> str:
-    """Print a SymPy expression (or a Python int, e.g. 0) as NumPy code."""
-    return _printer().doprint(sp.Integer(expr) if isinstance(expr, int) else expr)
+def _damping_matrix(c: _Context) -> list[str]:
+    """damping_matrix() and its coefficients (:mod:`derive.damping_code`), for damped scenes."""
+    if not c.model.damped:
+        return []
+    return damping_matrix_lines(c.model, c.sig, c.kwcall, matrix if c.dense else None)
 
 
-#: Module constants that function bodies read; bodies use private aliases (``_N``) so that a
-#: parameter (a keyword argument) of the same name cannot shadow them.
-_BODY_CONSTANTS = ("N", "SPRING_ENDS", "DAMPER_ENDS", "RIGID_MODES", "MAX_DENSE", "LEFT")
-_DEF = re.compile(r"^def ([A-Za-z]\w*)\(", re.M)
+def _dynamical_matrix(c: _Context) -> list[str]:
+    """dynamical_matrix() and, past MAX_PRINTED_MATRIX masses, the element assembler _assemble()."""
+    if c.dense:
+        return function(f"dynamical_matrix({c.sig})", "D = M^-1/2 K M^-1/2, shape (N, N).",
+                        [f"    return {matrix(c.model.D)}"])
+    return (function(f"dynamical_matrix({c.sig})", "D = M^-1/2 K M^-1/2, shape (N, N).",
+                     [f"    _r = 1.0 / numpy.sqrt(masses({c.kwcall}))",
+                      f"    return stiffness_matrix({c.kwcall}) * _r[:, None] * _r[None, :]"])
+            + function("_assemble(ends, values)",
+                       "Σ_e c_e b_e b_eᵀ over elements with ends (a, b) (-1 = wall): an (N, N) matrix.",
+                       ["    _ends = numpy.asarray(ends, dtype=numpy.intp).reshape(-1, 2)",
+                        "    _out = numpy.zeros((_N, _N))",
+                        "    for _ci, _si in ((0, 1.0), (1, -1.0)):",
+                        "        for _cj, _sj in ((0, 1.0), (1, -1.0)):",
+                        "            _ok = (_ends[:, _ci] >= 0) & (_ends[:, _cj] >= 0)",
+                        "            numpy.add.at(_out, (_ends[_ok, _ci], _ends[_ok, _cj]), _si * _sj * values[_ok])",
+                        "    return _out"]))
 
 
-def privatize(source: str) -> str:
-    """Make a generated module's function bodies independent of the user's names.
-
-    Module imports become ``_np``/``_linalg``; calls between the module's public functions
-    go through private aliases (``_masses = masses``, appended at the end); body reads of
-    module constants go through ``_N`` and the like. Parameters are keyword arguments of
-    the public functions, so after this no parameter name can shadow what a body uses.
-    """
-    source = private_modules(source)
-    source = re.sub(r"\bdtype=float\b", "dtype=_np.float64", source).replace(".astype(float)", ".astype(_np.float64)")
-    source = source.replace("raise ValueError(", "raise _ValueError(")
-    public = _DEF.findall(source)
-    for name in public:
-        source = re.sub(rf"(?<!def )(?<![\w.]){name}\((?!\))", f"_{name}(", source)
-    aliases = [f"_{name} = {name}" for name in public]
-    consts = [f"_{c} = {c}" for c in _BODY_CONSTANTS if re.search(rf"^{c} = ", source, re.M)]
-    head, sep, rest = source.partition("\n\n\ndef ")
-    source = head.rstrip("\n") + "\n" + "\n".join(consts) + "\n_float, _ValueError = float, ValueError\n" + sep.lstrip("\n").join(["\n\n", ""]) + rest
-    return source + "\n\n# Private aliases used by the function bodies above.\n" + "\n".join(aliases) + "\n"
-
-
-def regenerate_command(scene_file: str, bundled: bool = False) -> str:
-    """The command line that regenerates a module (only safe file names are shown).
-
-    A function of the scene file's name and of its folder's name only (``scenes/NAME`` when the folder
-    is called ``scenes``, as the bundled scenes' is, installed or in a clone; else ``NAME``): never of
-    where springchain is installed or of the current folder, so a scene renders the same text anywhere.
-    ``bundled`` is accepted for compatibility and changes nothing.
-    """
-    from pathlib import Path
-
-    path = Path(scene_file.replace("\\", "/"))
-    name = path.name
-    if not _SAFE_FILE.match(name):
-        return "springchain derive SCENE"
-    try:
-        folder = path.resolve().parent.name
-    except (OSError, RuntimeError):
-        folder = path.parent.name
-    return f"springchain derive scenes/{name}" if folder == "scenes" else f"springchain derive {name}"
+def _spectrum(c: _Context) -> list[str]:
+    """omega2() and mode_shapes(): stable closed forms, or the spring-factor helper's values."""
+    if c.stable is not None:
+        omega2, cols = c.stable
+        shapes = sp.Matrix(c.model.scene.n, len(cols), lambda i, j: cols[j][i])
+        return (function(f"omega2({c.sig})",
+                         "Closed-form squared angular frequencies, one per independent mode, shape (N,).\n\n"
+                         "Ordered by value at DEFAULTS; repeated values appear once per shape. Every expression\n"
+                         "is free of cancellation (no sum of terms of both signs), so it is accurate to a few\n"
+                         "ulps at any positive parameter values.\n",
+                         [f"    return {array([c.p(e) for e in omega2])}"])
+                + function(f"mode_shapes({c.sig})",
+                           "Closed-form physical mode shapes as columns, in omega2() order, shape (N, N); any scale.",
+                           [f"    return {matrix(shapes)}"]))
+    why = ("the closed forms cancel in float64 at some parameter values (radicals, trigonometric "
+           "roots or sums of both signs)" if c.modes.closed_form else "no closed form")
+    call = f"_accurate_modes(masses({c.kwcall}), spring_constants({c.kwcall}))"
+    return (function(f"omega2({c.sig})",
+                     "Squared angular frequencies, ascending, rigid modes exactly 0 first, shape (N,).\n\n"
+                     f"Computed numerically ({why}) by the accurate spring-factor route _accurate_modes():\n"
+                     "correct to float64 in the relative sense at any positive parameter values.\n",
+                     [f"    return {call}[0]"])
+            + function(f"mode_shapes({c.sig})",
+                       "Physical, M-orthonormal mode shapes as columns in omega2() order, shape (N, N).\n\n"
+                       f"Computed numerically ({why}) by _accurate_modes().\n",
+                       [f"    return {call}[1]"]))
 
 
-def header(scene_name: str, sha256: str, command: str) -> str:
-    return (
-        f"# GENERATED by springchain from scene {scene_name!r} (scene file sha256 {sha256}).\n"
-        f"# DO NOT EDIT: regenerate with `{command}`; `springchain derive --check` tests freshness.\n"
-    )
+def _spectrum_helper(c: _Context) -> list[str]:
+    """The spring-factor helper's source, for a scene without stable closed forms or with modal damping."""
+    return pasted(helper_source()) if c.accurate_helper else []
 
 
-def _array(entries: list[str], indent: str = "    ") -> str:
-    if not entries:
-        return "numpy.zeros(0)"
-    return "numpy.array([" + ", ".join(entries) + "], dtype=float)"
+_ACCELERATION_DOC = """.
+
+Parameters
+----------
+x : ndarray, shape (N, ...)
+    Displacements; trailing axes are a batch of states.
+
+Returns
+-------
+ndarray, shape (N, ...)
+"""
 
 
-def _matrix(mat: sp.Matrix) -> str:
-    rows = ["[" + ", ".join(_p(mat[i, j]) for j in range(mat.shape[1])) + "]" for i in range(mat.shape[0])]
-    return "numpy.array([\n        " + ",\n        ".join(rows) + ",\n    ], dtype=float)"
+def _acceleration(c: _Context) -> list[str]:
+    """acceleration(x): springs (linear and cubic) and gravity, per mass or by the spring list."""
+    model = c.model
+    doc = "Acceleration from springs" + (" and gravity" if model.g is not None else "") + _ACCELERATION_DOC
+    if c.dense:
+        cons = model.force_expressions(Effect.SPRING, Effect.CUBIC, Effect.GRAVITY)
+        body = [f"    {c.unpack(model.x)} = _x", "    _out = numpy.empty(numpy.shape(_x))",
+                *c.per_mass(cons), "    return _out"]
+    else:  # incidence form: one pass over the spring list, no N expressions
+        body = _incidence_lines(c, "_x", "_SPRING_ENDS", "spring_constants", cubic=True)
+        if model.g is not None:
+            body.append(f"    _f += gravity_forces({c.kwcall}).reshape(_col)")
+        body.append(f"    return _f / masses({c.kwcall}).reshape(_col)")
+    return function(f"acceleration(_x{c.kw})", doc, body)
 
 
-
-
-def _incidence_lines(model: Model, kwcall: str, arg: str, ends: str, constants: str, *, cubic: bool,
+def _incidence_lines(c: _Context, arg: str, ends: str, constants: str, *, cubic: bool,
                      forces: bool = True) -> list[str]:
     """Body lines that form the element extensions ``_d`` (shape (S, ...)) of ``arg`` over an element
     list and, with ``forces``, the summed element forces ``_f`` (shape (N, ...)); ``_col`` reshapes a
@@ -136,42 +260,168 @@ def _incidence_lines(model: Model, kwcall: str, arg: str, ends: str, constants: 
            "    _d = _xe[_a] - _xe[_b]"]
     if not forces:
         return out
-    out.append(f"    _s = {constants}({kwcall}).reshape(_col) * _d")
-    if cubic and any(k3 is not None for *_, k3, _ in model.springs):
-        out.append(f"    _s = _s + cubic_constants({kwcall}).reshape(_col) * _d**3")
-    out += [f"    _f = numpy.zeros({arg}.shape)",
+    out.append(f"    _s = {constants}({c.kwcall}).reshape(_col) * _d")
+    if cubic and c.cubic:
+        out.append(f"    _s = _s + cubic_constants({c.kwcall}).reshape(_col) * _d**3")
+    return out + [f"    _f = numpy.zeros({arg}.shape)",
+                  "    _ia, _ib = numpy.flatnonzero(_a >= 0), numpy.flatnonzero(_b >= 0)",
+                  "    numpy.add.at(_f, _a[_ia], -_s[_ia])",
+                  "    numpy.add.at(_f, _b[_ib], _s[_ib])"]
+
+
+def _bound_acceleration(c: _Context) -> list[str]:
+    """make_acceleration(): acceleration() with the parameters bound (linear: -M⁻¹K formed once)."""
+    if not c.model.scene.linear:
+        call = f"acceleration(_y{', ' + c.kwcall if c.kwcall else ''})"
+        return function(f"make_acceleration({c.sig})",
+                        "acceleration() with the parameters bound (nonlinear springs: the expressions above).",
+                        ["", "    def _bound(_y):", f"        return {call}", "", "    return _bound"])
+    g = c.model.g is not None
+    doc = "acceleration() with the parameters bound: -M⁻¹K" + (" and g" if g else "") + \
+        " formed once; x shape (N,) or (N, B)."
+    body = [f"    _inv_m = 1.0 / masses({c.kwcall})"]
+    body += _bound_by_elements(c, g) if not c.dense else _bound_by_matrix(c, g)
+    return function(f"make_acceleration({c.sig})", doc, body + ["", "    return _bound"])
+
+
+def _bound_by_matrix(c: _Context, g: bool) -> list[str]:
+    out = [f"    _A = -_inv_m[:, None] * stiffness_matrix({c.kwcall})"]
+    if not g:
+        return out + ["", "    def _bound(_y):", "        return _A @ _y"]
+    return out + [f"    _g = (_inv_m * gravity_forces({c.kwcall}))[:, None]", "",
+                  "    def _bound(_y):", "        return _A @ _y + (_g if numpy.ndim(_y) == 2 else _g[:, 0])"]
+
+
+def _bound_by_elements(c: _Context, g: bool) -> list[str]:
+    """The incidence form: one pass over the spring list, no N x N matrix."""
+    col = "reshape((-1,) + (1,) * (_x.ndim - 1))"
+    return ["    _ends = numpy.asarray(_SPRING_ENDS, dtype=numpy.intp).reshape(-1, 2)",
+            "    _a, _b = _ends[:, 0], _ends[:, 1]",
+            f"    _k = spring_constants({c.kwcall})",
             "    _ia, _ib = numpy.flatnonzero(_a >= 0), numpy.flatnonzero(_b >= 0)",
-            "    numpy.add.at(_f, _a[_ia], -_s[_ia])",
-            "    numpy.add.at(_f, _b[_ib], _s[_ib])"]
+            *([f"    _g = _inv_m * gravity_forces({c.kwcall})"] if g else []),
+            "",
+            "    def _bound(_y):",
+            "        _x = numpy.asarray(_y, dtype=float)",
+            "        _xe = numpy.concatenate([_x, numpy.zeros((1,) + _x.shape[1:])])  # row -1 = wall",
+            f"        _s = _k.{col} * (_xe[_a] - _xe[_b])",
+            "        _f = numpy.zeros_like(_x)",
+            "        numpy.add.at(_f, _a[_ia], -_s[_ia])",
+            "        numpy.add.at(_f, _b[_ib], _s[_ib])",
+            f"        _f *= _inv_m.{col}",
+            *([f"        _f += _g.{col}"] if g else []),
+            "        return _f"]
+
+
+def _damping_acceleration(c: _Context) -> list[str]:
+    """damping_acceleration(v) = -M⁻¹C v: through C for modal damping, else per mass or by dashpot list."""
+    model = c.model
+    if not model.damped:
+        return []
+    if model.modal_zeta is not None:
+        return matrix_damping_acceleration_lines(c.kw, c.kwcall)
+    what = " and ".join((["the dampers"] if model.dampers else [])
+                        + (["Rayleigh damping"] if model.rayleigh is not None else []))
+    if c.dense or model.rayleigh is not None:  # Rayleigh terms are per mass: one line each, no N x N
+        from .rayleigh_targets import binding_lines, private
+
+        damp = [private(e) for e in model.force_expressions(Effect.DAMPER, Effect.RAYLEIGH)]
+        body = [*binding_lines(model, c.kwcall),  # _alpha_R, _beta_R of [damping] rayleigh_targets
+                f"    {c.unpack(model.v)} = _v", "    _out = numpy.empty(numpy.shape(_v))",
+                *c.per_mass(damp), "    return _out"]
+    else:
+        body = _incidence_lines(c, "_v", "_DAMPER_ENDS", "damper_constants", cubic=False)
+        body.append(f"    return _f / masses({c.kwcall}).reshape(_col)")
+    return function(f"damping_acceleration(_v{c.kw})",
+                    f"Acceleration -M^-1 C v from {what}; v and result have shape (N, ...).", body)
+
+
+def _external_acceleration(c: _Context) -> list[str]:
+    """external_acceleration(t) = M⁻¹F(t) of the ``[[forces]]`` expressions."""
+    model = c.model
+    if not model.forces:
+        return []
+    ext = model.force_expressions(Effect.FORCE)
+    body = ["    t = numpy.asarray(t, dtype=float)", "    _out = numpy.zeros((_N,) + t.shape)"]
+    body += c.per_mass(ext, skip_zero=True)
+    return function(f"external_acceleration(t{c.kw})",
+                    "Acceleration M^-1 F(t) from the external forces; t scalar or array, result (N, *t.shape).",
+                    body + ["    return _out"])
+
+
+def _gravity(c: _Context) -> list[str]:
+    """gravity_forces(): the constant m_i g of ``[gravity]``."""
+    if c.model.g is None:
+        return []
+    return function(f"gravity_forces({c.sig})", "Constant gravity force m_i*g on each mass (+x direction), shape (N,).",
+                    [f"    return {array([c.p(f) for f in c.model.gravity_force])}"])
+
+
+_HARMONICS_DOC = """External forces as F(t) = const + sum_h cos_amp[h] cos(omega[h] t) + sin_amp[h] sin(omega[h] t).
+
+Returns
+-------
+omega : ndarray, shape (H,)
+cos_amp, sin_amp : ndarray, shape (H, N)
+const : ndarray, shape (N,)
+"""
+
+
+def _forcing_harmonics(c: _Context) -> list[str]:
+    """FORCING_HARMONIC and, when the forces are constant + harmonic, forcing_harmonics()."""
+    model = c.model
+    if not model.forces:
+        return []
+    harmonic = harmonic_table([(on, f) for on, f, _ in model.forces], model.t, model.scene.n)
+    out = ["", f"FORCING_HARMONIC = {harmonic is not None!r}"]
+    if harmonic is None:
+        return out
+    const, freqs, cos_amp, sin_amp = harmonic
+
+    def rows(table) -> str:
+        return "numpy.array([" + ", ".join(array([c.p(e) for e in row]) for row in table) + "]).reshape(_omega.shape[0], _N)"
+
+    return out + function(f"forcing_harmonics({c.sig})", _HARMONICS_DOC,
+                          [f"    _omega = {array([c.p(f) for f in freqs])}",
+                           f"    _cos = {rows(cos_amp)}",
+                           f"    _sin = {rows(sin_amp)}",
+                           f"    _const = {array([c.p(e) for e in const])}",
+                           "    return _omega, _cos, _sin, _const"])
+
+
+def _tables_and_ground(c: _Context) -> list[str]:
+    """Tabulated forces and ground motion (:mod:`derive.loadgen`, shared with chain modules)."""
+    model = c.model
+    ons = [on for on, _, _ in model.table_forces]
+    out = table_force_lines(ons, [model.masses[on] for on in ons], c.sig, chain=False)
+    if model.scene.ground is not None:
+        out += ground_lines(model.ground, model.ground_motion, model.t, c.sig)
     return out
 
 
-def forcing_harmonics(model: Model):
-    """Constant part and harmonics of every external force, or None if any is not harmonic.
-
-    Returns ``(const, omegas, cos_amp, sin_amp)`` with ``const`` a list of N
-    expressions and ``cos_amp``/``sin_amp`` lists (one per frequency) of N expressions.
-    """
-    from .forcing import decompose
-
-    n = model.scene.n
-    const = [sp.Integer(0)] * n
-    table: dict = {}
-    for on, f, _ in model.forces:
-        parts = decompose(f, model.t)
-        if parts is None:
-            return None
-        c, harmonics = parts
-        const[on] += c
-        for h in harmonics:
-            row = table.setdefault(h.omega, ([sp.Integer(0)] * n, [sp.Integer(0)] * n))
-            row[0][on] += h.cos_amp
-            row[1][on] += h.sin_amp
-    freqs = sorted(table, key=sp.default_sort_key)
-    return const, freqs, [table[f][0] for f in freqs], [table[f][1] for f in freqs]
+def _energy(c: _Context) -> list[str]:
+    """energy(x, v) = T + V (gravity's potential included): one expression, or sums over element lists."""
+    model = c.model
+    doc = "Total energy T + V" + (" (V includes gravity's potential)" if model.g is not None else "") + \
+        "; x, v shape (N, ...), result shape (...)."
+    if c.dense:
+        body = [f"    {c.unpack(model.x)} = _x", f"    {c.unpack(model.v)} = _v", f"    return {c.p(model.energy)}"]
+        return function(f"energy(_x, _v{c.kw})", doc, body)
+    body = _incidence_lines(c, "_x", "_SPRING_ENDS", "spring_constants", cubic=True, forces=False)
+    body += ["    _v = numpy.asarray(_v, dtype=_float)",
+             f"    _e = 0.5 * numpy.sum(masses({c.kwcall}).reshape(_col) * _v**2, axis=0)",
+             f"    _e = _e + 0.5 * numpy.sum(spring_constants({c.kwcall}).reshape(_col) * _d**2, axis=0)"]
+    if c.cubic:
+        body.append(f"    _e = _e + 0.25 * numpy.sum(cubic_constants({c.kwcall}).reshape(_col) * _d**4, axis=0)")
+    if model.g is not None:
+        body.append(f"    _e = _e - numpy.sum(gravity_forces({c.kwcall}).reshape(_col) * _x, axis=0)")
+    return function(f"energy(_x, _v{c.kw})", doc, body + ["    return _e"])
 
 
-_p_public = _p
+#: The section writers of a ``[masses]`` module, in the order they appear in it.
+SECTIONS = (_constants, _element_constants, _mass_and_stiffness, _damping_matrix, _dynamical_matrix,
+            _spectrum, _spectrum_helper, _acceleration, _bound_acceleration, _damping_acceleration,
+            _external_acceleration, _gravity, _forcing_harmonics, _tables_and_ground, _energy)
 
 
 def render_module(model: Model, modes: ModeSet, *, bundled: bool = True) -> str:
@@ -191,319 +441,9 @@ def render_module(model: Model, modes: ModeSet, *, bundled: bool = True) -> str:
     str
         Python source; byte-identical for the same scene.
     """
-    sc = model.scene
-    params = list(model.params)  # sorted
-    sig = ", ".join(params)
-    kw = (", " + sig) if params else ""
-    n = sc.n
-    # coordinates print under private names (_x_m1), so no parameter can shadow them
-    private = {s: sp.Symbol("_" + s.name, **s.assumptions0) for s in (*model.x, *model.v)}
+    c = _Context(model, modes)
+    head = module_head(model.scene, c.params, _doc(model), scipy=c.accurate_helper, bundled=bundled)
+    return render(head, SECTIONS, c)
 
-    printed: dict = {}
 
-    def _p(expr) -> str:
-        """Print once per distinct expression (a long uniform chain repeats ``m`` and ``k``)."""
-        text = printed.get(expr)
-        if text is None:
-            text = printed[expr] = _p_public(expr.xreplace(private) if isinstance(expr, sp.Basic) else expr)
-        return text
-
-    xs = ", ".join("_" + str(s) for s in model.x) + ("," if n == 1 else "")
-    vs = ", ".join("_" + str(s) for s in model.v) + ("," if n == 1 else "")
-    effects = sorted(e.value for e in model.effects)
-    lines: list[str] = []
-    w = lines.append
-    w(header(sc.name, sc.sha256, regenerate_command(sc.file, bundled)).rstrip("\n"))
-    w('"""Equations of motion and normal modes of scene ' + repr(sc.name) + ".")
-    w("")
-    w("Coordinates are displacements from the springs' rest configuration, in the order")
-    w("of MASS_NAMES; arrays of states have shape (N, ...) (a batch in trailing axes).")
-    w("Every function takes the parameters PARAMETERS as keyword arguments.")
-    w('"""')
-    w("")
-    stable = stable_closed_forms(modes)
-    w("import numpy as _np")
-    if stable is None or model.modal_zeta is not None:
-        w("import scipy.linalg as _linalg")
-    w("")
-    w(f"SCENE = {sc.name!r}")
-    w(f"SCENE_SHA256 = {sc.sha256!r}")
-    w(f"PARAMETERS = {tuple(params)!r}")
-    w(f"DEFAULTS = {{{', '.join(f'{p!r}: {sc.parameters[p]!r}' for p in params)}}}")
-    w(f"MASS_NAMES = {tuple(sc.mass_names)!r}")
-    w(f"N = {n}")
-    w(f"EFFECTS = {tuple(effects)!r}")
-    w(f"LINEAR = {sc.linear!r}")
-    w("#: Spring ends as mass indices; -1 is a wall.")
-    w(f"SPRING_ENDS = {tuple((a, b) for a, b, *_ in model.springs)!r}")
-    if model.dampers:
-        w("#: Damper ends as mass indices; -1 is a wall.")
-        w(f"DAMPER_ENDS = {tuple((a, b) for a, b, *_ in model.dampers)!r}")
-    w(f"CLOSED_FORM = {modes.closed_form!r}")
-    w(f"RIGID_MODES = {len(model.free_components)}")
-    w("#: Mass indices of each free piece (no spring to a wall): one rigid-body mode each.")
-    w(f"RIGID_PIECES = {tuple(tuple(sorted(c)) for c in model.free_components)!r}")
-    w("")
-    w("")
-    w(f"def masses({sig}):")
-    w('    """Masses, shape (N,)."""')
-    w(f"    return {_array([_p(m) for m in model.masses])}")
-    w("")
-    w("")
-    w(f"def spring_constants({sig}):")
-    w('    """Linear stiffness of each spring in SPRING_ENDS order, shape (S,)."""')
-    w(f"    return {_array([_p(k) for _, _, k, _, _ in model.springs])}")
-    if any(k3 is not None for *_, k3, _ in model.springs):
-        w("")
-        w("")
-        w(f"def cubic_constants({sig}):")
-        w('    """Cubic coefficient k3 of each spring (0 where linear), shape (S,)."""')
-        w(f"    return {_array([_p(k3 if k3 is not None else 0) for *_, k3, _ in model.springs])}")
-    if model.dampers:
-        w("")
-        w("")
-        w(f"def damper_constants({sig}):")
-        w('    """Damping coefficient of each damper in DAMPER_ENDS order, shape (D,)."""')
-        w(f"    return {_array([_p(c) for _, _, c, _ in model.dampers])}")
-    w("")
-    w("")
-    kwcall = ", ".join(f"{p}={p}" for p in params)
-    dense = n <= MAX_PRINTED_MATRIX
-    w(f"def mass_matrix({sig}):")
-    w('    """M = d²T/dv², shape (N, N)."""')
-    w(f"    return {_matrix(model.M)}" if dense else f"    return numpy.diag(masses({kwcall}))")
-    w("")
-    w("")
-    w(f"def stiffness_matrix({sig}):")
-    w('    """K = d²V/dx² at x = 0, shape (N, N)."""')
-    if dense:
-        w(f"    return {_matrix(model.K)}")
-    else:
-        w(f"    return _assemble(_SPRING_ENDS, spring_constants({kwcall}))")
-    if model.damped:
-        from .damping_code import damping_matrix_lines
-
-        lines.extend(damping_matrix_lines(model, sig, kwcall, _matrix if dense else None))
-    w("")
-    w("")
-    w(f"def dynamical_matrix({sig}):")
-    w('    """D = M^-1/2 K M^-1/2, shape (N, N)."""')
-    if dense:
-        w(f"    return {_matrix(model.D)}")
-    else:
-        w(f"    _r = 1.0 / numpy.sqrt(masses({kwcall}))")
-        w(f"    return stiffness_matrix({kwcall}) * _r[:, None] * _r[None, :]")
-    if not dense:
-        w("")
-        w("")
-        w("def _assemble(ends, values):")
-        w('    """Σ_e c_e b_e b_eᵀ over elements with ends (a, b) (-1 = wall): an (N, N) matrix."""')
-        w("    _ends = numpy.asarray(ends, dtype=numpy.intp).reshape(-1, 2)")
-        w("    _out = numpy.zeros((_N, _N))")
-        w("    for _ci, _si in ((0, 1.0), (1, -1.0)):")
-        w("        for _cj, _sj in ((0, 1.0), (1, -1.0)):")
-        w("            _ok = (_ends[:, _ci] >= 0) & (_ends[:, _cj] >= 0)")
-        w("            numpy.add.at(_out, (_ends[_ok, _ci], _ends[_ok, _cj]), _si * _sj * values[_ok])")
-        w("    return _out")
-    w("")
-    w("")
-    if stable is not None:
-        w(f"def omega2({sig}):")
-        w('    """Closed-form squared angular frequencies, one per independent mode, shape (N,).')
-        w("")
-        w("    Ordered by value at DEFAULTS; repeated values appear once per shape. Every expression")
-        w("    is free of cancellation (no sum of terms of both signs), so it is accurate to a few")
-        w('    ulps at any positive parameter values.')
-        w('    """')
-        w(f"    return {_array([_p(e) for e in stable[0]])}")
-        w("")
-        w("")
-        w(f"def mode_shapes({sig}):")
-        w('    """Closed-form physical mode shapes as columns, in omega2() order, shape (N, N); any scale."""')
-        cols = stable[1]
-        mat = sp.Matrix(n, len(cols), lambda i, j: cols[j][i])
-        w(f"    return {_matrix(mat)}")
-    else:
-        why = ("the closed forms cancel in float64 at some parameter values (radicals, trigonometric "
-               "roots or sums of both signs)" if modes.closed_form else "no closed form")
-        w(f"def omega2({sig}):")
-        w('    """Squared angular frequencies, ascending, rigid modes exactly 0 first, shape (N,).')
-        w("")
-        w(f"    Computed numerically ({why}) by the accurate spring-factor route _accurate_modes():")
-        w("    correct to float64 in the relative sense at any positive parameter values.")
-        w('    """')
-        w(f"    return _accurate_modes(masses({kwcall}), spring_constants({kwcall}))[0]")
-        w("")
-        w("")
-        w(f"def mode_shapes({sig}):")
-        w('    """Physical, M-orthonormal mode shapes as columns in omega2() order, shape (N, N).')
-        w("")
-        w(f"    Computed numerically ({why}) by _accurate_modes().")
-        w('    """')
-        w(f"    return _accurate_modes(masses({kwcall}), spring_constants({kwcall}))[1]")
-    if stable is None or model.modal_zeta is not None:
-        lines.extend(["", *helper_source().rstrip("\n").split("\n")])
-    w("")
-    w("")
-    cons = model.force_expressions(Effect.SPRING, Effect.CUBIC, Effect.GRAVITY)
-    w(f"def acceleration(_x{kw}):")
-    w('    """Acceleration from springs' + (" and gravity" if model.g is not None else "") + ".")
-    w("")
-    w("    Parameters")
-    w("    ----------")
-    w("    x : ndarray, shape (N, ...)")
-    w("        Displacements; trailing axes are a batch of states.")
-    w("")
-    w("    Returns")
-    w("    -------")
-    w("    ndarray, shape (N, ...)")
-    w('    """')
-    if dense:
-        w(f"    {xs} = _x")
-        w("    _out = numpy.empty(numpy.shape(_x))")
-        for i in range(n):
-            w(f"    _out[{i}] = {_p(cons[i] / model.masses[i])}")
-        w("    return _out")
-    else:  # incidence form: one pass over the spring list, no N expressions
-        lines.extend(_incidence_lines(model, kwcall, "_x", "_SPRING_ENDS", "spring_constants", cubic=True))
-        if model.g is not None:
-            w(f"    _f += gravity_forces({kwcall}).reshape(_col)")
-        w(f"    return _f / masses({kwcall}).reshape(_col)")
-    w("")
-    w("")
-    w(f"def make_acceleration({sig}):")
-    if sc.linear:
-        w('    """acceleration() with the parameters bound: -M⁻¹K' + (" and g" if model.g is not None else "")
-          + ' formed once; x shape (N,) or (N, B)."""')
-        w(f"    _inv_m = 1.0 / masses({kwcall})")
-        if not dense:  # incidence form: no N x N matrix
-            w("    _ends = numpy.asarray(_SPRING_ENDS, dtype=numpy.intp).reshape(-1, 2)")
-            w("    _a, _b = _ends[:, 0], _ends[:, 1]")
-            w(f"    _k = spring_constants({kwcall})")
-            w("    _ia, _ib = numpy.flatnonzero(_a >= 0), numpy.flatnonzero(_b >= 0)")
-            if model.g is not None:
-                w(f"    _g = _inv_m * gravity_forces({kwcall})")
-            w("")
-            w("    def _bound(_y):")
-            w("        _x = numpy.asarray(_y, dtype=float)")
-            w("        _xe = numpy.concatenate([_x, numpy.zeros((1,) + _x.shape[1:])])  # row -1 = wall")
-            w("        _s = _k.reshape((-1,) + (1,) * (_x.ndim - 1)) * (_xe[_a] - _xe[_b])")
-            w("        _f = numpy.zeros_like(_x)")
-            w("        numpy.add.at(_f, _a[_ia], -_s[_ia])")
-            w("        numpy.add.at(_f, _b[_ib], _s[_ib])")
-            w("        _f *= _inv_m.reshape((-1,) + (1,) * (_x.ndim - 1))")
-            if model.g is not None:
-                w("        _f += _g.reshape((-1,) + (1,) * (_x.ndim - 1))")
-            w("        return _f")
-        else:
-            w(f"    _A = -_inv_m[:, None] * stiffness_matrix({kwcall})")
-            if model.g is not None:
-                w(f"    _g = (_inv_m * gravity_forces({kwcall}))[:, None]")
-                w("")
-                w("    def _bound(_y):")
-                w("        return _A @ _y + (_g if numpy.ndim(_y) == 2 else _g[:, 0])")
-            else:
-                w("")
-                w("    def _bound(_y):")
-                w("        return _A @ _y")
-    else:
-        w('    """acceleration() with the parameters bound (nonlinear springs: the expressions above)."""')
-        w("")
-        w("    def _bound(_y):")
-        w(f"        return acceleration(_y{', ' + kwcall if kwcall else ''})")
-    w("")
-    w("    return _bound")
-    if model.damped and model.modal_zeta is not None:
-        from .damping_code import matrix_damping_acceleration_lines
-
-        lines.extend(matrix_damping_acceleration_lines(kw, kwcall))
-    elif model.damped:
-        damp = model.force_expressions(Effect.DAMPER, Effect.RAYLEIGH)
-        what = " and ".join((["the dampers"] if model.dampers else [])
-                            + (["Rayleigh damping"] if model.rayleigh is not None else []))
-        w("")
-        w("")
-        w(f"def damping_acceleration(_v{kw}):")
-        w(f'    """Acceleration -M^-1 C v from {what}; v and result have shape (N, ...)."""')
-        if dense or model.rayleigh is not None:  # Rayleigh terms are per mass: one line each, no N x N
-            from .rayleigh_targets import binding_lines, private as rayleigh_private
-
-            lines.extend(binding_lines(model, kwcall))  # _alpha_R, _beta_R of [damping] rayleigh_targets
-            w(f"    {vs} = _v")
-            w("    _out = numpy.empty(numpy.shape(_v))")
-            for i in range(n):
-                w(f"    _out[{i}] = {_p(rayleigh_private(damp[i] / model.masses[i]))}")
-            w("    return _out")
-        else:
-            lines.extend(_incidence_lines(model, kwcall, "_v", "_DAMPER_ENDS", "damper_constants", cubic=False))
-            w(f"    return _f / masses({kwcall}).reshape(_col)")
-    if model.forces:
-        ext = model.force_expressions(Effect.FORCE)
-        w("")
-        w("")
-        w(f"def external_acceleration(t{kw}):")
-        w('    """Acceleration M^-1 F(t) from the external forces; t scalar or array, result (N, *t.shape)."""')
-        w("    t = numpy.asarray(t, dtype=float)")
-        w("    _out = numpy.zeros((_N,) + t.shape)")
-        for i in range(n):
-            if ext[i] != 0:
-                w(f"    _out[{i}] = {_p(ext[i] / model.masses[i])}")
-        w("    return _out")
-    if model.g is not None:
-        w("")
-        w("")
-        w(f"def gravity_forces({sig}):")
-        w('    """Constant gravity force m_i*g on each mass (+x direction), shape (N,)."""')
-        w(f"    return {_array([_p(f) for f in model.gravity_force])}")
-    if model.forces:
-        harmonic = forcing_harmonics(model)
-        w("")
-        w(f"FORCING_HARMONIC = {harmonic is not None!r}")
-        if harmonic is not None:
-            const, freqs, cos_amp, sin_amp = harmonic
-            w("")
-            w("")
-            w(f"def forcing_harmonics({sig}):")
-            w('    """External forces as F(t) = const + sum_h cos_amp[h] cos(omega[h] t) + sin_amp[h] sin(omega[h] t).')
-            w("")
-            w("    Returns")
-            w("    -------")
-            w("    omega : ndarray, shape (H,)")
-            w("    cos_amp, sin_amp : ndarray, shape (H, N)")
-            w("    const : ndarray, shape (N,)")
-            w('    """')
-            w(f"    _omega = {_array([_p(f) for f in freqs])}")
-            w("    _cos = numpy.array([" + ", ".join(_array([_p(c) for c in row]) for row in cos_amp)
-              + "]).reshape(_omega.shape[0], _N)")
-            w("    _sin = numpy.array([" + ", ".join(_array([_p(c) for c in row]) for row in sin_amp)
-              + "]).reshape(_omega.shape[0], _N)")
-            w(f"    _const = {_array([_p(c) for c in const])}")
-            w("    return _omega, _cos, _sin, _const")
-    if model.table_forces or sc.ground is not None:
-        from .loadgen import ground_lines, table_force_lines
-
-        lines.extend(table_force_lines([on for on, _, _ in model.table_forces],
-                                       [model.masses[on] for on, _, _ in model.table_forces], sig, chain=False))
-        if sc.ground is not None:
-            lines.extend(ground_lines(model.ground, model.ground_motion, model.t, sig))
-    w("")
-    w("")
-    w(f"def energy(_x, _v{kw}):")
-    w('    """Total energy T + V' + (" (V includes gravity's potential)" if model.g is not None else "")
-      + '; x, v shape (N, ...), result shape (...)."""')
-    if dense:
-        w(f"    {xs} = _x")
-        w(f"    {vs} = _v")
-        w(f"    return {_p(model.energy)}")
-    else:  # T + V summed over the mass and spring lists
-        lines.extend(_incidence_lines(model, kwcall, "_x", "_SPRING_ENDS", "spring_constants", cubic=True,
-                                      forces=False))
-        w("    _v = numpy.asarray(_v, dtype=_float)")
-        w(f"    _e = 0.5 * numpy.sum(masses({kwcall}).reshape(_col) * _v**2, axis=0)")
-        w(f"    _e = _e + 0.5 * numpy.sum(spring_constants({kwcall}).reshape(_col) * _d**2, axis=0)")
-        if any(k3 is not None for *_, k3, _ in model.springs):
-            w(f"    _e = _e + 0.25 * numpy.sum(cubic_constants({kwcall}).reshape(_col) * _d**4, axis=0)")
-        if model.g is not None:
-            w(f"    _e = _e - numpy.sum(gravity_forces({kwcall}).reshape(_col) * _x, axis=0)")
-        w("    return _e")
-    return privatize("\n".join(lines) + "\n")
+__all__ = ["MAX_PRINTED_MATRIX", "SECTIONS", "render_module"]

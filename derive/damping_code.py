@@ -8,6 +8,7 @@ methods and the frequency response read).
 
 from __future__ import annotations
 
+from .codeprint import array, p
 from .model import Model
 
 _MODAL_HELPER = '''
@@ -24,14 +25,8 @@ def _modal_damping_matrix(m, k, zeta):
 '''
 
 
-def _array(entries: list[str]) -> str:
-    return "numpy.array([" + ", ".join(entries) + "], dtype=float)"
-
-
 def rayleigh_coefficients_lines(model, sig: str) -> list[str]:
     """Lines of ``rayleigh_coefficients()`` (empty without ``[damping] rayleigh``); dense and chain modules."""
-    from .codegen import _p
-
     if model.rayleigh is None:
         return []
     if getattr(model, "rayleigh_targets", None) is not None:
@@ -41,7 +36,7 @@ def rayleigh_coefficients_lines(model, sig: str) -> list[str]:
         return coefficients_lines(model, sig)
     return ["", "", f"def rayleigh_coefficients({sig}):",
             '    """(alpha, beta) of Rayleigh damping C = alpha*M + beta*K ([damping] rayleigh), shape (2,)."""',
-            f"    return {_array([_p(e) for e in model.rayleigh])}"]
+            f"    return {array([p(e) for e in model.rayleigh])}"]
 
 
 def damping_matrix_lines(model: Model, sig: str, kwcall: str, matrix=None) -> list[str]:
@@ -55,8 +50,6 @@ def damping_matrix_lines(model: Model, sig: str, kwcall: str, matrix=None) -> li
     matrix : callable or None
         Prints a SymPy matrix as a NumPy literal (dense scenes); None assembles from element lists.
     """
-    from .codegen import _p
-
     out: list[str] = []
     w = out.append
     out.extend(rayleigh_coefficients_lines(model, sig))
@@ -65,7 +58,7 @@ def damping_matrix_lines(model: Model, sig: str, kwcall: str, matrix=None) -> li
         w("")
         w(f"def modal_damping_ratios({sig}):")
         w('    """Damping ratio of each mode in ascending omega order ([damping] modal), shape (N,)."""')
-        w(f"    return {_array([_p(e) for e in model.modal_zeta])}")
+        w(f"    return {array([p(e) for e in model.modal_zeta])}")
         out.extend(_MODAL_HELPER.rstrip("\n").split("\n")[1:])
     parts, what = [], []
     from .rayleigh_targets import binding_lines, private

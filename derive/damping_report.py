@@ -1,7 +1,9 @@
 """Damped modes for the report: ζ per mode (closed form where one exists) or complex modes.
 
 Everything is computed in the **modal coordinates** of the undamped problem, at the scene's
-values and at high precision (mpmath, successive precisions until float64 is settled):
+values and at high precision (mpmath, successive precisions until float64 is settled; past
+:data:`accurate.MAX_MPMATH_MODES` masses, where mpmath's eigensolvers take minutes, in float64 by
+the spring-factor route, :func:`_rows_float`):
 
 * Φ, ω² — M-orthonormal modes from the exactly assembled dynamical matrix
   (:func:`accurate._eig_dynamical`; rigid-body modes are the lowest ``RIGID_MODES``, set to 0
@@ -24,7 +26,7 @@ import mpmath
 import sympy as sp
 
 from .printing import latex, sstr
-from .accurate import NotAccurate, _eig_dynamical, _mp, exact_values, value
+from .accurate import MAX_MPMATH_MODES, NotAccurate, _eig_dynamical, _mp, exact_values, value
 from .model import Model
 from .modes import BudgetExceeded, ModeSet, time_budget
 
@@ -64,13 +66,54 @@ def _values(model: Model) -> dict:
     return {**exact_values(model.params, model.scene.parameters), **values(model)}
 
 
+def _pieces(model: Model) -> list[list[int]]:
+    """Mass indices of the pieces joined by springs or dashpots (walls join nothing)."""
+    n = model.scene.n
+    parent = list(range(n))
+
+    def root(i: int) -> int:
+        while parent[i] != i:
+            parent[i] = parent[parent[i]]
+            i = parent[i]
+        return i
+
+    for a, b, *_ in list(model.springs) + list(model.dampers):  # one pass over elements, not masses
+        if a >= 0 and b >= 0:
+            parent[root(a)] = root(b)
+    groups: dict[int, list[int]] = {}
+    for i in range(n):
+        groups.setdefault(root(i), []).append(i)
+    return list(groups.values())
+
+
+def _eig_by_piece(masses: list, springs: list, pieces: list[list[int]], dps: int):
+    """``_eig_dynamical`` piece by piece: ω² ascending and shapes that are exactly zero outside
+    their piece, so a piece without damping has exactly zero rows in G = ΦᵀCΦ (its modes are
+    undamped by structure, not by a value that shrinks with the precision)."""
+    n = len(masses)
+    where = {i: (p, j) for p, piece in enumerate(pieces) for j, i in enumerate(piece)}
+    found = []
+    for p, piece in enumerate(pieces):
+        local = [(where[a][1] if a >= 0 else -1, where[b][1] if b >= 0 else -1, k)
+                 for a, b, k in springs if (a >= 0 and where[a][0] == p) or (b >= 0 and where[b][0] == p)]
+        w, shapes = _eig_dynamical([masses[i] for i in piece], local, len(piece), dps)
+        with mpmath.workdps(dps):
+            for wj, sj in zip(w, shapes):
+                full = [mpmath.mpf(0)] * n
+                for j, i in enumerate(piece):
+                    full[i] = sj[j]
+                found.append((wj, full))
+    found.sort(key=lambda r: r[0])
+    return [w for w, _ in found], [s for _, s in found]
+
+
 def _modal_damping(model: Model, dps: int):
     """(ω² list, G matrix) in modal coordinates at working precision ``dps``."""
     subs = _values(model)
     n = model.scene.n
     masses = [m.subs(subs) for m in model.masses]
     springs = [(a, b, k.subs(subs)) for a, b, k, _, _ in model.springs]
-    w2, shapes = _eig_dynamical(masses, springs, n, dps)
+    w2, shapes = _eig_by_piece(masses, springs, _pieces(model), dps)
     with mpmath.workdps(dps):
         n_rigid = len(model.free_components)
         w2 = [mpmath.mpf(0) if j < n_rigid else w for j, w in enumerate(w2)]
@@ -138,18 +181,26 @@ def _rows_at(model: Model, dps: int) -> tuple[list[tuple], bool]:
                 wd2 = w2[j] - g * g / 4
                 rows.append((float(w), float(g / (2 * w)), float(mpmath.sqrt(wd2)) if wd2 > 0 else 0.0, None))
             return rows, True
-        A = mpmath.zeros(2 * n, 2 * n)
-        for i in range(n):
-            A[i, n + i] = 1
-            A[n + i, i] = -w2[i]
-            for j in range(n):
-                A[n + i, n + j] = -G[i, j]
-        lam = mpmath.eig(A, left=False, right=False)
+        # modes with an exactly zero row of G (a piece without damping) are undamped by structure:
+        # λ = ±iω, left out of the eigenvalue problem (whose QR would give them a real part of noise)
+        free = [j for j in range(n) if all(G[j, i] == 0 for i in range(n))]
+        kept = [j for j in range(n) if j not in free]
+        m = len(kept)
+        A = mpmath.zeros(2 * m, 2 * m)
+        for a, i in enumerate(kept):
+            A[a, m + a] = 1
+            A[m + a, a] = -w2[i]
+            for b, j in enumerate(kept):
+                A[m + a, m + b] = -G[i, j]
+        lam = list(mpmath.eig(A, left=False, right=False)) if m else []
+        lam += [mpmath.mpc(0, mpmath.sqrt(w2[j])) for j in free if w2[j] > 0]
+        lam += [mpmath.mpc(0, 0)] * (2 * sum(1 for j in free if w2[j] == 0))
         scale = max(abs(l) for l in lam) or mpmath.mpf(1)
         tiny = mpmath.mpf(10) ** (-(dps // 2)) * scale
         cplx = sorted((l for l in lam if mpmath.im(l) > tiny), key=abs)
+        undamped = {id(l) for l in lam if mpmath.re(l) == 0}
         real = sorted((mpmath.re(l) for l in lam if abs(mpmath.im(l)) <= tiny), key=lambda r: -r)
-        rows = [(float(abs(l)), float(-mpmath.re(l) / abs(l)), float(mpmath.im(l)),
+        rows = [(float(abs(l)), 0.0 if id(l) in undamped else float(-mpmath.re(l) / abs(l)), float(mpmath.im(l)),
                  complex(float(mpmath.re(l)), float(mpmath.im(l)))) for l in cplx]
         zeros = [r for r in real if abs(r) <= tiny]
         rest = [r for r in real if abs(r) > tiny]
@@ -162,14 +213,159 @@ def _rows_at(model: Model, dps: int) -> tuple[list[tuple], bool]:
         return rows[:n], False
 
 
-def _settled(a: list[tuple], b: list[tuple]) -> bool:
+def _rows_float(model: Model) -> tuple[list[tuple], bool]:
+    """The rows of :func:`_rows_at` in float64, for scenes past :data:`accurate.MAX_MPMATH_MODES`
+    masses (mpmath's eigensolvers take minutes there): the modes of each piece by the spring-factor
+    route (relatively accurate, the generated modules' own code), G = ΦᵀCΦ from the elements
+    (Rayleigh and modal damping diagonal by definition), and LAPACK's eigenvalues of the state
+    matrix in the balanced form ``[[0, Ω], [−Ω, −G]]``; modes of a piece without damping undamped by
+    structure, as at high precision."""
+    subs = _values(model)
+    w2, Phi = _float_modes(model, subs)
+    G = _float_damping(model, subs, w2, Phi)
+    return _float_proportional_rows(w2, G) or _float_complex_rows(w2, G)
+
+
+def _float_modes(model: Model, subs: dict):
+    """ω² ascending and physical M-orthonormal shapes (columns), piece by piece (exact zeros outside)."""
+    import numpy as np
+
+    from .spring_factor import accurate_modes_function
+
+    n = model.scene.n
+    masses = np.array([float(m.subs(subs)) for m in model.masses])
+    springs = [(a, b, float(k.subs(subs))) for a, b, k, _, _ in model.springs]
+    found = []
+    for piece in _pieces(model):  # a loop over pieces, not masses
+        where = {i: j for j, i in enumerate(piece)}
+        local = [(where.get(a, -1), where.get(b, -1), k) for a, b, k in springs if a in where or b in where]
+        rigid = [] if any(a < 0 or b < 0 for a, b, _ in local) else [tuple(range(len(piece)))]
+        run = accurate_modes_function(len(piece), tuple((a, b) for a, b, _ in local), tuple(rigid))
+        pw2, pshapes = run(masses[piece], [k for *_, k in local])
+        found += [(float(pw2[j]), piece, pshapes[:, j]) for j in range(len(piece))]
+    found.sort(key=lambda r: r[0])
+    w2, Phi = np.zeros(n), np.zeros((n, n))
+    for j, (wj, piece, shape) in enumerate(found):
+        w2[j] = wj
+        Phi[piece, j] = shape
+    return w2, Phi
+
+
+def _float_damping(model: Model, subs: dict, w2, Phi):
+    """G = ΦᵀCΦ: dashpots from their elements, Rayleigh α + βω², modal 2ζω (diagonal by definition)."""
+    import numpy as np
+
+    n = w2.shape[0]
+    G = np.zeros((n, n))
+    if model.dampers:
+        B = np.zeros((len(model.dampers), n))
+        c = np.array([float(cc.subs(subs)) for _, _, cc, _ in model.dampers])
+        for r, (a, b, _, _) in enumerate(model.dampers):  # a loop over dashpots
+            B[r, a] += 1.0 if a >= 0 else 0.0
+            B[r, b] -= 1.0 if b >= 0 else 0.0
+        P = B @ Phi
+        G = P.T @ (c[:, None] * P)
+        G = 0.5 * (G + G.T)
+    if model.rayleigh is not None:
+        alpha, beta = (float(e.subs(subs)) for e in model.rayleigh)
+        G[np.arange(n), np.arange(n)] += alpha + beta * w2
+    if model.modal_zeta is not None:
+        zeta = np.array([float(z.subs(subs)) for z in model.modal_zeta])
+        G[np.arange(n), np.arange(n)] += 2 * zeta * np.sqrt(np.maximum(w2, 0.0))
+    return G
+
+
+def _float_proportional_rows(w2, G) -> tuple[list[tuple], bool] | None:
+    """Rows of real modes if G is diagonal between distinct ω² (else None)."""
+    import numpy as np
+
+    n = w2.shape[0]
+    d = np.sqrt(np.abs(np.diag(G)))
+    off = np.abs(G - np.diag(np.diag(G))) > 1e-12 * np.outer(d, d) + 1e-300
+    same = np.abs(w2[:, None] - w2[None, :]) <= 1e-12 * max(float(np.max(w2, initial=0.0)), 1e-300)
+    if np.any(off & ~same):
+        return None
+    diag = np.diag(G).copy()
+    j = 0
+    while j < n:  # within a repeated ω, the eigenvalues of G's block (any basis is one of modes)
+        k = j + 1
+        while k < n and same[j, k]:
+            k += 1
+        if k - j > 1:
+            diag[j:k] = np.linalg.eigvalsh(G[j:k, j:k])
+        j = k
+    w = np.sqrt(np.maximum(w2, 0.0))
+    rows = []
+    for j in range(n):
+        if w2[j] == 0:
+            rows.append((0.0, None, 0.0, None))
+            continue
+        wd2 = w2[j] - diag[j] ** 2 / 4
+        rows.append((float(w[j]), float(diag[j] / (2 * w[j])), float(np.sqrt(wd2)) if wd2 > 0 else 0.0, None))
+    return rows, True
+
+
+def _float_complex_rows(w2, G) -> tuple[list[tuple], bool]:
+    """Rows of complex modes from the balanced state matrix (a piece without damping left out: λ = ±iω)."""
+    import numpy as np
+    import scipy.linalg
+
+    n = w2.shape[0]
+    w = np.sqrt(np.maximum(w2, 0.0))
+    free = [j for j in range(n) if not np.any(G[j])]
+    kept = [j for j in range(n) if np.any(G[j])]
+    m = len(kept)
+    A = np.zeros((2 * m, 2 * m))
+    A[np.arange(m), m + np.arange(m)] = np.where(w[kept] > 0, w[kept], 1.0)
+    A[m + np.arange(m), np.arange(m)] = -w[kept]
+    A[m:, m:] = -G[np.ix_(kept, kept)]
+    lam = list(scipy.linalg.eigvals(A)) if m else []
+    undamped = [complex(0.0, float(w[j])) for j in free if w2[j] > 0]
+    tiny = 1e-12 * max([abs(v) for v in lam + undamped] + [1.0])
+    rows = [(float(abs(v)), float(-v.real / abs(v)), float(v.imag), complex(v))
+            for v in sorted([v for v in lam if v.imag > tiny], key=abs)]
+    rows += [(float(v.imag), 0.0, float(v.imag), v) for v in undamped]
+    real = sorted((v.real for v in lam if abs(v.imag) <= tiny), key=lambda r: -r)
+    zeros = [r for r in real if abs(r) <= tiny] + [0.0] * (2 * sum(1 for j in free if w2[j] == 0))
+    rest = [r for r in real if abs(r) > tiny]
+    rows += [(0.0, None, 0.0, None)] * (len(zeros) // 2 or (1 if zeros else 0))
+    while len(rest) >= 2:  # overdamped: real pairs, slowest with fastest
+        r1, r2 = rest.pop(0), rest.pop(-1)
+        wn = float(np.sqrt(r1 * r2))
+        rows.append((wn, float(-(r1 + r2) / (2 * wn)), 0.0, None))
+    rows.sort(key=lambda r: r[0])
+    return rows[:n], False
+
+
+def _zero_noise(x: float, y: float, dps: int) -> bool:
+    """``x`` (at ``dps`` digits) is below 10^(−dps/2) and ``y`` (at 2·dps) below 10^(−1.8·dps): noise
+    that shrinks with the precision, i.e. a quantity that is exactly zero (a node of a mode at every
+    dashpot) — the absolute floor near ζ = 0. A true ζ of 1e-61 is noise at 40 digits but stays
+    1e-61 at 80 (above 1e-72), so it is not taken for zero: the precision keeps doubling until it
+    settles."""
+    return abs(x) < 10.0 ** (-dps / 2) and abs(y) <= 10.0 ** (-1.8 * dps)
+
+
+def _settled(a: list[tuple], b: list[tuple], dps: int = 40) -> bool:
+    """Rows at ``dps`` and at 2·dps digits agree: relative 4e-16, or both noise around an exact zero."""
     def close(x, y):
         if x is None or y is None:
             return x is y
         if isinstance(x, complex):
             return abs(x - y) <= _SETTLED * max(abs(x), abs(y))
-        return abs(x - y) <= _SETTLED * max(abs(x), abs(y))
+        return abs(x - y) <= _SETTLED * max(abs(x), abs(y)) or _zero_noise(x, y, dps)
     return len(a) == len(b) and all(close(x, y) for ra, rb in zip(a, b) for x, y in zip(ra, rb))
+
+
+def _clean(rows: list[tuple], prev: list[tuple], dps: int) -> list[tuple]:
+    """Rows with a damping ratio that settled to an exact zero (see :func:`_zero_noise`) made
+    undamped: ζ = 0, ω_d = ω_n, λ = iω_n."""
+    out = []
+    for (wn, zeta, wd, lam), old in zip(rows, prev):
+        if zeta is not None and zeta != 0.0 and old[1] is not None and _zero_noise(old[1], zeta, dps):
+            zeta, wd, lam = 0.0, wn, (None if lam is None else complex(0.0, wn))
+        out.append((wn, zeta, wd, lam))
+    return out
 
 
 def _closed_forms(model: Model, modes: ModeSet) -> list[sp.Expr | None]:
@@ -223,19 +419,26 @@ def damped_modes(model: Model, modes: ModeSet | None) -> DampedModes:
     return cache[key]
 
 
-def _damped_modes(model: Model, modes: ModeSet | None) -> DampedModes:
-    parts = (["dashpots"] if model.dampers else []) + (
-        [model.scene.damping.kind] if model.scene.damping is not None else [])
+def _settled_rows(model: Model) -> tuple[list[tuple], bool]:
+    """:func:`_rows_at` at 40, 80, … digits until two successive precisions agree (float64 settled)."""
     prev = None
     dps = 40
     while dps <= 640:
         rows, prop = _rows_at(model, dps)
-        if prev is not None and prev[1] == prop and _settled(prev[0], rows):
-            break
+        if prev is not None and prev[1] == prop and _settled(prev[0], rows, dps // 2):
+            return _clean(rows, prev[0], dps // 2), prop
         prev = (rows, prop)
         dps *= 2
+    raise NotAccurate("damped modes did not settle to float64 accuracy within 640 digits")
+
+
+def _damped_modes(model: Model, modes: ModeSet | None) -> DampedModes:
+    parts = (["dashpots"] if model.dampers else []) + (
+        [model.scene.damping.kind] if model.scene.damping is not None else [])
+    if model.scene.n > MAX_MPMATH_MODES:  # float64 spring-factor route (mpmath takes minutes here)
+        rows, prop = _rows_float(model)
     else:
-        raise NotAccurate("damped modes did not settle to float64 accuracy within 640 digits")
+        rows, prop = _settled_rows(model)
     exprs = _closed_forms(model, modes) if prop and modes is not None else [None] * len(rows)
     subs = _values(model)
     out = []

@@ -33,7 +33,7 @@ from fractions import Fraction
 
 
 from .errors import SceneError, show
-from .expr_tree import CONSTANTS, FUNCTIONS, BinOp, Call, Expr, Name, Neg, Num
+from .expr_tree import CONSTANTS, FUNCTIONS, ARITHMETIC, BinOp, Call, Expr, Name, Neg, Num
 
 MAX_LENGTH = 500
 MAX_NODES = 200
@@ -86,13 +86,9 @@ def _constant_value(node: Expr) -> Fraction | None:
         a, b = _constant_value(node.left), _constant_value(node.right)
         if a is None or b is None:
             return None
-        if node.op == "+":
-            return a + b
-        if node.op == "-":
-            return a - b
-        if node.op == "*":
-            return a * b
-        return None if b == 0 else a / b
+        if node.op == "/":
+            return None if b == 0 else a / b
+        return ARITHMETIC[node.op](a, b)
     return None
 
 
@@ -156,23 +152,47 @@ def parse_expression(
         Naming the file, key, the offending text and what is accepted. No
         other exception escapes, whatever ``text`` is.
     """
-    accepted = accepted_form(allowed, functions)
-
-    def fail(why: str, hint: str | None = accepted) -> SceneError:
-        return SceneError(file, key, f"{show(text)}: {why}" + (f"; accepted: {hint}" if hint else ""))
-
+    fail = _Fail(text, file, key, accepted_form(allowed, functions))
     if isinstance(text, bool):
         raise fail("a boolean, not an expression")
     if isinstance(text, (int, float)):
-        try:
-            ok = math.isfinite(text) and abs(text) <= MAX_LITERAL
-        except OverflowError:
-            ok = False
-        if not ok:
-            raise fail("not a finite number", f"numbers up to {MAX_LITERAL:g} in size, or an expression")
-        return Num(Fraction(repr(float(text))) if isinstance(text, float) else Fraction(text))
+        return _literal(text, fail)
     if not isinstance(text, str):
         raise fail(f"a {type(text).__name__}, not an expression", "a number or an expression string")
+    tree = _syntax_tree(text, max_length, fail)
+    try:
+        return _Walker(allowed, functions, max_nodes, fail).walk(tree, 0, 1.0)
+    except (RecursionError, MemoryError):
+        raise fail("nested too deeply", f"at most {MAX_DEPTH} levels of nesting") from None
+
+
+class _Fail:
+    """The :class:`SceneError` of one scene value: ``fail(why, hint)``; ``hint`` defaults to what
+    an expression may contain, None leaves it out."""
+
+    _ACCEPTED = object()
+
+    def __init__(self, text: object, file: str | None, key: str | None, accepted: str):
+        self.text, self.file, self.key, self.accepted = text, file, key, accepted
+
+    def __call__(self, why: str, hint: str | None = _ACCEPTED) -> SceneError:
+        hint = self.accepted if hint is self._ACCEPTED else hint
+        return SceneError(self.file, self.key, f"{show(self.text)}: {why}" + (f"; accepted: {hint}" if hint else ""))
+
+
+def _literal(value: int | float, fail: _Fail) -> Num:
+    """A number given as a TOML number (not text)."""
+    try:
+        ok = math.isfinite(value) and abs(value) <= MAX_LITERAL
+    except OverflowError:
+        ok = False
+    if not ok:
+        raise fail("not a finite number", f"numbers up to {MAX_LITERAL:g} in size, or an expression")
+    return Num(Fraction(repr(float(value))) if isinstance(value, float) else Fraction(value))
+
+
+def _syntax_tree(text: str, max_length: int, fail: _Fail) -> ast.Expression:
+    """Python's parse of the text after the checks on its size, characters and nesting."""
     if len(text) > max_length:
         raise fail(f"longer than {max_length} characters", f"expressions up to {max_length} characters")
     if not text.isascii():
@@ -187,94 +207,109 @@ def parse_expression(
     try:
         with warnings.catch_warnings():  # e.g. SyntaxWarning on "1or a": never a second line on stderr
             warnings.simplefilter("ignore")
-            tree = ast.parse(text.strip(), mode="eval")
+            return ast.parse(text.strip(), mode="eval")
     except (SyntaxError, ValueError, RecursionError, MemoryError, OverflowError) as exc:
         msg = getattr(exc, "msg", None) or type(exc).__name__
         raise fail(f"not a valid expression ({msg})") from None
 
-    count = 0
-    digits = 0
 
-    def walk(node: ast.AST, depth: int, power: float) -> Expr:
-        nonlocal count, digits
-        count += 1
-        if count > max_nodes:
-            raise fail(f"more than {max_nodes} parts", f"expressions of at most {max_nodes} parts")
+class _Walker:
+    """Walks a syntax tree against the whitelist into :class:`Expr` nodes, counting parts and the
+    exact digits its numbers need (``power``: the exponent the current subtree is raised to)."""
+
+    def __init__(self, allowed, functions: tuple[str, ...], max_nodes: int, fail: _Fail):
+        self.allowed, self.functions, self.max_nodes, self.fail = allowed, functions, max_nodes, fail
+        self.count = 0
+        self.digits = 0
+
+    def walk(self, node: ast.AST, depth: int, power: float) -> Expr:
+        fail = self.fail
+        self.count += 1
+        if self.count > self.max_nodes:
+            raise fail(f"more than {self.max_nodes} parts", f"expressions of at most {self.max_nodes} parts")
         if depth > MAX_DEPTH:
             raise fail(f"nested deeper than {MAX_DEPTH} levels", f"at most {MAX_DEPTH} levels of nesting")
         if isinstance(node, ast.Expression):
-            return walk(node.body, depth + 1, power)
+            return self.walk(node.body, depth + 1, power)
         if isinstance(node, ast.Constant):
-            v = node.value
-            if isinstance(v, bool) or not isinstance(v, (int, float)):
-                what = "..." if v is Ellipsis else type(v).__name__
-                raise fail(f"{what} literals are not accepted")
-            if isinstance(v, float) and not math.isfinite(v):
-                raise fail("a number beyond floating-point range", f"numbers up to {MAX_LITERAL:g} in size")
-            if abs(v) > MAX_LITERAL:
-                raise fail("a number too large", f"numbers up to {MAX_LITERAL:g} in size")
-            value = Fraction(repr(v)) if isinstance(v, float) else Fraction(v)
-            digits += math.ceil(_digits(value) * power)
-            if digits > MAX_DIGITS:
-                raise fail("its numbers, with their powers, need more than "
-                           f"{MAX_DIGITS} exact digits", "fewer or smaller literals")
-            return Num(value)
+            return self._constant(node.value, power)
         if isinstance(node, ast.Name):
-            if node.id in CONSTANTS:
-                return Name(node.id)
-            if node.id not in allowed:
-                near = difflib.get_close_matches(node.id, sorted(allowed) + list(CONSTANTS), n=1)
-                hint = f" (did you mean {near[0]!r}?)" if near else ""
-                if node.id in functions:
-                    raise fail(f"{node.id} must be called, as {node.id}(...)")
-                raise fail(f"unknown name {node.id!r}{hint}")
-            return Name(node.id)
+            return self._name(node.id)
         if isinstance(node, ast.UnaryOp) and isinstance(node.op, (ast.USub, ast.UAdd)):
-            inner = walk(node.operand, depth + 1, power)
+            inner = self.walk(node.operand, depth + 1, power)
             return Neg(inner) if isinstance(node.op, ast.USub) else inner
         if isinstance(node, ast.BinOp) and type(node.op) in _BINOPS:
-            op = _BINOPS[type(node.op)]
-            if op == "%":
-                # a constant divisor only: SymPy's Mod with a symbolic divisor runs polynomial gcds
-                # that can take unbounded time (e.g. 46 % exp(617175.67*exp(b)))
-                left, right = walk(node.left, depth + 1, power), walk(node.right, depth + 1, power)
-                divisor = _constant_value(right)
-                if divisor is None or divisor == 0:
-                    raise fail("% needs a nonzero constant number on its right",
-                               "a % p with p a nonzero number, e.g. i % 2")
-                return BinOp(op, left, right)
-            if op != "**":
-                return BinOp(op, walk(node.left, depth + 1, power), walk(node.right, depth + 1, power))
-            right = walk(node.right, depth + 1, power)
-            exponent = _constant_value(right)
-            if exponent is None:
-                raise fail("an exponent that is not a constant number",
-                           "** with a constant exponent, e.g. x**2, x**(1/2), x**-1")
-            if abs(exponent) > MAX_EXPONENT or exponent.denominator > MAX_EXPONENT:
-                raise fail(f"exponent {exponent} out of range",
-                           f"constant exponents p = a/b with |p| <= {MAX_EXPONENT}, b <= {MAX_EXPONENT}")
-            total = power * max(1.0, float(abs(exponent)))
-            if total > MAX_TOTAL_EXPONENT:
-                raise fail(f"powers of powers reach exponent {total:g}",
-                           f"nested exponents multiplying to at most {MAX_TOTAL_EXPONENT}")
-            return BinOp(op, walk(node.left, depth + 1, total), right)
+            return self._binop(_BINOPS[type(node.op)], node, depth, power)
         if isinstance(node, ast.Call):
-            if not isinstance(node.func, ast.Name):
-                raise fail(f"calling {_describe(node.func)} is not accepted",
-                           f"calls of {', '.join(functions) or '(none)'} by name")
-            if node.func.id not in functions:
-                raise fail(f"calls to {node.func.id!r} are not accepted",
-                           f"the functions {', '.join(functions) or '(none)'}")
-            if node.keywords or len(node.args) != 1 or isinstance(node.args[0], ast.Starred):
-                raise fail(f"{node.func.id}() takes exactly one argument",
-                           f"{node.func.id}(x) with one plain argument")
-            return Call(node.func.id, walk(node.args[0], depth + 1, power))
+            return self._call(node, depth, power)
         raise fail(f"{_describe(node)} not accepted")
 
-    try:
-        return walk(tree, 0, 1.0)
-    except (RecursionError, MemoryError):
-        raise fail("nested too deeply", f"at most {MAX_DEPTH} levels of nesting") from None
+    def _constant(self, v, power: float) -> Num:
+        fail = self.fail
+        if isinstance(v, bool) or not isinstance(v, (int, float)):
+            what = "..." if v is Ellipsis else type(v).__name__
+            raise fail(f"{what} literals are not accepted")
+        if isinstance(v, float) and not math.isfinite(v):
+            raise fail("a number beyond floating-point range", f"numbers up to {MAX_LITERAL:g} in size")
+        if abs(v) > MAX_LITERAL:
+            raise fail("a number too large", f"numbers up to {MAX_LITERAL:g} in size")
+        value = Fraction(repr(v)) if isinstance(v, float) else Fraction(v)
+        self.digits += math.ceil(_digits(value) * power)
+        if self.digits > MAX_DIGITS:
+            raise fail("its numbers, with their powers, need more than "
+                       f"{MAX_DIGITS} exact digits", "fewer or smaller literals")
+        return Num(value)
+
+    def _name(self, name: str) -> Name:
+        if name in CONSTANTS:
+            return Name(name)
+        if name not in self.allowed:
+            near = difflib.get_close_matches(name, sorted(self.allowed) + list(CONSTANTS), n=1)
+            hint = f" (did you mean {near[0]!r}?)" if near else ""
+            if name in self.functions:
+                raise self.fail(f"{name} must be called, as {name}(...)")
+            raise self.fail(f"unknown name {name!r}{hint}")
+        return Name(name)
+
+    def _binop(self, op: str, node: ast.BinOp, depth: int, power: float) -> BinOp:
+        fail = self.fail
+        if op == "%":
+            # a constant divisor only: SymPy's Mod with a symbolic divisor runs polynomial gcds
+            # that can take unbounded time (e.g. 46 % exp(617175.67*exp(b)))
+            left, right = self.walk(node.left, depth + 1, power), self.walk(node.right, depth + 1, power)
+            divisor = _constant_value(right)
+            if divisor is None or divisor == 0:
+                raise fail("% needs a nonzero constant number on its right",
+                           "a % p with p a nonzero number, e.g. i % 2")
+            return BinOp(op, left, right)
+        if op != "**":
+            return BinOp(op, self.walk(node.left, depth + 1, power), self.walk(node.right, depth + 1, power))
+        right = self.walk(node.right, depth + 1, power)
+        exponent = _constant_value(right)
+        if exponent is None:
+            raise fail("an exponent that is not a constant number",
+                       "** with a constant exponent, e.g. x**2, x**(1/2), x**-1")
+        if abs(exponent) > MAX_EXPONENT or exponent.denominator > MAX_EXPONENT:
+            raise fail(f"exponent {exponent} out of range",
+                       f"constant exponents p = a/b with |p| <= {MAX_EXPONENT}, b <= {MAX_EXPONENT}")
+        total = power * max(1.0, float(abs(exponent)))
+        if total > MAX_TOTAL_EXPONENT:
+            raise fail(f"powers of powers reach exponent {total:g}",
+                       f"nested exponents multiplying to at most {MAX_TOTAL_EXPONENT}")
+        return BinOp(op, self.walk(node.left, depth + 1, total), right)
+
+    def _call(self, node: ast.Call, depth: int, power: float) -> Call:
+        fail, functions = self.fail, self.functions
+        if not isinstance(node.func, ast.Name):
+            raise fail(f"calling {_describe(node.func)} is not accepted",
+                       f"calls of {', '.join(functions) or '(none)'} by name")
+        if node.func.id not in functions:
+            raise fail(f"calls to {node.func.id!r} are not accepted",
+                       f"the functions {', '.join(functions) or '(none)'}")
+        if node.keywords or len(node.args) != 1 or isinstance(node.args[0], ast.Starred):
+            raise fail(f"{node.func.id}() takes exactly one argument",
+                       f"{node.func.id}(x) with one plain argument")
+        return Call(node.func.id, self.walk(node.args[0], depth + 1, power))
 
 
 def _describe(node: ast.AST) -> str:

@@ -9,6 +9,7 @@ SymPy at import time: :meth:`Expr.to_sympy` builds SymPy objects (imported lazil
 from __future__ import annotations
 
 import math
+import operator
 from dataclasses import dataclass
 from fractions import Fraction
 from typing import Mapping
@@ -20,6 +21,11 @@ FUNCTIONS = ("cos", "exp", "sin", "sqrt")
 #: Named constants a scene expression may use.
 CONSTANTS = ("pi",)
 
+
+#: The operators that mean the same on exact fractions, SymPy objects and floats.
+ARITHMETIC = {"+": operator.add, "-": operator.sub, "*": operator.mul}
+#: Every binary operator on floats and arrays (warnings silenced by the caller).
+_NUMPY_OPS = {**ARITHMETIC, "/": np.divide, "**": np.power, "%": np.mod}
 
 _U = 2.0**-52
 #: Absolute rounding in the subnormal range (the smallest positive float).
@@ -134,32 +140,12 @@ class BinOp(Expr):
         import sympy
 
         a, b = self.left.to_sympy(symbols), self.right.to_sympy(symbols)
-        if self.op == "+":
-            return a + b
-        if self.op == "-":
-            return a - b
-        if self.op == "*":
-            return a * b
-        if self.op == "/":
-            return a / b
-        if self.op == "**":
-            return a**b
-        return sympy.Mod(a, b)
+        return {**ARITHMETIC, "/": operator.truediv, "**": operator.pow, "%": sympy.Mod}[self.op](a, b)
 
     def evaluate(self, env):
         a, b = self.left.evaluate(env), self.right.evaluate(env)
         with np.errstate(all="ignore"):
-            if self.op == "+":
-                return a + b
-            if self.op == "-":
-                return a - b
-            if self.op == "*":
-                return a * b
-            if self.op == "/":
-                return np.divide(a, b)
-            if self.op == "**":
-                return np.power(a, b)
-            return np.mod(a, b)
+            return _NUMPY_OPS[self.op](a, b)
 
     def evaluate_error(self, env):
         a, ea = self.left.evaluate_error(env)

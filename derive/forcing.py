@@ -63,3 +63,47 @@ def decompose(expr: sp.Expr, t: sp.Symbol) -> tuple[sp.Expr, list[Harmonic]] | N
         amps[1] += ss
     harmonics = [Harmonic(w, c, s) for w, (c, s) in sorted(by_freq.items(), key=lambda kv: sp.default_sort_key(kv[0]))]
     return const, harmonics
+
+
+def harmonics_by_mass(forces, t: sp.Symbol):
+    """Constant parts and harmonics of forces ``[(on, f(t)), ...]`` on single masses, or None if
+    any force is not constant + harmonic.
+
+    Returns ``(const, omegas, amplitudes)``: ``const`` maps a mass index to its constant force,
+    ``omegas`` are the frequencies (sorted by SymPy's default key) and ``amplitudes`` holds one
+    ``(cos_amp, sin_amp)`` pair of such maps per frequency. Zero terms are left out.
+    """
+    const: dict = {}
+    table: dict = {}
+    for on, f in forces:
+        parts = decompose(f, t)
+        if parts is None:
+            return None
+        c, harmonics = parts
+        if c != 0:
+            const[on] = const.get(on, 0) + c
+        for h in harmonics:
+            cos_amp, sin_amp = table.setdefault(h.omega, ({}, {}))
+            if h.cos_amp != 0:
+                cos_amp[on] = cos_amp.get(on, 0) + h.cos_amp
+            if h.sin_amp != 0:
+                sin_amp[on] = sin_amp.get(on, 0) + h.sin_amp
+    omegas = sorted(table, key=sp.default_sort_key)
+    return const, omegas, [table[w] for w in omegas]
+
+
+def harmonic_table(forces, t: sp.Symbol, n: int):
+    """:func:`harmonics_by_mass` as dense lists over ``n`` masses, or None.
+
+    Returns ``(const, omegas, cos_amp, sin_amp)``: ``const`` a list of n expressions,
+    ``cos_amp``/``sin_amp`` one such list per frequency.
+    """
+    parts = harmonics_by_mass(forces, t)
+    if parts is None:
+        return None
+    const, omegas, amplitudes = parts
+
+    def dense(by_mass: dict) -> list:
+        return [by_mass.get(i, sp.Integer(0)) for i in range(n)]
+
+    return dense(const), omegas, [dense(c) for c, _ in amplitudes], [dense(s) for _, s in amplitudes]

@@ -1,7 +1,7 @@
 """Generated code of the loads: tabulated forces and ground motion (lines of a module).
 
-Shared by the ``[masses]`` renderer (:mod:`derive.codegen`) and the ``[chain]`` renderer
-(:mod:`derive.chain`). Tables never reach the source: the functions take them as arguments
+Section writers shared by the ``[masses]`` renderer (:mod:`derive.codegen`) and the ``[chain]``
+renderer (:mod:`derive.chain_codegen`). Tables never reach the source: the functions take them as arguments
 (``_tables``: one ``(times, values)`` pair per tabulated force, in scene order). Bodies use
 no Python builtin and bind only private names, so any parameter name is safe. Each
 function is emitted only for a scene that declares the load.
@@ -11,9 +11,10 @@ from __future__ import annotations
 
 import sympy as sp
 
+from .codeprint import array, p
+from .forcing import decompose, harmonics_by_mass
+from .module_text import function
 from .printing import sstr
-from .codegen import _array, _p
-from .forcing import decompose
 
 
 def table_force_lines(ons: list[int], masses: list[sp.Expr], sig: str, chain: bool) -> list[str]:
@@ -30,20 +31,21 @@ def table_force_lines(ons: list[int], masses: list[sp.Expr], sig: str, chain: bo
         return []
     size = "n" if chain else "_N"
     extra = ", n=N" if chain else ""
-    out = ["", "#: Mass index of each tabulated force ([[forces]] with table), in scene order.",
-           f"TABLE_FORCE_ON = {tuple(ons)!r}", "", "",
-           f"def table_acceleration(t, _tables{', ' + sig if sig else ''}{extra}):",
-           '    """Acceleration M^-1 F(t) from the tabulated forces; result shape (N, *t.shape).',
-           "",
-           "    _tables holds one (times, values) pair of 1-D arrays per TABLE_FORCE_ON entry:",
-           '    linearly interpolated, zero outside the table\'s time range."""',
-           "    t = numpy.asarray(t, dtype=float)",
-           f"    _out = numpy.zeros(({size},) + t.shape)"]
-    for j, (on, m) in enumerate(zip(ons, masses)):
-        out.append(f"    _out[{on}] += numpy.interp(t, _tables[{j}][0], _tables[{j}][1], left=0.0, right=0.0)"
-                   f" / ({_p(m)})")
-    out.append("    return _out")
-    return out
+    body = ["    t = numpy.asarray(t, dtype=float)", f"    _out = numpy.zeros(({size},) + t.shape)"]
+    body += [f"    _out[{on}] += numpy.interp(t, _tables[{j}][0], _tables[{j}][1], left=0.0, right=0.0) / ({p(m)})"
+             for j, (on, m) in enumerate(zip(ons, masses))]
+    return ["", "#: Mass index of each tabulated force ([[forces]] with table), in scene order.",
+            f"TABLE_FORCE_ON = {tuple(ons)!r}",
+            *function(f"table_acceleration(t, _tables{', ' + sig if sig else ''}{extra})",
+                      "Acceleration M^-1 F(t) from the tabulated forces; result shape (N, *t.shape).\n\n"
+                      "_tables holds one (times, values) pair of 1-D arrays per TABLE_FORCE_ON entry:\n"
+                      "linearly interpolated, zero outside the table's time range.",
+                      body + ["    return _out"])]
+
+
+def _of_t(expr: sp.Expr) -> str:
+    """An expression of t and the parameters as an array of t's shape."""
+    return f"numpy.broadcast_to(numpy.asarray({p(expr)}, dtype=float), t.shape).copy()"
 
 
 def ground_lines(acceleration: sp.Expr | None, motion, t: sp.Symbol, sig: str) -> list[str]:
@@ -52,59 +54,32 @@ def ground_lines(acceleration: sp.Expr | None, motion, t: sp.Symbol, sig: str) -
     kw = (", " + sig) if sig else ""
     if acceleration is None:
         return ["", "#: Ground motion ([ground]) given as a table of t, a_g (data passed at run time).",
-                'GROUND = "table"', "", "",
-                "def ground_table_acceleration(t, _table):",
-                '    """Ground acceleration a_g(t) from (times, values): linear, zero outside the table."""',
-                "    return numpy.interp(numpy.asarray(t, dtype=float), _table[0], _table[1], left=0.0, right=0.0)"]
+                'GROUND = "table"', *function(
+                    "ground_table_acceleration(t, _table)",
+                    "Ground acceleration a_g(t) from (times, values): linear, zero outside the table.",
+                    ["    return numpy.interp(numpy.asarray(t, dtype=float), _table[0], _table[1], left=0.0, right=0.0)"])]
     out = ["", "#: Ground motion ([ground]) given as an expression of t: every mass feels -m_i a_g(t).",
-           'GROUND = "expression"', "", "",
-           f"def ground_acceleration(t{kw}):",
-           '    """Ground acceleration a_g(t); t scalar or array, result shape t.shape."""',
-           "    t = numpy.asarray(t, dtype=float)",
-           f"    return numpy.broadcast_to(numpy.asarray({_p(acceleration)}, dtype=float), t.shape).copy()"]
+           'GROUND = "expression"']
+    out += function(f"ground_acceleration(t{kw})", "Ground acceleration a_g(t); t scalar or array, result shape t.shape.",
+                    ["    t = numpy.asarray(t, dtype=float)", f"    return {_of_t(acceleration)}"])
     parts = decompose(acceleration, t)
     out += ["", f"GROUND_HARMONIC = {parts is not None!r}"]
     if parts is not None:
         const, harmonics = parts
-        out += ["", "", f"def ground_harmonics({sig}):",
-                '    """a_g(t) = const + sum_h cos_amp[h] cos(omega[h] t) + sin_amp[h] sin(omega[h] t);',
-                '    returns omega, cos_amp, sin_amp of shape (H,) and const (a float)."""',
-                f"    return ({_array([_p(h.omega) for h in harmonics])}, "
-                f"{_array([_p(h.cos_amp) for h in harmonics])}, {_array([_p(h.sin_amp) for h in harmonics])}, "
-                f"_float({_p(const)}))"]
+        out += function(f"ground_harmonics({sig})",
+                        "a_g(t) = const + sum_h cos_amp[h] cos(omega[h] t) + sin_amp[h] sin(omega[h] t);\n"
+                        "returns omega, cos_amp, sin_amp of shape (H,) and const (a float).",
+                        [f"    return ({array([p(h.omega) for h in harmonics])}, "
+                         f"{array([p(h.cos_amp) for h in harmonics])}, {array([p(h.sin_amp) for h in harmonics])}, "
+                         f"_float({p(const)}))"])
     out += ["", f"GROUND_DISPLACEMENT = {motion is not None!r}"]
     if motion is not None:
         vg, xg = motion
-        out += ["", "", f"def ground_motion(t{kw}):",
-                '    """Ground velocity and displacement (v_g, x_g) at t, from v_g(0) = x_g(0) = 0; shapes t.shape."""',
-                "    t = numpy.asarray(t, dtype=float)",
-                f"    return (numpy.broadcast_to(numpy.asarray({_p(vg)}, dtype=float), t.shape).copy(),",
-                f"            numpy.broadcast_to(numpy.asarray({_p(xg)}, dtype=float), t.shape).copy())"]
+        out += function(f"ground_motion(t{kw})",
+                        "Ground velocity and displacement (v_g, x_g) at t, from v_g(0) = x_g(0) = 0; shapes t.shape.",
+                        ["    t = numpy.asarray(t, dtype=float)",
+                         f"    return ({_of_t(vg)},", f"            {_of_t(xg)})"])
     return out
-
-
-def forcing_harmonics_of(forces, t):
-    """Sparse form of :func:`forcing_harmonics` for forces ``[(on, f(t)), ...]`` on single masses:
-    ``(const {on: c}, frequencies, [({on: cos_amp}, {on: sin_amp}) per frequency])`` or None."""
-    from .forcing import decompose
-
-    const: dict = {}
-    table: dict = {}
-    for on, f in forces:
-        parts = decompose(f, t)
-        if parts is None:
-            return None
-        c, harmonics = parts
-        if c != 0:
-            const[on] = const.get(on, 0) + c
-        for h in harmonics:
-            cos_amp, sin_amp = table.setdefault(h.omega, ({}, {}))
-            if h.cos_amp != 0:
-                cos_amp[on] = cos_amp.get(on, 0) + h.cos_amp
-            if h.sin_amp != 0:
-                sin_amp[on] = sin_amp.get(on, 0) + h.sin_amp
-    freqs = sorted(table, key=sp.default_sort_key)
-    return const, freqs, [table[f] for f in freqs]
 
 
 def chain_load_lines(model) -> list[str]:
@@ -124,39 +99,14 @@ def chain_load_lines(model) -> list[str]:
 def chain_load_code(model, sig: str, kw: str) -> list[str]:
     """Gravity, external forces (expressions), tabulated forces and ground motion of a chain
     module: nothing for a chain without loads. Forces act on single masses, so no loop over masses."""
-    out: list[str] = []
     sep = ", " if sig else ""
+    out: list[str] = []
     if model.g is not None:
-        out += ["", "", f"def gravity_forces({sig}{sep}n=N):",
-                '    """Constant gravity force m_i*g on each mass (+x direction), shape (n,)."""',
-                f"    return masses({kw}{sep}n=n) * ({_p(model.g)})"]
+        out += function(f"gravity_forces({sig}{sep}n=N)",
+                        "Constant gravity force m_i*g on each mass (+x direction), shape (n,).",
+                        [f"    return masses({kw}{sep}n=n) * ({p(model.g)})"])
     if model.forces:
-        out += ["", "", f"def external_acceleration(t{sep}{sig}, n=N):",
-                '    """Acceleration M^-1 F(t) from the external forces; result shape (n, *t.shape)."""',
-                "    t = numpy.asarray(t, dtype=float)",
-                "    _out = numpy.zeros((n,) + t.shape)"]
-        for on, f, _ in model.forces:
-            out.append(f"    _out[{on}] += {_p(f / model.mass_at(on))}")
-        out.append("    return _out")
-        harmonic = forcing_harmonics_of([(on, f) for on, f, _ in model.forces], model.t)
-        out += ["", f"FORCING_HARMONIC = {harmonic is not None!r}"]
-        if harmonic is not None:
-            const, freqs, rows = harmonic
-            out += ["", "", f"def forcing_harmonics({sig}{sep}n=N):",
-                    '    """F(t) = const + sum_h cos_amp[h] cos(omega[h] t) + sin_amp[h] sin(omega[h] t);',
-                    '    omega (H,), cos_amp and sin_amp (H, n), const (n,)."""',
-                    f"    _omega = {_array([_p(w) for w in freqs])}",
-                    "    _cos = numpy.zeros((_omega.shape[0], n))",
-                    "    _sin = numpy.zeros((_omega.shape[0], n))",
-                    "    _const = numpy.zeros(n)"]
-            for on, c in const.items():
-                out.append(f"    _const[{on}] += {_p(c)}")
-            for h, (cos_amp, sin_amp) in enumerate(rows):
-                for on, c in cos_amp.items():
-                    out.append(f"    _cos[{h}, {on}] += {_p(c)}")
-                for on, c in sin_amp.items():
-                    out.append(f"    _sin[{h}, {on}] += {_p(c)}")
-            out.append("    return _omega, _cos, _sin, _const")
+        out += _chain_forces(model, sig, sep)
     out += table_force_lines([on for on, _ in model.table_forces],
                              [model.mass_at(on) for on, _ in model.table_forces], sig, chain=True)
     if model.scene.ground is not None:
@@ -164,4 +114,30 @@ def chain_load_code(model, sig: str, kw: str) -> list[str]:
     return out
 
 
-__all__ = ["table_force_lines", "ground_lines", "forcing_harmonics_of", "chain_load_lines", "chain_load_code"]
+def _chain_forces(model, sig: str, sep: str) -> list[str]:
+    """external_acceleration(), FORCING_HARMONIC and (when harmonic) forcing_harmonics() of a chain."""
+    body = ["    t = numpy.asarray(t, dtype=float)", "    _out = numpy.zeros((n,) + t.shape)"]
+    body += [f"    _out[{on}] += {p(f / model.mass_at(on))}" for on, f, _ in model.forces]
+    out = function(f"external_acceleration(t{sep}{sig}, n=N)",
+                   "Acceleration M^-1 F(t) from the external forces; result shape (n, *t.shape).",
+                   body + ["    return _out"])
+    harmonic = harmonics_by_mass([(on, f) for on, f, _ in model.forces], model.t)
+    out += ["", f"FORCING_HARMONIC = {harmonic is not None!r}"]
+    if harmonic is None:
+        return out
+    const, freqs, rows = harmonic
+    body = [f"    _omega = {array([p(w) for w in freqs])}",
+            "    _cos = numpy.zeros((_omega.shape[0], n))",
+            "    _sin = numpy.zeros((_omega.shape[0], n))",
+            "    _const = numpy.zeros(n)"]
+    body += [f"    _const[{on}] += {p(c)}" for on, c in const.items()]
+    for h, (cos_amp, sin_amp) in enumerate(rows):
+        body += [f"    _cos[{h}, {on}] += {p(c)}" for on, c in cos_amp.items()]
+        body += [f"    _sin[{h}, {on}] += {p(c)}" for on, c in sin_amp.items()]
+    return out + function(f"forcing_harmonics({sig}{sep}n=N)",
+                          "F(t) = const + sum_h cos_amp[h] cos(omega[h] t) + sin_amp[h] sin(omega[h] t);\n"
+                          "omega (H,), cos_amp and sin_amp (H, n), const (n,).",
+                          body + ["    return _omega, _cos, _sin, _const"])
+
+
+__all__ = ["table_force_lines", "ground_lines", "chain_load_lines", "chain_load_code"]

@@ -25,6 +25,7 @@ import numpy as np
 
 from .errors import SceneError, show
 from .expr import Expr
+from .scene_loader import did_you_mean
 
 FORCE_KEYS = ("on", "f", "table")
 GROUND_KEYS = ("acceleration", "table")
@@ -55,8 +56,17 @@ class Table:
 
 
 @dataclass(frozen=True)
+class Force:
+    """An external force ``f(t, parameters)`` on mass ``on``; ``key`` names its scene entry."""
+
+    on: int
+    f: Expr
+    key: str
+
+
+@dataclass(frozen=True)
 class TableForce:
-    """A tabulated external force (newtons) on mass ``on``."""
+    """A tabulated external force (newtons) on mass ``on``, the same kind of entry as :class:`Force`."""
 
     on: int
     table: Table
@@ -198,9 +208,6 @@ def parse_forces(ld, entries: list[dict], *, chain_n: int | None, index: dict[st
     ``ld`` is the scene loader (:class:`derive.scene_loader.Loader`); ``chain_n`` is the chain
     length for ``[chain]`` scenes (``on`` is then an index), else None.
     """
-    from .scene import Force
-    from .scene_loader import did_you_mean
-
     forces, tables = [], []
     for j, f in enumerate(entries):
         key = f"forces[{j}]"
@@ -243,5 +250,5 @@ def parse_ground(ld, pnames: frozenset[str], env: dict, times: np.ndarray) -> Gr
     return Ground(None, read_table(ld.file, "ground.table", g["table"], "a"))
 
 
-__all__ = ["Table", "TableForce", "Ground", "read_table", "table_from_arrays", "parse_forces", "parse_ground", "FORCE_KEYS",
-           "GROUND_KEYS"]
+__all__ = ["Table", "Force", "TableForce", "Ground", "read_table", "table_from_arrays", "parse_forces", "parse_ground",
+           "FORCE_KEYS", "GROUND_KEYS"]

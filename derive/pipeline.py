@@ -43,7 +43,8 @@ def derive(scene: Scene, budget: float | None = None, bundled: bool = False) -> 
         Whether the scene ships with springchain (only changes the header's regenerate hint).
     """
     if scene.chain is not None:
-        from .chain import ChainModel, chain_modes, render_chain_module
+        from .chain import ChainModel, chain_modes
+        from .chain_codegen import render_chain_module
 
         model = ChainModel(scene)
         modes = chain_modes(model)

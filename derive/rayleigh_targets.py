@@ -252,7 +252,7 @@ def private(expr):
 
 def coefficients_lines(model, sig: str) -> list[str]:
     """``rayleigh_coefficients()`` of a scene with targets: computed at call time from ``omega2()``."""
-    from .codegen import _p
+    from .codeprint import p as _p
 
     (za, zb), (a, b) = model.rayleigh_targets
     kwcall = ", ".join(f"{p}={p}" for p in sig.split(", ")) if sig else ""

@@ -168,9 +168,9 @@ def effect_notes(model: Model) -> list[str]:
         notes.append("cubic springs: modes are those of the linearization about x = 0; "
                      "the exact modal solution does not apply (integrators only)")
     if model.forces:
-        from .codegen import forcing_harmonics
+        from .forcing import harmonics_by_mass
 
-        if forcing_harmonics(model) is None:
+        if harmonics_by_mass([(on, f) for on, f, _ in model.forces], model.t) is None:
             notes.append("forces are not constant + harmonic in t: no exact solution; integrators only")
         else:
             notes.append("forces are constant + harmonic: exact solution = steady state "

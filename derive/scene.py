@@ -26,12 +26,13 @@ from pathlib import Path
 
 import numpy as np
 
-from ..ends import END_WORDS, End
+from ..generated.contract import END_WORDS, End
 from .errors import SceneError
 from .expr import CONSTANTS, FUNCTIONS, Expr, Num, accepted_form
 from .scene_loader import _CHUNK, Loader, did_you_mean
 from .damping import DampingModel, parse_damping
-from .loads import FORCE_KEYS, Ground, TableForce, parse_forces, parse_ground  # noqa: F401
+from .loads import FORCE_KEYS, Force, Ground, TableForce, parse_forces, parse_ground  # noqa: F401
+from .scene_edit import DICT_FILE, from_dict
 
 WALL = -1
 
@@ -87,15 +88,6 @@ class Damper:
     a: int
     b: int
     c: Expr
-    key: str
-
-
-@dataclass(frozen=True)
-class Force:
-    """An external force ``f(t, parameters)`` on mass ``on``."""
-
-    on: int
-    f: Expr
     key: str
 
 
@@ -171,6 +163,12 @@ class Scene:
 
         return with_parameters(self, {**(values or {}), **more})
 
+    @classmethod
+    def from_data(cls, data: dict, file: str, sha: str) -> "Scene":
+        """A scene validated from TOML-shaped ``data`` by the loader of scene files (:func:`build_scene`);
+        what :mod:`derive.scene_edit` rebuilds changed scenes with (it never imports this module)."""
+        return build_scene(data, file, sha)
+
     def with_initial(self, x=None, v=None) -> "Scene":
         """A new scene with another initial state (``x``, ``v``: arrays of shape (N,), lists, or, for
         ``[chain]`` scenes, expressions of ``i`` and ``n``), validated like ``[initial]``.
@@ -218,6 +216,7 @@ def load_scene(path: str | Path, text: str | None = None) -> Scene:
     Returns
     -------
     Scene
+        Validated and immutable; expressions parsed, not evaluated as code.
 
     Raises
     ------
@@ -274,6 +273,34 @@ class SceneSource(dict):
     __slots__ = ("scene",)
 
 
+def scene_from_dict(data: dict, *, file: str = DICT_FILE) -> Scene:
+    """A scene from a dict with the TOML schema (see README, "Scene format").
+
+    Parameters
+    ----------
+    data : dict
+        ``{"name": ..., "parameters": {...}, "masses": {...}, "springs": [{...}, ...], ...}``
+        or the ``[chain]`` form. Beyond what TOML can say: ``initial.x`` / ``initial.v`` may be
+        NumPy arrays of shape (N,); a force's or the ground's ``table`` may be an array of
+        shape (R, 2) (columns t and f, or t and a) or a dict ``{"t": ..., "f": ...}``
+        (``{"t": ..., "a": ...}`` for the ground) instead of a CSV file name.
+    file : str
+        How messages name the scene; table files named by a string are read relative to its
+        folder (the current folder for the default ``"<dict>"``).
+
+    Returns
+    -------
+    Scene
+        Keyed (``sha256``) by a hash of its whole content.
+
+    Raises
+    ------
+    SceneError
+        The one-line message a scene file with the same content would get.
+    """
+    return from_dict(data, file, build_scene)
+
+
 def build_scene(data: dict, file: str, sha: str) -> Scene:
     """Validate TOML-shaped ``data`` (as :func:`load_scene` reads it) into a Scene whose cache key is ``sha``."""
     token = _BUILDING.set(True)
@@ -288,10 +315,55 @@ def build_scene(data: dict, file: str, sha: str) -> Scene:
 
 
 def _build(ld: Loader, sha: str) -> Scene:
+    """The scene from its TOML data, each table checked in the order of the file format."""
     data = ld.data
     ld.keys(data, TOP_KEYS, None, required=("name", "parameters"), what="a scene")
     name = ld.identifier("name", data["name"], "scene name")
-    description = data.get("description", "")
+    description = _description(ld, data.get("description", ""))
+    parameters = _parameters(ld)
+    pnames = frozenset(parameters)
+    env = dict(parameters)
+    dt, steps, record_every = _simulation(ld)
+
+    chain = None
+    if "chain" in data:
+        if "masses" in data or "springs" in data:
+            both = "masses" if "masses" in data else "springs"
+            raise ld.bad("chain", f"[chain] with [{both}]", "both forms given",
+                         "either [chain] or [masses] with [[springs]]")
+        chain = _chain(ld, pnames, env)
+        mass_names: tuple[str, ...] = ()
+        mass_exprs: tuple[Expr, ...] = ()
+    else:
+        mass_names, mass_exprs = _masses(ld, pnames, env)
+    n = chain.n if chain is not None else len(mass_names)
+    index = {m: j for j, m in enumerate(mass_names)}
+    ends = _Ends(ld, index)
+    springs = _springs(ld, ends, pnames, env)
+    dampers, chain_dampers = _dampers(ld, ends, chain, pnames, env)
+    if chain is not None and isinstance(data.get("damping"), dict) and "modal" in data["damping"]:
+        raise ld.bad("damping.modal", data["damping"]["modal"], "modal damping on a [chain] is not yet supported",
+                     "rayleigh = [ALPHA, BETA] or [[dampers]] on a [chain]; modal with [masses]")
+    damping = parse_damping(ld, pnames, env, n, chain=chain is not None,
+                            elastic=None if chain is not None else n - _free_pieces(n, springs))
+
+    times = np.linspace(0.0, dt * steps, 257)
+    forces, table_forces = parse_forces(ld, ld.array_of_tables("forces"),
+                                        chain_n=None if chain is None else chain.n, index=index,
+                                        pnames=pnames, env=env, times=times)
+    gravity = _gravity(ld, pnames, env)
+    ground = parse_ground(ld, pnames, env, times)
+    x0, v0, initial_given = _initial_state(ld, n, chain is not None, pnames, env)
+
+    return Scene(file=ld.file, sha256=sha, name=name, description=description,
+                 parameters=parameters, mass_names=mass_names, mass_exprs=mass_exprs,
+                 springs=springs, dampers=dampers, forces=forces,
+                 gravity=gravity, chain=chain, x0=x0, v0=v0, dt=dt, steps=steps,
+                 record_every=record_every, table_forces=table_forces, ground=ground,
+                 damping=damping, chain_dampers=chain_dampers, initial_given=initial_given, source=data)
+
+
+def _description(ld: Loader, description) -> str:
     if not isinstance(description, str):
         raise ld.bad("description", description, "not a string", "a string")
     if len(description) > MAX_DESCRIPTION:
@@ -301,7 +373,11 @@ def _build(ld: Loader, sha: str) -> Scene:
     if control:
         raise ld.bad("description", description, f"holds the control character {control[0]!r}",
                      "printable text (newlines and tabs allowed)")
+    return description
 
+
+def _parameters(ld: Loader) -> dict[str, float]:
+    """``[parameters]``: name -> value, in sorted order; names outside the scene language."""
     params_raw = ld.table("parameters", required=True, example=" of name = number, e.g. m = 1.0")
     parameters: dict[str, float] = {}
     for pname in sorted(params_raw):
@@ -313,9 +389,11 @@ def _build(ld: Loader, sha: str) -> Scene:
             raise ld.bad(key, pname, f"reserved ({why})",
                          f"any other identifier (not {', '.join(sorted(RESERVED))}), e.g. {pname}0")
         parameters[pname] = float(ld.number(key, params_raw[pname]))
-    pnames = frozenset(parameters)
-    env = dict(parameters)
+    return parameters
 
+
+def _simulation(ld: Loader) -> tuple[float, int, int]:
+    """``[simulation]``: dt, steps and record_every (defaults 0.1, 1000, 1)."""
     sim = ld.table("simulation")
     ld.keys(sim, SIMULATION_KEYS, "simulation", what="[simulation]")
     dt = float(ld.number("simulation.dt", sim.get("dt", 0.1), positive=True))
@@ -326,47 +404,45 @@ def _build(ld: Loader, sha: str) -> Scene:
     if not math.isfinite(dt * steps) or not math.isfinite(1.0 / dt):
         raise ld.bad("simulation.dt", dt, f"dt x steps = {dt:g} x {steps} is not a finite time",
                      "dt and steps whose product is a finite number")
+    return dt, steps, record_every
 
-    chain = None
-    if "chain" in data:
-        if "masses" in data or "springs" in data:
-            both = "masses" if "masses" in data else "springs"
-            raise ld.bad("chain", f"[chain] with [{both}]", "both forms given",
-                         "either [chain] or [masses] with [[springs]]")
-        chain = _chain(ld, pnames, env)
-        mass_names: tuple[str, ...] = ()
-        mass_exprs: tuple[Expr, ...] = ()
-        n = chain.n
-    else:
-        masses_raw = ld.table("masses", required=True, example=" of name = expression, e.g. m1 = \"m\"")
-        if not masses_raw:
-            raise ld.bad("masses", masses_raw, "no masses", "at least one entry such as m1 = \"m\"")
-        names = []
-        exprs = []
-        for mname, mexpr in masses_raw.items():
-            key = f"masses.{mname}"
-            ld.identifier(key, mname, "mass name")
-            if mname in MASS_RESERVED:
-                raise ld.bad(key, mname, "reserved (the fixed end of springs)",
-                             f"another mass name, e.g. {mname}1")
-            if mname in pnames:
-                raise ld.bad(key, mname, "also the name of a parameter",
-                             "a mass name different from every parameter name")
-            clash = next((p for p in (f"x_{mname}", f"v_{mname}", f"a_{mname}") if p in pnames), None)
-            if clash:
-                raise ld.bad(f"parameters.{clash}", clash, f"the name of mass {mname!r}'s coordinate",
-                             "a parameter name other than x_<mass>, v_<mass>, a_<mass>")
-            names.append(mname)
-            exprs.append(ld.expression(key, mexpr, pnames, positive=True, bounded=True, env=env))
-        mass_names, mass_exprs = tuple(names), tuple(exprs)
-        n = len(names)
 
-    index = {m: j for j, m in enumerate(mass_names)}
-    accepted_ends = ", ".join(repr(m) for m in (*mass_names, "wall"))
+def _masses(ld: Loader, pnames: frozenset[str], env: dict) -> tuple[tuple[str, ...], tuple[Expr, ...]]:
+    """``[masses]``: the names (the coordinate order) and their positive expressions."""
+    masses_raw = ld.table("masses", required=True, example=" of name = expression, e.g. m1 = \"m\"")
+    if not masses_raw:
+        raise ld.bad("masses", masses_raw, "no masses", "at least one entry such as m1 = \"m\"")
+    names = []
+    exprs = []
+    for mname, mexpr in masses_raw.items():
+        key = f"masses.{mname}"
+        ld.identifier(key, mname, "mass name")
+        if mname in MASS_RESERVED:
+            raise ld.bad(key, mname, "reserved (the fixed end of springs)",
+                         f"another mass name, e.g. {mname}1")
+        if mname in pnames:
+            raise ld.bad(key, mname, "also the name of a parameter",
+                         "a mass name different from every parameter name")
+        clash = next((p for p in (f"x_{mname}", f"v_{mname}", f"a_{mname}") if p in pnames), None)
+        if clash:
+            raise ld.bad(f"parameters.{clash}", clash, f"the name of mass {mname!r}'s coordinate",
+                         "a parameter name other than x_<mass>, v_<mass>, a_<mass>")
+        names.append(mname)
+        exprs.append(ld.expression(key, mexpr, pnames, positive=True, bounded=True, env=env))
+    return tuple(names), tuple(exprs)
 
-    def ends(key: str, value) -> tuple[int, int]:
+
+class _Ends:
+    """``between = [END, END]`` of a spring or damper as two indices (``WALL`` for "wall")."""
+
+    def __init__(self, ld: Loader, index: dict[str, int]):
+        self.ld, self.index = ld, index
+        self.accepted = ", ".join(repr(m) for m in (*index, "wall"))
+
+    def __call__(self, key: str, value) -> tuple[int, int]:
+        ld, index = self.ld, self.index
         if not isinstance(value, list) or len(value) != 2:
-            raise ld.bad(key, value, "not a list of two ends", f'two names, e.g. ["{(*mass_names, "m1")[0]}", "wall"]')
+            raise ld.bad(key, value, "not a list of two ends", f'two names, e.g. ["{(*index, "m1")[0]}", "wall"]')
         idx = []
         for v in value:
             if v == "wall":
@@ -374,67 +450,62 @@ def _build(ld: Loader, sha: str) -> Scene:
             elif isinstance(v, str) and v in index:
                 idx.append(index[v])
             else:
-                raise ld.bad(key, v, f"not a mass{did_you_mean(v, index)}", accepted_ends)
+                raise ld.bad(key, v, f"not a mass{did_you_mean(v, index)}", self.accepted)
         if idx[0] == idx[1]:
             what = "both ends are walls" if idx[0] == WALL else f"joins {value[0]!r} to itself"
             raise ld.bad(key, value, what, "two different ends")
         return idx[0], idx[1]
 
+
+def _entries(ld: Loader, ends: _Ends, table: str, allowed: tuple[str, ...], required: tuple[str, ...]):
+    """``(key, entry, (a, b))`` of each ``[[table]]`` entry between two ends, its keys checked."""
+    for j, entry in enumerate(ld.array_of_tables(table)):
+        key = f"{table}[{j}]"
+        ld.keys(entry, allowed, key, required=required, what=f"a [[{table}]] entry")
+        yield key, entry, ends(f"{key}.between", entry["between"])
+
+
+def _springs(ld: Loader, ends: _Ends, pnames: frozenset[str], env: dict) -> tuple[Spring, ...]:
+    """``[[springs]]``: linear stiffness k > 0 and an optional cubic k3 != 0."""
     springs = []
-    for j, s in enumerate(ld.array_of_tables("springs")):
-        key = f"springs[{j}]"
-        ld.keys(s, SPRING_KEYS, key, required=("between", "k"), what="a [[springs]] entry")
-        a, b = ends(f"{key}.between", s["between"])
+    for key, s, (a, b) in _entries(ld, ends, "springs", SPRING_KEYS, ("between", "k")):
         k = ld.expression(f"{key}.k", s["k"], pnames, positive=True, bounded=True, env=env)
         k3 = (ld.expression(f"{key}.k3", s["k3"], pnames, nonzero=True, bounded=True, env=env)
               if "k3" in s else None)
         springs.append(Spring(a, b, k, k3, key))
+    return tuple(springs)
 
-    dampers = []
-    chain_dampers = ()
+
+def _dampers(ld: Loader, ends: _Ends, chain: Chain | None, pnames: frozenset[str], env: dict):
+    """``[[dampers]]``: dashpots between masses, or for a ``[chain]`` its families and single dashpots."""
     if chain is not None:
         from .chain_dampers import parse_chain_dampers
 
-        chain_dampers = parse_chain_dampers(ld, ld.array_of_tables("dampers"), chain.n, pnames, env)
-    for j, d in enumerate(ld.array_of_tables("dampers") if chain is None else ()):
-        key = f"dampers[{j}]"
-        ld.keys(d, DAMPER_KEYS, key, required=("between", "c"), what="a [[dampers]] entry")
-        a, b = ends(f"{key}.between", d["between"])
-        c = ld.expression(f"{key}.c", d["c"], pnames, positive=True, bounded=True, env=env)
-        dampers.append(Damper(a, b, c, key))
+        return (), parse_chain_dampers(ld, ld.array_of_tables("dampers"), chain.n, pnames, env)
+    dampers = tuple(Damper(a, b, ld.expression(f"{key}.c", d["c"], pnames, positive=True, bounded=True, env=env), key)
+                    for key, d, (a, b) in _entries(ld, ends, "dampers", DAMPER_KEYS, ("between", "c")))
+    return dampers, ()
 
-    if chain is not None and isinstance(data.get("damping"), dict) and "modal" in data["damping"]:
-        raise ld.bad("damping.modal", data["damping"]["modal"], "modal damping on a [chain] is not yet supported",
-                     "rayleigh = [ALPHA, BETA] or [[dampers]] on a [chain]; modal with [masses]")
-    damping = parse_damping(ld, pnames, env, n, chain=chain is not None,
-                            elastic=None if chain is not None else n - _free_pieces(n, springs))
 
-    times = np.linspace(0.0, dt * steps, 257)
-    forces, table_forces = parse_forces(ld, ld.array_of_tables("forces"),
-                                        chain_n=None if chain is None else chain.n, index=index,
-                                        pnames=pnames, env=env, times=times)
+def _gravity(ld: Loader, pnames: frozenset[str], env: dict) -> Expr | None:
+    if "gravity" not in ld.data:
+        return None
+    g = ld.table("gravity", example=' with g = "g"')
+    ld.keys(g, GRAVITY_KEYS, "gravity", required=("g",), what="[gravity]")
+    return ld.expression("gravity.g", g["g"], pnames, nonzero=True, bounded=True, env=env)
 
-    gravity = None
-    if "gravity" in data:
-        g = ld.table("gravity", example=' with g = "g"')
-        ld.keys(g, GRAVITY_KEYS, "gravity", required=("g",), what="[gravity]")
-        gravity = ld.expression("gravity.g", g["g"], pnames, nonzero=True, bounded=True, env=env)
-    ground = parse_ground(ld, pnames, env, times)
 
-    # [initial] is optional: a missing table or key means rest (zero displacement or velocity).
-    # Whether a run from rest is worth making is decided by the commands that run (simulate,
-    # plan, bench), not here: modes and derive never need it.
+def _initial_state(ld: Loader, n: int, chain: bool, pnames: frozenset[str], env: dict):
+    """``(x0, v0, given)`` from ``[initial]``; a missing table or key means rest.
+
+    Whether a run from rest is worth making is decided by the commands that run (simulate,
+    plan, bench), not here: modes and derive never need it.
+    """
     init = ld.table("initial", example=" with x = [...] and v = [...]")
     ld.keys(init, INITIAL_KEYS, "initial", what="[initial]")
-    x0 = _initial(ld, "initial.x", init["x"], n, chain is not None, pnames, env) if "x" in init else np.zeros(n)
-    v0 = _initial(ld, "initial.v", init["v"], n, chain is not None, pnames, env) if "v" in init else np.zeros(n)
-
-    return Scene(file=ld.file, sha256=sha, name=name, description=description,
-                 parameters=parameters, mass_names=mass_names, mass_exprs=mass_exprs,
-                 springs=tuple(springs), dampers=tuple(dampers), forces=tuple(forces),
-                 gravity=gravity, chain=chain, x0=x0, v0=v0, dt=dt, steps=steps,
-                 record_every=record_every, table_forces=table_forces, ground=ground,
-                 damping=damping, chain_dampers=chain_dampers, initial_given=bool(init), source=data)
+    x0 = _initial(ld, "initial.x", init["x"], n, chain, pnames, env) if "x" in init else np.zeros(n)
+    v0 = _initial(ld, "initial.v", init["v"], n, chain, pnames, env) if "v" in init else np.zeros(n)
+    return x0, v0, bool(init)
 
 
 def _free_pieces(n: int, springs) -> int:
@@ -511,4 +582,5 @@ def _initial(ld: Loader, key: str, value, n: int, chain: bool, pnames, env) -> n
     raise ld.bad(key, value, "not a list of numbers", accepted)
 
 
-__all__ = ["Scene", "Spring", "Damper", "Force", "Chain", "WALL", "load_scene", "Num", "RESERVED", "VOCABULARY", "did_you_mean"]
+__all__ = ["Scene", "Spring", "Damper", "Force", "Chain", "WALL", "load_scene", "scene_from_dict", "build_scene", "Num",
+           "RESERVED", "VOCABULARY", "did_you_mean"]

@@ -1,12 +1,16 @@
 """Scenes made or changed from Python, validated by the very loader of scene files.
 
-* :func:`scene_from_dict` — the TOML schema as a dict (tables may be arrays, initial states arrays);
+* :func:`from_dict` (behind :func:`derive.scene.scene_from_dict`) — the TOML schema as a dict (tables
+  may be arrays, initial states arrays);
 * :func:`with_parameters`, :func:`with_initial` — a copy of a scene with some values changed;
 * :func:`validate_replaced` — what ``dataclasses.replace(scene, ...)`` goes through.
 
 Each returns a new :class:`~springchain.derive.scene.Scene` built from TOML-shaped data by
 :func:`~springchain.derive.scene.build_scene`, so every check and every one-line
-:class:`~springchain.derive.errors.SceneError` of a scene file applies. A changed scene's
+:class:`~springchain.derive.errors.SceneError` of a scene file applies. This module sits below
+:mod:`derive.scene` (which calls it from ``Scene``'s methods): it reaches the loader through the
+scene's class (``Scene.from_data``) or, for a dict, the builder :func:`derive.scene.scene_from_dict`
+passes in, and never imports it. A changed scene's
 ``sha256`` (the key of the generated-module cache) is a hash of its whole content, so it never
 shares a cached module with the file it came from. SymPy is not imported here.
 """
@@ -18,12 +22,15 @@ import hashlib
 import math
 from dataclasses import fields
 from numbers import Real
+from typing import TYPE_CHECKING, Callable
 
 import numpy as np
 
 from .errors import SceneError, show
-from .scene import Scene, build_scene
 from .scene_loader import did_you_mean
+
+if TYPE_CHECKING:  # the class only: scene.py imports this module
+    from .scene import Scene
 
 #: What a dict scene is called in messages when no file name is given.
 DICT_FILE = "<dict>"
@@ -87,41 +94,20 @@ def _data(scene: Scene) -> dict:
     return copy.deepcopy(dict(scene.source))
 
 
-def _finish(data: dict, file: str, key_of_file: str | None = None) -> Scene:
-    """Build and key a scene: ``key_of_file`` (a file's own hash) or the hash of ``data``."""
-    scene = build_scene(data, file, "0" * 64)
+def _finish(data: dict, file: str, build: Callable, key_of_file: str | None = None) -> Scene:
+    """Build (``build(data, file, sha)``, the scene loader) and key a scene: ``key_of_file`` (a file's
+    own hash) or the hash of ``data``."""
+    scene = build(data, file, "0" * 64)
     object.__setattr__(scene, "sha256", key_of_file or content_sha256(data))
     return scene
 
 
-def scene_from_dict(data: dict, *, file: str = DICT_FILE) -> Scene:
-    """A scene from a dict with the TOML schema (see README, "Scene format").
-
-    Parameters
-    ----------
-    data : dict
-        ``{"name": ..., "parameters": {...}, "masses": {...}, "springs": [{...}, ...], ...}``
-        or the ``[chain]`` form. Beyond what TOML can say: ``initial.x`` / ``initial.v`` may be
-        NumPy arrays of shape (N,); a force's or the ground's ``table`` may be an array of
-        shape (R, 2) (columns t and f, or t and a) or a dict ``{"t": ..., "f": ...}``
-        (``{"t": ..., "a": ...}`` for the ground) instead of a CSV file name.
-    file : str
-        How messages name the scene; table files named by a string are read relative to its
-        folder (the current folder for the default ``"<dict>"``).
-
-    Returns
-    -------
-    Scene
-
-    Raises
-    ------
-    SceneError
-        The one-line message a scene file with the same content would get.
-    """
+def from_dict(data: dict, file: str, build: Callable) -> Scene:
+    """:func:`derive.scene.scene_from_dict` with the loader ``build`` passed in."""
     if not isinstance(data, dict):
         raise SceneError(file, None, f"{show(data)}: a {type(data).__name__}, not a dict; accepted: a dict "
                                      "with the keys of a scene file (name, parameters, masses, springs, ...)")
-    return _finish(_plain(copy.deepcopy(data), ()), file)
+    return _finish(_plain(copy.deepcopy(data), ()), file, build)
 
 
 def _number(file: str, key: str, value):
@@ -182,7 +168,8 @@ def _rebuild(scene: Scene, data: dict, how: str) -> Scene:
     """Build from changed data; a refusal names the scene file and the change that made it. Data equal to
     the scene's own keeps its key (a file's hash: the checked-in or cached module stays in use)."""
     try:
-        return _finish(data, scene.file, scene.sha256 if _same(data, dict(scene.source)) else None)
+        return _finish(data, scene.file, type(scene).from_data,
+                       scene.sha256 if _same(data, dict(scene.source)) else None)
     except SceneError as exc:
         raise SceneError(f"{exc.file} {how}" if exc.file else how, exc.key, exc.detail) from None
 
@@ -191,11 +178,11 @@ def validate_replaced(scene: Scene) -> None:
     """Check, in place, a Scene made by ``dataclasses.replace`` (or directly): rebuild it from its
     source data with the replaced values, or refuse a change that only a new scene can make."""
     original = getattr(scene.source, "scene", None)
-    if not isinstance(original, Scene):
+    if not isinstance(original, type(scene)):
         raise SceneError(None, "Scene(...)", "a Scene is made by springchain.load (a file), "
                                              "springchain.scene_from_dict (a dict) or scene.with_parameters / "
                                              "with_initial; accepted: one of those")
-    names = [f.name for f in fields(Scene) if f.name != "source"]
+    names = [f.name for f in fields(scene) if f.name != "source"]
     changed = [n for n in names if getattr(scene, n) is not getattr(original, n)]
     if not changed:
         return
@@ -220,9 +207,9 @@ def validate_replaced(scene: Scene) -> None:
             table = table.setdefault(part, {}) if isinstance(table.get(part, {}), dict) else {}
         table[path[-1]] = value
     new = _rebuild(original, data, f"dataclasses.replace({', '.join(changed)})")
-    for f in fields(Scene):
+    for f in fields(scene):
         object.__setattr__(scene, f.name, getattr(new, f.name))
 
 
-__all__ = ["scene_from_dict", "with_parameters", "with_initial", "validate_replaced", "content_sha256",
+__all__ = ["from_dict", "with_parameters", "with_initial", "validate_replaced", "content_sha256",
            "DICT_FILE", "REPLACEABLE"]

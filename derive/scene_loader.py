@@ -25,27 +25,36 @@ MIN_MAGNITUDE, MAX_MAGNITUDE = 1e-150, 1e150
 _CHUNK = 1 << 16
 
 
-#: Words people write for a key, tried after spelling mistakes for "did you mean".
-ALIASES = {
-    "stiffness": "k", "spring_constant": "k", "spring_k": "k", "k1": "k", "kappa": "k3",
-    "cubic": "k3", "k_cubic": "k3", "nonlinear": "k3",
-    "damping": "c", "viscosity": "c", "coefficient": "c", "c1": "c",
-    "ends": "between", "connects": "between", "nodes": "between", "pair": "between", "link": "between",
-    "mass": "masses", "spring": "springs", "damper": "dampers", "dashpots": "dampers",
-    "force": "forces", "forcing": "forces", "loads": "forces", "load": "forces",
-    "target": "on", "mass_name": "on", "at": "on", "force_expression": "f", "value": "f",
-    "params": "parameters", "parameter": "parameters", "constants": "parameters", "values": "parameters",
-    "init": "initial", "initial_conditions": "initial", "ic": "initial", "start": "initial",
-    "x0": "x", "position": "x", "positions": "x", "displacement": "x", "displacements": "x",
-    "v0": "v", "velocity": "v", "velocities": "v",
-    "sim": "simulation", "settings": "simulation", "solver": "simulation", "run": "simulation",
-    "h": "dt", "step": "dt", "timestep": "dt", "time_step": "dt", "step_size": "dt",
-    "nsteps": "steps", "n_steps": "steps", "num_steps": "steps", "iterations": "steps",
-    "record": "record_every", "stride": "record_every", "every": "record_every", "save_every": "record_every",
-    "title": "name", "desc": "description", "comment": "description",
-    "count": "n", "length": "n", "size": "n", "m": "mass", "left_end": "left", "right_end": "right",
-    "g0": "g", "acceleration": "g",
+#: Words people write for each key, tried after spelling mistakes for "did you mean".
+_SYNONYMS = {
+    "k": "stiffness spring_constant spring_k k1",
+    "k3": "kappa cubic k_cubic nonlinear",
+    "c": "damping viscosity coefficient c1",
+    "between": "ends connects nodes pair link",
+    "masses": "mass",
+    "springs": "spring",
+    "dampers": "damper dashpots",
+    "forces": "force forcing loads load",
+    "on": "target mass_name at",
+    "f": "force_expression value",
+    "parameters": "params parameter constants values",
+    "initial": "init initial_conditions ic start",
+    "x": "x0 position positions displacement displacements",
+    "v": "v0 velocity velocities",
+    "simulation": "sim settings solver run",
+    "dt": "h step timestep time_step step_size",
+    "steps": "nsteps n_steps num_steps iterations",
+    "record_every": "record stride every save_every",
+    "name": "title",
+    "description": "desc comment",
+    "n": "count length size",
+    "mass": "m",
+    "left": "left_end",
+    "right": "right_end",
+    "g": "g0 acceleration",
 }
+#: Each such word -> the key it means.
+ALIASES = {word: key for key, words in _SYNONYMS.items() for word in words.split()}
 
 
 

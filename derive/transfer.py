@@ -47,13 +47,24 @@ class TransferFunction:
     def expr(self) -> sp.Expr:
         return self.numerator / self.denominator
 
-    def at_values(self, digits: int = 6) -> tuple[str, str]:
-        """Numerator and denominator at the scene's values in descending powers of s, coefficients
-        evaluated at 30 digits and shown to ``digits``, the denominator's leading coefficient 1."""
-        num = sp.Poly(self.numerator.subs(self.values), self.s)
-        den = sp.Poly(self.denominator.subs(self.values), self.s)
+    def _exact_values(self) -> dict:
+        """The parameter values as exact rationals (a float is one): no 15-digit SymPy Float enters."""
+        from fractions import Fraction
+
+        return {k: sp.Rational(Fraction(float(v))) for k, v in self.values.items()}
+
+    def at_values(self, digits: int | None = None) -> tuple[str, str]:
+        """Numerator and denominator at the scene's values in descending powers of s, the denominator's
+        leading coefficient 1: each coefficient computed exactly (rational parameter values) and
+        shown as the shortest decimal that reads back as its float64 value (or to ``digits``)."""
+        exact = self._exact_values()
+        num = sp.Poly(self.numerator.subs(exact), self.s)
+        den = sp.Poly(self.denominator.subs(exact), self.s)
         lead = den.LC()
-        fmt = lambda c: f"{float(sp.N(c / lead, 30)):.{digits}g}"  # noqa: E731
+        if digits is None:
+            fmt = lambda c: repr(float(sp.N(c / lead, 30)))  # noqa: E731
+        else:
+            fmt = lambda c: f"{float(sp.N(c / lead, 30)):.{digits}g}"  # noqa: E731
         return _descending(num, fmt, "s"), _descending(den, fmt, "s")
 
     def text(self) -> str:
@@ -74,7 +85,7 @@ class TransferFunction:
                 + tex(self.denominator) + "}\n\\end{align*}\n")
 
     def as_json(self) -> dict:
-        n, d = self.at_values(15)
+        n, d = self.at_values()
         return {"numerator": sp.sstr(self.numerator), "denominator": sp.sstr(self.denominator),
                 "variable": "s", "latex": self.latex(), "numerator_value": n, "denominator_value": d}
 
@@ -84,15 +95,14 @@ class TransferFunction:
         Returns a list of Python complex numbers (the numeric side never imports SymPy; the
         caller turns it into an array).
         """
-        num = sp.Poly(self.numerator.subs(self.values), self.s)
-        den = sp.Poly(self.denominator.subs(self.values), self.s)
-        nc = [sp.N(c, 30) for c in num.all_coeffs()]
-        dc = [sp.N(c, 30) for c in den.all_coeffs()]
+        exact = self._exact_values()
+        num = sp.Poly(self.numerator.subs(exact), self.s)
+        den = sp.Poly(self.denominator.subs(exact), self.s)
         import mpmath
 
         with mpmath.workdps(30):
-            ncm = [mpmath.mpf(str(c)) for c in nc]
-            dcm = [mpmath.mpf(str(c)) for c in dc]
+            ncm = [mpmath.mpf(c.p) / c.q for c in num.all_coeffs()]
+            dcm = [mpmath.mpf(c.p) / c.q for c in den.all_coeffs()]
             return [complex(mpmath.polyval(ncm, mpmath.mpc(z)) / mpmath.polyval(dcm, mpmath.mpc(z)))
                     for z in s_values]
 

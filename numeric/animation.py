@@ -12,6 +12,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ..generated.contract import MAX_DENSE, End
 from .files import atomic_path
 from .plots import new_figure
 
@@ -284,9 +285,9 @@ def mode_shape(system, j: int) -> tuple[float, np.ndarray, bool]:
         raise RunRefused(f"mode {j!r}: accepted: a mode number 0 ... {n - 1} (ascending frequency, "
                          "rigid-body modes included)", quantity="mode")
     mod, p = system.module, system.params
-    ring = system.chain and str(getattr(mod, "LEFT", "")) == "ring"
-    uniform = system.chain and bool(getattr(mod, "UNIFORM", False)) and hasattr(mod, "mode_omega")
-    if not system.chain or (ring and not uniform and n <= getattr(mod, "MAX_DENSE", 4000)):
+    ring = system.chain and system.ends[0] is End.RING
+    uniform = system.chain and system.has("mode_omega")
+    if not system.chain or (ring and not uniform and n <= MAX_DENSE):
         spec = spectrum(system.masses, system.spring_ends, system.stiffness)
         omega, shape, rigid = float(spec.omega[j]), spec.shapes[:, j], j < spec.rigid
     elif ring and uniform:
@@ -297,12 +298,12 @@ def mode_shape(system, j: int) -> tuple[float, np.ndarray, bool]:
         rigid = j == 0
     elif ring:
         raise RunRefused(f"mode shapes of an index-dependent ring of {n} masses need a dense solve; "
-                         f"accepted: rings of at most {getattr(mod, 'MAX_DENSE', 4000)} masses", quantity="mode")
+                         f"accepted: rings of at most {MAX_DENSE} masses", quantity="mode")
     else:
         diag, off = (np.asarray(b, dtype=float) for b in mod.stiffness_bands(**p, n=n))
         r = 1 / np.sqrt(system.masses)
         w2, e = scipy.linalg.eigh_tridiagonal(diag * r * r, off * r[:-1] * r[1:], select="i", select_range=(j, j))
-        rigid = j < int(getattr(mod, "RIGID_MODES", 0))
+        rigid = j < system.rigid_modes
         shape = np.ones(n) if rigid else e[:, 0] * r
         omega = 0.0 if rigid else float(np.sqrt(max(w2[0], 0.0)))
         if uniform and not rigid:

@@ -31,24 +31,25 @@ What is measured
 from __future__ import annotations
 
 import math
-import time
 from dataclasses import dataclass, replace
 from typing import Callable
 
 import numpy as np
 
-from . import progress
-from .driver import integrate, step_grid
-from .integrators import ADAPTIVE, INTEGRATORS
-from .integrators.base import Integrator, Problem
-from .integrators.ivp import AdaptiveMethod
-from .errors import RunRefused
-from .plan import MAX_MASSES, ExactModal, Planner, adaptive_atol, modal_run, output_grid
-from .spectrum import spectrum
+from .bench_runs import (adaptive_rtols, adaptive_sweep, energy_norm, progress_reporter, report_run,
+                          selected_in_order, timed_run)
+from .plan import Planner, exact_method, with_tolerance
+from .plan_pilot import check_pilot, needs_pilot
+from .progress import Reporter
+from .run import registry
+from .run.grid import Grid
+from .run.protocol import Kind, Method, Options, SpectrumSource
+from .run.protocol import record
 from .system import System
 from .timing import measure
 from .bench_records import (LINEAR_TARGET_ACCURACIES, LINEAR_TARGET_RATIO, NONLINEAR_TARGET_ACCURACIES,
                             NONLINEAR_TARGET_RATIO, BenchConfig, BenchRecord, BenchResult, HorizonCurve, targets)
+from .bench_pilot import run_pilot_bench
 from .bench_reference import ExtendedModalReference, GridReference
 from .bench_report import horizon_figure, markdown_table, work_precision_figure, write_outputs
 
@@ -66,38 +67,9 @@ def _energy_errors(system: System, x: np.ndarray, v: np.ndarray, e0: float) -> f
     return float(np.max(np.abs(e - e0)) / max(abs(e0), 1e-300))
 
 
-def energy_norm(system: System, dx: np.ndarray, dv: np.ndarray) -> float:
-    """``√(δvᵀMδv + δxᵀKδx)`` for one state difference (N,), K of the linear springs."""
-    a, b = system.spring_ends[:, 0], system.spring_ends[:, 1]
-    da = np.where(a >= 0, dx[np.maximum(a, 0)], 0.0)
-    db = np.where(b >= 0, dx[np.maximum(b, 0)], 0.0)
-    pot = float(np.sum(system.stiffness * (da - db) ** 2))
-    return math.sqrt(max(float(np.sum(system.masses * dv**2)) + pot, 0.0))
-
-
-class _Progress:
-    def __init__(self, enabled: bool, total: int):
-        self.enabled = enabled
-        self.total = total
-        self.done = 0
-        self.t0 = time.perf_counter()
-
-    def note(self, text: str) -> None:
-        if self.enabled:
-            progress.line(text, prefix="bench")
-
-    def run(self, label: str, rec: BenchRecord | None = None) -> None:
-        self.done += 1
-        if self.enabled and rec is not None:
-            progress.line(f"[{self.done:3d}/{self.total}] {time.perf_counter() - self.t0:6.1f}s  "
-                          f"{label:<28} error {rec.error:9.2e}  {rec.seconds * 1e3:9.2f} ms  "
-                          f"{rec.force_evals:>9} evals", prefix="bench")
-
-
 @dataclass
 class _Context:
     system: System
-    problem: Problem
     x0: np.ndarray
     v0: np.ndarray
     t_end: float
@@ -107,74 +79,68 @@ class _Context:
     exact: bool
     spacing: float  # grid spacing for nonlinear scenes
     config: BenchConfig
-    progress: _Progress
+    progress: Reporter
     e0: float = 0.0
 
     def ref(self, t):
         return self.reference.at(t)
 
 
-def _record(ctx: _Context, method: str, setting: str, dt, rtol, steps, t, x, v, timing, evals,
-            predicted) -> BenchRecord:
-    xr, vr = ctx.ref(t)
-    err = float(np.max(np.abs(x - xr)))
-    fin = energy_norm(ctx.system, x[-1] - xr[-1], v[-1] - vr[-1])
-    rec = BenchRecord(method, setting, dt, rtol, steps, err, _energy_errors(ctx.system, x, v, ctx.e0), fin,
-                      timing.seconds, int(evals), predicted, timing.repeats)
-    ctx.progress.run(f"{method} {setting}", rec)
+def _record(ctx: _Context, method: Method, setting: str, dt, rtol, steps, timing, predicted) -> BenchRecord:
+    run = timing.result
+    xr, vr = ctx.ref(run.t)
+    err = float(np.max(np.abs(run.x - xr)))
+    fin = energy_norm(ctx.system, run.x[-1] - xr[-1], run.v[-1] - vr[-1])
+    rec = BenchRecord(method.name, setting, dt, rtol, steps, err, _energy_errors(ctx.system, run.x, run.v, ctx.e0),
+                      fin, timing.seconds, run.force_evals, predicted, timing.repeats)
+    report_run(ctx.progress, rec)
     return rec
 
 
-def _run_step(ctx: _Context, integ: Integrator, steps: int, record_every: int = 1,
+def _run_step(ctx: _Context, method: Method, steps: int, record_every: int = 1,
               h: float | None = None) -> BenchRecord:
     h = ctx.t_end / steps if h is None else h
-    timing = measure(lambda: integrate(integ, ctx.problem, ctx.x0, ctx.v0, h, steps, record_every),
-                     budget=ctx.config.timing_budget)
-    tr = timing.result
+    timing = timed_run(method, ctx.system, ctx.x0, ctx.v0, Grid(h, steps, record_every), ctx.config.timing_budget)
     predicted = None
-    if integ.name in ctx.planner.responses:
-        predicted = ctx.planner.predict_error(integ, steps)[0]
-    elif integ.name in {p.name for p in ctx.planner.propagators}:
+    if method in ctx.planner.responses:
+        predicted = ctx.planner.predict_error(method, steps)[0]
+    elif method in ctx.planner.propagators:
         predicted = ctx.planner.propagator_error(steps)
-    return _record(ctx, integ.name, f"h={h:.4g}", h, None, steps, tr.t, tr.x[..., 0], tr.v[..., 0], timing,
-                   tr.force_evals, predicted)
+    return _record(ctx, method, f"h={h:.4g}", h, None, steps, timing, predicted)
 
 
-def _run_adaptive(ctx: _Context, method: AdaptiveMethod, rtol: float) -> BenchRecord:
-    t = output_grid(ctx.t_end, ctx.spacing)
-    atol = adaptive_atol(ctx.x0, ctx.v0, rtol)
-    timing = measure(lambda: method.solve(ctx.problem, ctx.x0, ctx.v0, t, rtol, atol),
-                     budget=ctx.config.timing_budget)
-    res = timing.result
-    law = ctx.planner.adaptive.get(method.name)
+def _run_adaptive(ctx: _Context, method: Method, rtol: float) -> BenchRecord:
+    grid = Grid.covering(ctx.t_end, ctx.spacing)
+    timing = timed_run(with_tolerance(method, ctx.x0, ctx.v0, rtol), ctx.system, ctx.x0, ctx.v0, grid,
+                       ctx.config.timing_budget)
+    law = ctx.planner.adaptive.get(method)
     predicted = law.error(rtol, ctx.t_end) if law else None
-    return _record(ctx, method.name, f"rtol={rtol:.2g}", None, rtol, None, t, res.x[..., 0], res.v[..., 0],
-                   timing, res.force_evals, predicted)
+    return _record(ctx, method, f"rtol={rtol:.2g}", None, rtol, None, timing, predicted)
 
 
-def _run_modal(ctx: _Context, source: str = "svd") -> BenchRecord:
-    """The exact method, its spectrum from the SVD route (``svd``) or the generated closed forms."""
-    t = output_grid(ctx.t_end, ctx.dt_out)
-    timing = measure(lambda: modal_run(ctx.system, ctx.x0, ctx.v0, t, source), budget=ctx.config.timing_budget)
-    x, v = timing.result
-    predicted = ctx.planner.exact_error(t.shape[0] - 1)
-    return _record(ctx, ExactModal.name, f"{source} spectrum", None, None, None, t, x, v, timing, 0, predicted)
+def _run_modal(ctx: _Context, source: SpectrumSource = SpectrumSource.SVD) -> BenchRecord:
+    """The exact method with its set-up, its spectrum from the SVD route or the generated closed forms."""
+    grid = Grid.covering(ctx.t_end, ctx.dt_out)
+    method = exact_method(source)
+    timing = measure(lambda: record(method, ctx.system.fresh(), ctx.x0, ctx.v0, grid), budget=ctx.config.timing_budget)
+    predicted = ctx.planner.exact_error(grid.steps)
+    return _record(ctx, method, f"{source.value} spectrum", None, None, None, timing, predicted)
 
 
-def _step_sweep(ctx: _Context, integ: Integrator) -> list[int]:
+def _step_sweep(ctx: _Context, method: Method) -> list[int]:
     """Step counts of the sweep: the planner's steps for each target error, and the scene's dt."""
     cfg = ctx.config
-    stages = max(integ.evals_per_step, 1.0)
-    counts = {step_grid(ctx.t_end, ctx.dt_out)[1]}
+    stages = max(method.traits.evals_per_step, 1.0)
+    counts = {Grid.covering(ctx.t_end, ctx.dt_out).steps}
     for tol in cfg.target_errors:
-        c = ctx.planner.plan_step(integ, tol)
+        c = ctx.planner.plan_step(method, tol)
         if c.reachable and c.steps * stages <= cfg.eval_cap:
             counts.add(int(c.steps))
-    n_min = ctx.planner._min_steps(integ)
+    n_min = ctx.planner.min_steps(method)
     return sorted(n for n in counts if n >= n_min and n * stages <= max(cfg.eval_cap, 1))
 
 
-def _grid_sweep(ctx: _Context, integ: Integrator) -> list[tuple[int, int, int]]:
+def _grid_sweep(ctx: _Context, method: Method) -> list[tuple[int, int, int]]:
     """Nonlinear scenes: ``(steps, stride, j)`` of steps ``h = jΔ/stride`` whose recorded states lie on the grid.
 
     Targets ``h`` are spaced by 2^(1/3) from the stability edge (with a margin for the
@@ -186,8 +152,9 @@ def _grid_sweep(ctx: _Context, integ: Integrator) -> list[tuple[int, int, int]]:
     cfg = ctx.config
     spacing = ctx.spacing
     n_grid = int(round(ctx.t_end / spacing))
+    traits = method.traits
     w = ctx.planner.model.omega_max * 1.25  # nonlinear stiffening margin over the linearization
-    h = 0.9 * integ.stability_limit / w
+    h = 0.9 * traits.stability_limit / w
     k = int(round(spacing / ctx.dt_out))
     out = {(n_grid * k, k, 1)}
     while True:
@@ -197,12 +164,12 @@ def _grid_sweep(ctx: _Context, integ: Integrator) -> list[tuple[int, int, int]]:
         else:
             m = math.ceil(spacing / h)
             cand = (n_grid * m, m, 1)
-        if cand[0] * integ.evals_per_step > cfg.eval_cap:
+        if cand[0] * traits.evals_per_step > cfg.eval_cap:
             break
         out.add(cand)
         h /= 2.0 ** (1.0 / 3.0)
-    return sorted(c for c in out if c[0] * integ.evals_per_step <= cfg.eval_cap
-                  and w * spacing * c[2] / c[1] < 0.9 * integ.stability_limit)
+    return sorted(c for c in out if c[0] * traits.evals_per_step <= cfg.eval_cap
+                  and w * spacing * c[2] / c[1] < 0.9 * traits.stability_limit)
 
 
 def run_bench(system: System, x0: np.ndarray, v0: np.ndarray, t_end: float, dt_out: float, scene: str = "",
@@ -228,25 +195,20 @@ def run_bench(system: System, x0: np.ndarray, v0: np.ndarray, t_end: float, dt_o
                          adaptive_cap=int(config.adaptive_cap * t_end / 100.0))
     x0 = np.asarray(x0, dtype=float)
     v0 = np.asarray(v0, dtype=float)
-    problem = Problem.from_system(system)
-    exact = bool(system.exact_available and system.conservative)
-    from .plan_pilot import check_pilot, needs_pilot
-
+    exact = bool(system.springs_only and system.exact_available)
     if needs_pilot(system):  # damped, forced, gravity, ground; long uniform chains: against the exact solution
         check_pilot(system, "bench")
-        from .bench_pilot import run_pilot_bench
-
         return run_pilot_bench(system, x0, v0, t_end, dt_out, scene, config, progress, methods)
-    prog = _Progress(progress, 0)
+    prog = progress_reporter(progress)
     notes: list[str] = []
-    prog.note(f"measuring costs and building models for {scene or 'the scene'} (t = 0 … {t_end:g})")
+    prog.say(f"measuring costs and building models for {scene or 'the scene'} (t = 0 … {t_end:g})")
     if exact:
         reference = ExtendedModalReference.from_system(system, x0, v0)
         spacing = dt_out
         planner = Planner.for_system(system, x0, v0, t_end, dt_out,
                                      reference=lambda t: reference.at(t)[0])
     else:
-        lin = spectrum(system.masses, system.spring_ends, system.stiffness)
+        lin = system.spectrum
         w = float(lin.omega_max) if lin.omega.size else 1.0
         k = max(1, int(math.floor(0.1 / (w * dt_out))))  # a fine grid: many steps jΔ and Δ/m
         n_total = int(round(t_end / dt_out))
@@ -257,52 +219,39 @@ def run_bench(system: System, x0: np.ndarray, v0: np.ndarray, t_end: float, dt_o
         t_end = n_grid * spacing
         m_fine = max(2, int(math.ceil(spacing * w / 0.074)))  # Kahan-Li 8 at ω_max·h ≈ 0.074
         m_coarse = max(1, int(round(m_fine * 2 / 3)))
-        reference = GridReference.kahan_li(problem, x0, v0, t_end, spacing, m_fine, m_coarse, prog.note)
+        reference = GridReference.kahan_li(system, x0, v0, t_end, spacing, m_fine, m_coarse, prog.say)
         notes.append(f"no exact solution: error measured at the recorded steps on the grid t = k·{spacing:g} "
                      f"(steps h = j·{spacing:g} record every step, h = {spacing:g}/m every m-th)")
         planner = Planner.for_system(system, x0, v0, t_end, spacing,
                                      reference=lambda t: reference.at(t)[0])
-    ctx = _Context(system, problem, x0, v0, t_end, dt_out, planner, reference, exact, spacing, config, prog,
+    ctx = _Context(system, x0, v0, t_end, dt_out, planner, reference, exact, spacing, config, prog,
                    float(system.energy(x0[:, None], v0[:, None])[0]))
-    wanted = set(methods) if methods else None
+    selected = {m for m in registry.methods(options=Options(progress=False), only=methods)}
 
-    def use(name):
-        return wanted is None or name in wanted
-
-    jobs: list[tuple[str, Callable[[], BenchRecord]]] = []
-    if exact and use(ExactModal.name):
-        jobs.append(("modal", lambda: _run_modal(ctx, "svd")))
-        if getattr(system.module, "CLOSED_FORM", False):
-            jobs.append(("modal", lambda: _run_modal(ctx, "closed-form")))
-    for integ in planner.step_methods:
-        if not use(integ.name):
+    jobs: list[Callable[[], BenchRecord]] = []
+    if exact and any(m.kind is Kind.EXACT for m in selected):
+        jobs.append(lambda: _run_modal(ctx, SpectrumSource.SVD))
+        if system.provided.closed_form:
+            jobs.append(lambda: _run_modal(ctx, SpectrumSource.CLOSED_FORM))
+    for m in planner.step_methods:
+        if m not in selected:
             continue
         if exact:
-            for n in _step_sweep(ctx, integ):
-                jobs.append((integ.name, lambda integ=integ, n=n: _run_step(ctx, integ, n)))
+            for n in _step_sweep(ctx, m):
+                jobs.append(lambda m=m, n=n: _run_step(ctx, m, n))
         else:
-            for steps, stride, j in _grid_sweep(ctx, integ):
-                jobs.append((integ.name, lambda integ=integ, n=steps, m=stride, j=j:
-                             _run_step(ctx, integ, n, m, h=spacing * j / m)))
-    for integ in planner.propagators:
-        if use(integ.name):
-            jobs.append((integ.name, lambda integ=integ: _run_step(ctx, integ, step_grid(t_end, dt_out)[1])))
-    adaptive_jobs = [(name, cls_(), config.dop853_rtols if name == "dop853" else config.rtols)
-                     for name, cls_ in ADAPTIVE.items()
-                     if use(name) and (cls_.supports_damping or not system.damped)]
-    prog.total = len(jobs) + sum(len(r) for _, _, r in adaptive_jobs)
-    records = [job() for _, job in jobs]
-    for name, method, rtols in adaptive_jobs:
-        for rtol in rtols:
-            rec = _run_adaptive(ctx, method, rtol)
-            records.append(rec)
-            if rec.force_evals > config.adaptive_cap:
-                skipped = [r for r in rtols if r < rtol]
-                if skipped:
-                    notes.append(f"{name}: stopped at rtol={rtol:.0e} ({rec.force_evals} evaluations > cap "
-                                 f"{config.adaptive_cap}); not run: rtol " + ", ".join(f"{r:.0e}" for r in skipped))
-                    prog.total -= len(skipped)
-                break
+            for steps, stride, j in _grid_sweep(ctx, m):
+                jobs.append(lambda m=m, n=steps, k=stride, j=j: _run_step(ctx, m, n, k, h=spacing * j / k))
+    for m in planner.propagators:
+        if m in selected:
+            jobs.append(lambda m=m: _run_step(ctx, m, Grid.covering(t_end, dt_out).steps))
+    adaptive_jobs = [(m, adaptive_rtols(m, config)) for m in selected_in_order(selected, Kind.ADAPTIVE)
+                     if m.refusal(system) is None]
+    prog.total = len(jobs) + sum(len(r) for _, r in adaptive_jobs)
+    records = [job() for job in jobs]
+    for m, rtols in adaptive_jobs:
+        records += adaptive_sweep(m, rtols, config.adaptive_cap, lambda rtol, m=m: _run_adaptive(ctx, m, rtol),
+                                  notes, prog)
     horizons: tuple[HorizonCurve, ...] = ()
     if exact and methods is None:
         horizons, hnotes = horizon_study(ctx)
@@ -312,6 +261,7 @@ def run_bench(system: System, x0: np.ndarray, v0: np.ndarray, t_end: float, dt_o
 
 
 # -- error against horizon ---------------------------------------------------------------------------
+#: The step methods of the error-vs-horizon study (verlet-kahan follows verlet; the propagators are exact).
 HORIZON_METHODS = ("verlet", "yoshida4", "blanes-moan4", "blanes-moan6", "kahan-li8", "rk4")
 
 
@@ -329,48 +279,49 @@ def horizon_study(ctx: _Context) -> tuple[tuple[HorizonCurve, ...], list[str]]:
     curves = []
     notes = []
     model_t = np.geomspace(cfg.horizons_model[0], cfg.horizons_model[-1], 41)
-    for name in HORIZON_METHODS:
-        integ = INTEGRATORS[name]()
-        h = integ.evals_per_step / cfg.horizon_work
-        if ctx.planner.model.omega_max * h >= integ.stability_limit:
+    quiet = Options(progress=False)
+
+    def running_errors(run):
+        xr, _ = ctx.reference.at(run.t)
+        err = np.maximum.accumulate(np.max(np.abs(run.x - xr), axis=1))
+        e = ctx.system.energy(run.x.T, run.v.T)
+        return err, np.maximum.accumulate(np.abs(e - ctx.e0) / abs(ctx.e0))
+
+    for m in registry.methods(Kind.STEP, quiet, only=HORIZON_METHODS):
+        traits = m.traits
+        h = traits.evals_per_step / cfg.horizon_work
+        if ctx.planner.model.omega_max * h >= traits.stability_limit:
             continue
-        t_cap = max([T for T in cfg.horizons_measured if T / h * integ.evals_per_step <= cfg.horizon_eval_cap]
+        t_cap = max([T for T in cfg.horizons_measured if T / h * traits.evals_per_step <= cfg.horizon_eval_cap]
                     or [cfg.horizons_measured[0]])
-        hs, n = step_grid(t_cap, h)
-        every = max(1, n // 100_000)
-        ctx.progress.note(f"horizon: {name} at h = {hs:.4g} up to t = {t_cap:g} ({n} steps)")
-        tr = integrate(integ, ctx.problem, ctx.x0, ctx.v0, hs, n, record_every=every)
-        xr, _ = ctx.reference.at(tr.t)
-        err = np.maximum.accumulate(np.max(np.abs(tr.x[..., 0] - xr), axis=1))
-        e = ctx.system.energy(tr.x[..., 0].T, tr.v[..., 0].T)
-        een = np.maximum.accumulate(np.abs(e - ctx.e0) / abs(ctx.e0))
+        g = Grid.covering(t_cap, h)
+        g = Grid(g.h, g.steps, max(1, g.steps // 100_000))
+        ctx.progress.say(f"horizon: {m.name} at h = {g.h:.4g} up to t = {t_cap:g} ({g.steps} steps)")
+        tr = record(m, ctx.system, ctx.x0, ctx.v0, g)
+        err, een = running_errors(tr)
         Ts = np.array([T for T in cfg.horizons_measured if T <= t_cap])
         at = np.searchsorted(tr.t, Ts * (1 - 1e-12))
-        resp = ctx.planner.responses[name]
-        model = np.array([ctx.planner.model.envelope(resp, hs, int(round(T / hs))) for T in model_t])
-        curves.append(HorizonCurve(name, f"h={hs:.4g}", Ts, err[at], een[at], model_t, model,
+        resp = ctx.planner.responses[m]
+        model = np.array([ctx.planner.model.envelope(resp, g.h, int(round(T / g.h))) for T in model_t])
+        curves.append(HorizonCurve(m.name, f"h={g.h:.4g}", Ts, err[at], een[at], model_t, model,
                                    "closed-form envelope"))
         if t_cap < cfg.horizons_measured[-1]:
-            notes.append(f"horizon study: {name} measured up to t = {t_cap:g} (cap {cfg.horizon_eval_cap} "
+            notes.append(f"horizon study: {m.name} measured up to t = {t_cap:g} (cap {cfg.horizon_eval_cap} "
                          f"force evaluations); longer horizons from the model")
-    # DOP853 at one tolerance
-    dop = ADAPTIVE["dop853"]()
+    # the reference adaptive method (DOP853) at one tolerance
     rtol = cfg.horizon_dop853_rtol
+    dop = with_tolerance(registry.method(registry.REFERENCE_ADAPTIVE), ctx.x0, ctx.v0, rtol)
     Ts = np.array([T for T in cfg.horizons_measured if T <= cfg.horizon_dop853_cap])
     t_cap = float(Ts[-1])
-    ctx.progress.note(f"horizon: dop853 at rtol {rtol:.0e} up to t = {t_cap:g}")
-    grid = output_grid(t_cap, ctx.dt_out)
-    res = dop.solve(ctx.problem, ctx.x0, ctx.v0, grid, rtol, adaptive_atol(ctx.x0, ctx.v0, rtol))
-    xr, _ = ctx.reference.at(grid)
-    err = np.maximum.accumulate(np.max(np.abs(res.x[..., 0] - xr), axis=1))
-    e = ctx.system.energy(res.x[..., 0].T, res.v[..., 0].T)
-    een = np.maximum.accumulate(np.abs(e - ctx.e0) / abs(ctx.e0))
-    at = np.searchsorted(grid, Ts * (1 - 1e-12))
+    ctx.progress.say(f"horizon: {dop.name} at rtol {rtol:.0e} up to t = {t_cap:g}")
+    res = record(dop, ctx.system, ctx.x0, ctx.v0, Grid.covering(t_cap, ctx.dt_out))
+    err, een = running_errors(res)
+    at = np.searchsorted(res.t, Ts * (1 - 1e-12))
     rate = float(err[-1] / t_cap)
-    curves.append(HorizonCurve("dop853", f"rtol={rtol:.0e}", Ts, err[at], een[at], model_t, rate * model_t,
+    curves.append(HorizonCurve(dop.name, f"rtol={rtol:.0e}", Ts, err[at], een[at], model_t, rate * model_t,
                                "measured, extrapolated ∝ T"))
     if t_cap < cfg.horizons_model[-1]:
-        notes.append(f"horizon study: dop853 (rtol {rtol:.0e}, {res.force_evals} evaluations for t = {t_cap:g}) "
+        notes.append(f"horizon study: {dop.name} (rtol {rtol:.0e}, {res.force_evals} evaluations for t = {t_cap:g}) "
                      f"measured up to t = {t_cap:g} only (cost ∝ T); beyond, its error is extrapolated ∝ T")
     return tuple(curves), notes
 

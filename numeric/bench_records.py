@@ -8,7 +8,8 @@ from typing import Callable
 
 import numpy as np
 
-from .integrators import INTEGRATORS
+from .run import registry
+from .run.protocol import Kind
 
 #: Accuracies at which the targets are evaluated.
 LINEAR_TARGET_ACCURACIES = tuple(10.0 ** -k for k in range(3, 13))
@@ -144,11 +145,12 @@ def targets(records: tuple[BenchRecord, ...], exact: bool) -> dict:
     evaluations and in seconds (needs ≥ 3× in both).
     """
     rows = []
-    fixed = set(INTEGRATORS)
+    fixed = set(registry.names(Kind.STEP))
+    reference = registry.REFERENCE_ADAPTIVE
     if exact:
         for acc in LINEAR_TARGET_ACCURACIES:
             best = _cheapest(records, acc, "seconds", lambda r: True)
-            dop = _cheapest(records, acc, "seconds", lambda r: r.method == "dop853")
+            dop = _cheapest(records, acc, "seconds", lambda r: r.method == reference)
             ratio = dop.seconds / best.seconds if best and dop else None
             rows.append({"accuracy": acc, "fastest": best and best.method, "fastest_setting": best and best.setting,
                          "fastest_seconds": best and best.seconds, "dop853_setting": dop and dop.setting,
@@ -156,8 +158,8 @@ def targets(records: tuple[BenchRecord, ...], exact: bool) -> dict:
                          "met": bool(ratio is not None and ratio >= LINEAR_TARGET_RATIO)})
         return {"kind": "fastest vs dop853 (seconds)", "required": LINEAR_TARGET_RATIO, "rows": rows}
     for acc in NONLINEAR_TARGET_ACCURACIES:
-        dop_e = _cheapest(records, acc, "force_evals", lambda r: r.method == "dop853")
-        dop_s = _cheapest(records, acc, "seconds", lambda r: r.method == "dop853")
+        dop_e = _cheapest(records, acc, "force_evals", lambda r: r.method == reference)
+        dop_s = _cheapest(records, acc, "seconds", lambda r: r.method == reference)
         best_e = _cheapest(records, acc, "force_evals", lambda r: r.method in fixed)
         best_s = _cheapest(records, acc, "seconds", lambda r: r.method in fixed)
         re_ = dop_e.force_evals / best_e.force_evals if dop_e and best_e else None

@@ -8,10 +8,10 @@ from typing import Callable
 
 import numpy as np
 
-from .driver import integrate
-from .integrators import INTEGRATORS
-from .integrators.base import Problem
-from .spectrum import spectrum
+from .run import registry
+from .run.grid import Grid
+from .run.protocol import Options, Recorded
+from .run.protocol import record
 from .system import System
 
 
@@ -50,7 +50,7 @@ class ExtendedModalReference:
         ld = np.longdouble
         n = system.n
         if n > max_n:
-            spec = spectrum(system.masses, system.spring_ends, system.stiffness)
+            spec = system.spectrum
             r = np.sqrt(spec.masses)
             E = spec.vectors
             return cls(spec.omega.astype(ld), (E / r[:, None]).astype(ld), (E.T @ (r * x0)).astype(ld),
@@ -116,37 +116,43 @@ class GridReference:
 
     Attributes
     ----------
-    t : ndarray, shape (S,)
-    x, v : ndarray, shape (S, N)
+    run : Recorded
+        The reference run: ``t`` (S,), ``x``, ``v`` (S, N).
     accuracy : float
         Estimated largest position error of the reference itself.
     description : str
     """
 
-    t: np.ndarray = field(repr=False)
-    x: np.ndarray = field(repr=False)
-    v: np.ndarray = field(repr=False)
+    run: Recorded = field(repr=False)
     accuracy: float
     description: str
 
+    @property
+    def x(self) -> np.ndarray:
+        """Positions, shape (S, N)."""
+        return self.run.x
+
     @classmethod
-    def kahan_li(cls, problem: Problem, x0, v0, t_end: float, spacing: float, m_fine: int, m_coarse: int,
+    def kahan_li(cls, system: System, x0, v0, t_end: float, spacing: float, m_fine: int, m_coarse: int,
                  progress: Callable[[str], None] | None = None) -> "GridReference":
-        """Kahan–Li 8 with steps ``spacing/m_fine``; its error ≈ difference from ``spacing/m_coarse``
-        times ``r⁸/(1 − r⁸)``, ``r = m_coarse/m_fine`` (eighth order)."""
-        integ = INTEGRATORS["kahan-li8"]()
+        """The reference step method (Kahan–Li 8, eighth order) with steps ``spacing/m_fine``; its
+        error ≈ difference from ``spacing/m_coarse`` times ``r⁸/(1 − r⁸)``, ``r = m_coarse/m_fine``."""
+        method = registry.method(registry.REFERENCE_STEP, Options(progress=False))
+        p = method.traits.order
         n = int(round(t_end / spacing))
         if progress:
-            progress(f"reference: kahan-li8 at h = {spacing / m_fine:.4g} over t = {t_end:g}")
-        fine = integrate(integ, problem, x0, v0, spacing / m_fine, n * m_fine, record_every=m_fine)
-        coarse = integrate(integ, problem, x0, v0, spacing / m_coarse, n * m_coarse, record_every=m_coarse)
-        r8 = (m_coarse / m_fine) ** 8
+            progress(f"reference: {method.name} at h = {spacing / m_fine:.4g} over t = {t_end:g}")
+        fine = record(method, system, x0, v0, Grid(spacing / m_fine, n * m_fine, m_fine))
+        coarse = record(method, system, x0, v0, Grid(spacing / m_coarse, n * m_coarse, m_coarse))
+        rp = (m_coarse / m_fine) ** p
         diff = float(np.max(np.abs(fine.x - coarse.x)))
-        acc = diff * r8 / (1 - r8)
-        return cls(fine.t, fine.x[..., 0], fine.v[..., 0], acc,
-                   f"kahan-li8 at h = {spacing / m_fine:.4g} (estimated error {acc:.1e} from a second run at "
+        acc = diff * rp / (1 - rp)
+        return cls(fine, acc,
+                   f"{method.name} at h = {spacing / m_fine:.4g} (estimated error {acc:.1e} from a second run at "
                    f"h = {spacing / m_coarse:.4g})")
 
     def at(self, t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        idx = np.rint(np.asarray(t) / (self.t[1] - self.t[0])).astype(int)
-        return self.x[idx], self.v[idx]
+        """Positions and velocities at grid times ``t``, shapes (S, N)."""
+        run = self.run
+        idx = np.rint(np.asarray(t) / (run.t[1] - run.t[0])).astype(int)
+        return run.x[idx], run.v[idx]

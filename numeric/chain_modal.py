@@ -32,8 +32,10 @@ Each mode then evolves exactly, ``q(t) = q0 cos(ωt) + q̇0·t·sinc(ωt)``
 of a free chain or a ring (ω = 0 exactly: sin 0) is the uniform drift.
 
 Index-dependent chains have no closed form: for them this module falls back
-to ``scipy.linalg.eigh_tridiagonal`` (O(N²) memory for the shapes; refused
-above :data:`MAX_FALLBACK` masses), and rings to the dense spectrum.
+to the modes of the bidiagonal spring factor (:mod:`numeric.chain_spectrum`: ω by bisection,
+the values ``modes`` prints, vectors by LAPACK ``dbdsqr``, both relatively accurate; O(N³)
+set-up, O(N²) memory; refused above :data:`MAX_FALLBACK` masses), and rings to the dense
+spectrum (:mod:`numeric.spectrum`).
 """
 
 from __future__ import annotations
@@ -44,14 +46,14 @@ from types import ModuleType
 
 import numpy as np
 import scipy.fft
-import scipy.linalg
 
-from ..ends import End
+from ..generated.contract import MAX_DENSE, End
+from .system import interface
 from .errors import RunRefused
 from .modal import tsinc
 
 #: Largest index-dependent chain solved through its (dense) eigenvectors.
-MAX_FALLBACK = 4000
+MAX_FALLBACK = MAX_DENSE
 
 
 class Basis(enum.Enum):
@@ -61,7 +63,7 @@ class Basis(enum.Enum):
     DST = "wall-wall: DST-I"
     DST_ODD = "wall-free: DST-I of size 2n, odd outputs"
     FFT = "ring: real FFT"
-    EIGENVECTORS = "index-dependent: eigenvectors (eigh_tridiagonal, or the dense SVD for a ring)"
+    EIGENVECTORS = "index-dependent: eigenvectors (bidiagonal spring factor, or the dense SVD for a ring)"
 
     @property
     def fast(self) -> bool:
@@ -173,44 +175,41 @@ class ChainModal:
         """The exact solution for a generated ``[chain]`` module's linear chain of len(x0) masses.
 
         A uniform chain uses its transform; an index-dependent one falls back
-        to eigenvectors (``eigh_tridiagonal``; the dense SVD for a ring) up to
+        to eigenvectors (the bidiagonal spring factor; the dense SVD for a ring) up to
         :data:`MAX_FALLBACK` masses.
         """
-        if not getattr(module, "CHAIN", False):
+        facts = interface(module)
+        if not facts.chain:
             raise RunRefused("ChainModal needs a [chain] scene's generated module; use numeric.modal for others")
-        if not bool(module.LINEAR):
+        if not facts.linear:
             raise RunRefused("no exact solution: this chain has cubic springs (use an integrator, e.g. verlet)")
-        values = dict(module.DEFAULTS)
+        values = dict(facts.defaults)
         values.update(params or {})
         x0, v0 = _initial(x0, v0)
         n = x0.shape[0]
-        left, right = End(str(module.LEFT)), End(str(module.RIGHT))
-        if bool(module.UNIFORM) and hasattr(module, "mode_omega"):
-            return cls.transform(module.mode_omega(**values, n=n), left, right, x0, v0)
+        if facts.has("mode_omega"):
+            return cls.transform(module.mode_omega(**values, n=n), facts.left, facts.right, x0, v0)
         masses = np.asarray(module.masses(**values, n=n), dtype=float)
         ks = np.asarray(module.spring_constants(**values, n=n), dtype=float)
         if n > MAX_FALLBACK:
             raise RunRefused(f"index-dependent chain of n = {n} masses: no closed-form modes, and the "
                              f"eigenvector fallback is limited to n <= {MAX_FALLBACK}; use method 'verlet'", quantity="method")
-        return cls._eigenvectors(module, values, masses, ks, x0, v0)
+        return cls._eigenvectors(module, facts, values, masses, ks, x0, v0)
 
     @classmethod
-    def _eigenvectors(cls, module, values, masses, ks, x0, v0) -> "ChainModal":
+    def _eigenvectors(cls, module, facts, values, masses, ks, x0, v0) -> "ChainModal":
         n = masses.shape[0]
         r = np.sqrt(masses)
-        if End(str(module.LEFT)) is End.RING:
+        if facts.left is End.RING:
             from .spectrum import spectrum
 
             spec = spectrum(masses, module.spring_ends(n=n), ks)
             omega, E = spec.omega, spec.vectors
-        else:
-            diag, off = (np.asarray(b, dtype=float) for b in module.stiffness_bands(**values, n=n))
-            w2, E = scipy.linalg.eigh_tridiagonal(diag / masses, off / (r[:-1] * r[1:]))
-            omega = np.sqrt(np.maximum(w2, 0.0))
-            rigid = int(module.RIGID_MODES)
-            if rigid:  # by structure: the uniform translation, ω = 0 exactly
-                omega[:rigid] = 0.0
-                E[:, 0] = r / np.linalg.norm(r)
+        else:  # the bidiagonal spring factor: ω by bisection (the printed values), vectors by dbdsqr
+            from .chain_spectrum import chain_spectrum
+
+            spec = chain_spectrum(masses, module.spring_ends(n=n), ks)
+            omega, E = spec.omega, spec.vectors
         shape = (-1,) + (1,) * (x0.ndim - 1)
         rr = r.reshape(shape)
         q0 = np.tensordot(E.T, rr * x0, axes=1)
@@ -231,16 +230,8 @@ class ChainModal:
         return q, p
 
     def at(self, t) -> tuple[np.ndarray, np.ndarray]:
-        """Positions and velocities at times ``t``.
-
-        Parameters
-        ----------
-        t : float or ndarray, shape (S,)
-
-        Returns
-        -------
-        x, v : ndarray, shape (n, ...) for scalar t, or (S, n, ...) for an array of times
-        """
+        """Positions and velocities at times ``t`` (a float, or an array of shape (S,)): x and v of
+        shape (n, ...), or (S, n, ...) for an array of times, as :meth:`numeric.modal.ModalSolution.at`."""
         t = np.asarray(t, dtype=float)
         q, p = self.modal_at(t)
         axis = t.ndim

@@ -7,9 +7,9 @@ from typing import Callable
 
 import numpy as np
 
-from .progress import Reporter
-
 from .integrators.base import Integrator, Problem
+from .progress import Reporter
+from .run.grid import record_indices
 
 
 @dataclass(frozen=True)
@@ -26,49 +26,10 @@ class Trajectory:
     force_evals: int = 0
 
 
-class Progress(Reporter):
-    """Progress of a run of ``total`` steps (:class:`numeric.progress.Reporter`): a bar on a
-    terminal, a plain line every few seconds otherwise, nothing for runs under a second."""
-
-    def __init__(self, total: int, label: str, enabled: bool | None = None):
-        super().__init__(label, total, enabled=enabled)
-
-
-def step_grid(t_end: float, h_target: float) -> tuple[float, int]:
-    """The fixed-step grid over ``[0, t_end]``: ``n = ceil(t_end/h_target)``, ``h = t_end/n``.
-
-    A quotient within 1e-9 steps of an integer counts as that integer (so
-    ``t_end = 100, h_target = 0.1`` gives 1000 steps whatever the rounding).
-
-    Returns
-    -------
-    h : float
-        The step actually used (≤ h_target up to roundoff).
-    n : int
-        Number of steps; times are ``t = i·h``, ``i = 0..n``.
-    """
-    t_end, h_target = float(t_end), float(h_target)
-    if not (np.isfinite(t_end) and t_end > 0 and np.isfinite(h_target) and h_target > 0):
-        raise ValueError(f"need t_end > 0 and h_target > 0 (finite), got {t_end!r}, {h_target!r}")
-    q = t_end / h_target
-    n = max(1, int(np.ceil(q - 1e-9 * max(1.0, q))))
-    return t_end / n, n
-
-
-def record_indices(steps: int, record_every: int) -> np.ndarray:
-    """Step indices kept by :func:`integrate`: every ``record_every``-th, and always 0 and ``steps``."""
-    if steps < 0 or record_every < 1:
-        raise ValueError(f"need steps >= 0 and record_every >= 1, got {steps}, {record_every}")
-    idx = np.arange(0, steps + 1, record_every)
-    if idx[-1] != steps:
-        idx = np.append(idx, steps)
-    return idx
-
-
 def integrate(integrator: Integrator, problem: Problem, x0: np.ndarray, v0: np.ndarray, h: float,
               steps: int, record_every: int = 1,
               on_frame: Callable[[int, np.ndarray, np.ndarray], None] | None = None,
-              progress: Progress | None = None) -> Trajectory:
+              progress: Reporter | None = None) -> Trajectory:
     """Run ``steps`` steps of size ``h`` from (x0, v0).
 
     The loop runs the integrator's array kernel (:meth:`Integrator.kernel`,

@@ -40,7 +40,7 @@ class EffectSplitting(Integrator):
         self.order = min(inner.order, 2) if damping is not None else inner.order
         self.symplectic = inner.symplectic and damping is None
         self.evals_per_step = inner.evals_per_step
-        self.stability_limit = getattr(inner, "stability_limit", 2.0)
+        self.stability_limit = inner.stability_limit
         self._flow: dict[float, np.ndarray] = {}
         self._augmented: tuple[Problem, Problem] | None = None
 
@@ -58,6 +58,9 @@ class EffectSplitting(Integrator):
 
         self._augmented = (problem, Problem(acceleration))
         return self._augmented[1]
+
+    def refusal(self, problem: Problem) -> str | None:
+        return self.inner.refusal(self._augment(problem))
 
     def init(self, problem: Problem, x0: np.ndarray, v0: np.ndarray) -> State:
         x0 = np.asarray(x0, dtype=float)

@@ -41,7 +41,8 @@ from typing import Callable
 
 import numpy as np
 
-from ..ends import End
+from ..generated.contract import End
+from .system import interface
 from .errors import RunRefused
 from .fast_coefficients import ChainCoefficients
 from .fast_kernels import BLOCK_ELEMENTS, _compiled, _Mode, available, stream_update
@@ -100,7 +101,7 @@ class FusedVerlet:
         if not (math.isfinite(h) and h > 0):
             raise ValueError(f"step size h must be finite and > 0, got {h!r}")
         coeffs = ChainCoefficients.from_module(module, params, n)
-        values = dict(module.DEFAULTS)
+        values = dict(interface(module).defaults)
         values.update(params or {})
         backend = default_backend() if backend is None else backend
         if backend is Backend.NUMBA and not available():

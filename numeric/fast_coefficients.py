@@ -9,27 +9,9 @@ from types import ModuleType
 
 import numpy as np
 
-from ..ends import End
+from ..generated.contract import End
 from .errors import RunRefused
-
-
-def _cubic_constants(module: ModuleType, values: dict[str, float], n: int) -> np.ndarray:
-    """Cubic coefficients k3 of a chain module's springs in ``spring_constants()`` order, shape (S,).
-
-    Uses a public ``spring_cubic_constants(**params, n)`` if the module has
-    one; otherwise the generator's per-spring helper ``_spring_k3(i, **params)``
-    (spring i joins i and i+1; -1 the left wall, n-1 the right wall or the ring closure).
-    """
-    public = getattr(module, "spring_cubic_constants", None)
-    if public is not None:
-        return np.asarray(public(**values, n=n), dtype=float)
-    helper = getattr(module, "_spring_k3", None) or getattr(module, "_k3", None)
-    if helper is None:
-        raise RunRefused(f"chain module {getattr(module, 'SCENE', '?')!r} declares cubic springs but exposes "
-                         "no cubic coefficients; regenerate it with `springchain derive`")
-    left, right = End(str(module.LEFT)), End(str(module.RIGHT))
-    idx = np.arange(-1 if left is End.WALL else 0, n if right.has_spring else n - 1, dtype=float)
-    return np.array(np.broadcast_to(np.asarray(helper(idx, **values), dtype=float), idx.shape))
+from .system import interface
 
 
 @dataclass(frozen=True)
@@ -82,15 +64,16 @@ class ChainCoefficients:
         n : int, optional
             Number of masses (default ``module.N``).
         """
-        if not getattr(module, "CHAIN", False):
+        facts = interface(module)
+        if not facts.chain:
             raise RunRefused("the fused chain step needs a [chain] scene's generated module")
-        values = dict(module.DEFAULTS)
+        values = dict(facts.defaults)
         values.update(params or {})
-        n = int(module.N if n is None else n)
+        n = int(facts.n if n is None else n)
         if n < 1:
             raise ValueError(f"a chain needs n >= 1 masses, got {n}")
-        left, right = End(str(module.LEFT)), End(str(module.RIGHT))
-        uniform = bool(module.UNIFORM)
+        left, right = facts.left, facts.right
+        uniform = facts.uniform
         m = np.asarray(module.masses(**values, n=n), dtype=float)
         ks = np.asarray(module.spring_constants(**values, n=n), dtype=float)
         off = 1 if left is End.WALL else 0
@@ -99,8 +82,8 @@ class ChainCoefficients:
         k_right = float(ks[-1]) if right in (End.WALL, End.RING) else 0.0
         k3 = None
         k3_left = k3_right = 0.0
-        if not bool(module.LINEAR):
-            k3s = _cubic_constants(module, values, n)  # spring_constants() order
+        if not facts.linear:  # spring_cubic_constants(): spring_constants() order
+            k3s = np.asarray(module.spring_cubic_constants(**values, n=n), dtype=float)
             k3 = np.array(k3s[off:off + n - 1])
             if left is End.WALL:
                 k3_left = float(k3s[0])

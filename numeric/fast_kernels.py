@@ -11,7 +11,7 @@ import functools
 
 import numpy as np
 
-from ..ends import End
+from ..generated.contract import End
 
 #: Elements (rows × batch) per cache block of a sweep: 8192 doubles = 64 KiB per array (L2-resident).
 BLOCK_ELEMENTS = 8192

@@ -1,15 +1,19 @@
 """Frequency response: the receptance ``H(iω) = X_out / F_in`` of a linear scene.
 
 ``(K − ω²M + iωC) X = F`` is solved once per frequency with ``F`` the unit force on the input
-mass: a batched dense LU for ``[masses]`` scenes (small N), a tridiagonal ``solve_banded`` for
-``[chain]`` scenes (a ring's corner entries by one Sherman–Morrison correction), never an N × N
-matrix for a chain. Cubic springs enter by their linear part (the response of the linearisation
-about x = 0); gravity, forces and ground motion do not change H.
+mass, never from K or C formed in float64 (adding a small spring to a large one rounds it
+away): ``[masses]`` scenes by the certified modal solve of :mod:`numeric.frf_dense` (refined with
+residuals in extended precision, mpmath where float64 cannot be certified), open ``[chain]``
+scenes by dynamic stiffness (:mod:`numeric.frf_chain`, O(n) per frequency, relatively accurate),
+rings by a tridiagonal solve with one Sherman–Morrison correction; never an N × N matrix for a
+chain. Cubic springs enter by their linear part (the response of the linearisation about
+x = 0); gravity, forces and ground motion do not change H.
 
 The grid
 --------
 A log-spaced grid over ``[omega_min, omega_max]`` (default: the smallest nonzero ω / 10 to the
-largest ω · 3, from the accurate spectrum of :mod:`numeric.spectrum`), refined around every
+largest ω · 3, from the accurate spectrum of :mod:`numeric.spectrum`, bisection on the bidiagonal
+spring factor for chains, and the damped ω_d of the resonance table), refined around every
 resonance in range (at most :data:`MAX_REFINED`, the lowest): points at ``ω_d (1 ± b g)`` for
 ``g`` log-spaced over three decades around the half-power half-width ``b = ζ``. For a damped
 resonance the local maximum of ``|H|`` is then found by a bounded scalar search (each trial is
@@ -29,6 +33,7 @@ from dataclasses import dataclass, field
 import numpy as np
 import scipy.linalg
 
+from ..generated.contract import MAX_DENSE, End
 from .errors import RunRefused
 from .system import System
 
@@ -51,15 +56,19 @@ _DENSE_BYTES = 32 * 2**20
 class Operator:
     """``K``, ``M``, ``C`` of a linear scene, as the solver needs them.
 
-    Dense scenes: ``K``, ``C`` of shape (N, N). Chains: ``K`` and ``C`` as tridiagonal bands
-    ``(diag (N,), off (N-1,), corner)`` with ``corner`` the coupling of masses 0 and N−1 (rings).
-    ``C`` is None without damping.
+    Dense scenes: ``K``, ``C`` of shape (N, N) and the certified solver ``dense``. Chains: ``K``
+    and ``C`` as tridiagonal bands ``(diag (N,), off (N-1,), corner)`` with ``corner`` the coupling
+    of masses 0 and N−1 (rings), and for open chains their impedances ``chain``. ``C`` is None
+    without damping. An Operator with neither ``dense`` nor ``chain`` solves from K and C in
+    float64 (LU, or the tridiagonal solve).
     """
 
     masses: np.ndarray = field(repr=False)
     K: object = field(repr=False)
     C: object = field(default=None, repr=False)
     banded: bool = False
+    dense: object = field(default=None, repr=False)
+    chain: object = field(default=None, repr=False)
 
     @property
     def n(self) -> int:
@@ -88,12 +97,23 @@ def _bands_of_dense(A: np.ndarray) -> tuple[np.ndarray, np.ndarray, float]:
 
 def operator(system: System) -> Operator:
     """The matrices of ``system`` (bands for a ``[chain]``, dense otherwise)."""
+    from .elements import Elements
+
     mod, p = system.module, system.params
+    el = Elements.from_system(system)
     if not system.chain:
+        from .frf_dense import DenseReceptance
+
         K = np.asarray(mod.stiffness_matrix(**p), dtype=float)
         C = np.asarray(mod.damping_matrix(**p), dtype=float) if system.damped else None
-        return Operator(system.masses, K, C, False)
+        return Operator(system.masses, K, C, False, dense=DenseReceptance.from_elements(el))
     n = system.n
+    if system.ends[0] is not End.RING:
+        from .frf_chain import chain_elements
+
+        impedances = chain_elements(el.masses, el.spring_ends, el.stiffness, el.damper_ends, el.damping)
+        zero = (np.zeros(n), np.zeros(max(n - 1, 0)), 0.0)
+        return Operator(system.masses, zero, zero if el.damped else None, True, chain=impedances)
     diag, off = (np.asarray(b, dtype=float) for b in mod.stiffness_bands(**p, n=n))
     if n == 2 and system.spring_ends.shape[0] > 1:  # a two-mass ring: both springs join 0 and 1
         inner = (system.spring_ends >= 0).all(axis=1)
@@ -101,21 +121,15 @@ def operator(system: System) -> Operator:
     K = (diag, off, _corner(n, system.spring_ends, system.stiffness))
     C = None
     if system.damped:
-        if hasattr(mod, "damping_bands"):
-            cd, co = (np.asarray(b, dtype=float) for b in mod.damping_bands(**p, n=n))
-            ends = np.asarray(mod.damper_ends(n=n)) if hasattr(mod, "damper_ends") else np.zeros((0, 2))
-            vals = np.asarray(mod.damper_constants(**p, n=n)) if hasattr(mod, "damper_constants") else np.zeros(0)
-            C = (cd, co, _corner(n, ends, vals))
-        else:
-            try:
-                C = _bands_of_dense(np.asarray(mod.damping_matrix(**p, n=n), dtype=float))
-            except ValueError as exc:
-                raise RunRefused(f"frequency response of a damped chain of {n} masses: {exc}") from None
+        try:
+            C = _bands_of_dense(np.asarray(mod.damping_matrix(**p, n=n), dtype=float))
+        except ValueError as exc:
+            raise RunRefused(f"frequency response of a damped chain of {n} masses: {exc}") from None
     return Operator(system.masses, K, C, True)
 
 
 # -- solves -------------------------------------------------------------------------------------------
-def receptance(op: Operator, omega: np.ndarray, input: int, output: int) -> np.ndarray:
+def receptance(op: Operator, omega: np.ndarray, input: int, output: int, certify: bool = True) -> np.ndarray:
     """``H(iω) = X_output / F_input`` of ``(K − ω²M + iωC) X = e_input``.
 
     Parameters
@@ -125,12 +139,21 @@ def receptance(op: Operator, omega: np.ndarray, input: int, output: int) -> np.n
         Angular frequencies [rad/s], none exactly on an undamped ω_j.
     input, output : int
         Mass indices.
+    certify : bool
+        ``[masses]`` scenes: certify each value to 1e-10 (refinement, mpmath where needed); False
+        gives the float64 modal solve alone (the peak search's trials).
 
     Returns
     -------
     ndarray, shape (W,), complex
     """
     omega = np.asarray(omega, dtype=float).reshape(-1)
+    if op.dense is not None:
+        return op.dense.receptance(omega, input, output, certify=certify)
+    if op.chain is not None:
+        from .frf_chain import chain_receptance
+
+        return chain_receptance(op.chain, omega, input, output)
     if op.banded:
         return _receptance_banded(op, omega, input, output)
     n = op.n
@@ -213,35 +236,27 @@ class Resonance:
 
 def undamped_omegas(system: System, count: int | None = None) -> np.ndarray:
     """Undamped ω ascending (rigid zeros first): the accurate spectrum for ``[masses]`` scenes, the
-    closed form or a tridiagonal bisection for chains (``count`` lowest plus the largest)."""
+    closed form or bisection on the bidiagonal spring factor for chains (``count`` lowest plus the
+    largest; relatively accurate, O(n) each)."""
     mod, p = system.module, system.params
     if not system.chain:
         from .spectrum import spectrum
 
         return spectrum(system.masses, system.spring_ends, system.stiffness).omega
     n = system.n
-    if bool(getattr(mod, "UNIFORM", False)) and hasattr(mod, "mode_omega"):
+    if system.has("mode_omega"):
         return np.sort(np.asarray(mod.mode_omega(**p, n=n), dtype=float))
-    op = operator(system)
-    kd, ko, kc = op.K
-    if kc != 0.0:
-        if n > getattr(mod, "MAX_DENSE", 4000):
+    if system.ends[0] is End.RING:
+        if n > MAX_DENSE:
             raise RunRefused(f"an index-dependent ring of {n} masses has no closed-form spectrum here; "
                              "give omega_min and omega_max", quantity="omega_min")
         from .spectrum import spectrum
 
         return spectrum(system.masses, system.spring_ends, system.stiffness).omega
-    r = 1 / np.sqrt(system.masses)
-    d, e = kd * r * r, ko * r[:-1] * r[1:]
-    if count is None or count + 1 >= n:
-        w2 = scipy.linalg.eigvalsh_tridiagonal(d, e)
-    else:
-        low = scipy.linalg.eigvalsh_tridiagonal(d, e, select="i", select_range=(0, count - 1))
-        top = scipy.linalg.eigvalsh_tridiagonal(d, e, select="i", select_range=(n - 1, n - 1))
-        w2 = np.concatenate([low, top])
-    w = np.sqrt(np.maximum(w2, 0.0))
-    w[: int(getattr(mod, "RIGID_MODES", 0))] = 0.0
-    return w
+    from .chain_spectrum import bidiagonal_factor, singular_values
+
+    f = bidiagonal_factor(system.masses, system.spring_ends, system.stiffness)
+    return singular_values(f) if count is None or count + 1 >= n else singular_values(f, count, 1)
 
 
 def _participation(system: System, input: int, output: int) -> list[Resonance]:
@@ -265,24 +280,38 @@ def _participation(system: System, input: int, output: int) -> list[Resonance]:
 
 
 def resonances(system: System, op: Operator, input: int, output: int,
-               omega: np.ndarray | None = None) -> list[Resonance]:
-    """Elastic resonances, ascending: undamped ω_j (ζ = 0) without damping; with damping the poles
-    of ``M s² + C s + K`` (the generalised eigenvalues of its first-order linearisation) for
-    ``[masses]`` scenes, the undamped ω_j for chains (their peaks are found by the search)."""
+               omega: np.ndarray | None = None, modes: list | None = None) -> list[Resonance]:
+    """Elastic resonances, ascending: undamped ω_j (ζ = 0) without damping; with damping the damped
+    modes ``modes`` — ``(ω_n, ζ, ω_d)`` rows as ``springchain modes`` computes them (the same ζ and ω;
+    rigid and overdamped rows, ζ None or ω_d = 0, are no resonance) — or, without them, the poles
+    of the modal state matrix; the undamped ω_j for chains (their peaks are found by the search)."""
     if op.C is None and not op.banded:
         return _participation(system, input, output)
+    if modes is not None and not op.banded:
+        return [Resonance(float(wn), float(z), float(wd)) for wn, z, wd in modes if z is not None and wd > 0]
     omega = undamped_omegas(system, MAX_REFINED) if omega is None else omega
     elastic = omega[omega > 0]
     if op.C is None or op.banded:  # a chain: its lowest MAX_REFINED (more than any grid resolves)
         zeta = 0.0 if op.C is None else float("nan")  # a damped chain: ζ not computed (no dense solve)
         return [Resonance(float(w), zeta, float(w)) for w in elastic[:MAX_REFINED]]
-    n = op.n
-    A = np.block([[np.zeros((n, n)), np.eye(n)], [-op.K, -op.C]])
-    B = np.block([[np.eye(n), np.zeros((n, n))], [np.zeros((n, n)), np.diag(op.masses)]])
-    lam = scipy.linalg.eigvals(A, B)
-    lam = lam[np.isfinite(lam)]
-    scale = max(float(np.max(np.abs(lam), initial=0.0)), 1e-300)
-    osc = sorted((l for l in lam if l.imag > 1e-12 * scale), key=lambda l: l.imag)
+    return _poles(op.dense)
+
+
+def _poles(dense) -> list[Resonance]:
+    """Oscillatory poles of ``q̈ + G q̇ + Ω² q = 0`` in the accurate modal basis, the state scaled to
+    ``(ω q, q̇)`` (balanced: every block of size ω). A rigid mode without damping is a double zero
+    (a Jordan block whose eigenvalues rounding splits into ±√ε i): no resonance, and left out."""
+    w, G = dense.omega_n, dense.G
+    n = w.shape[0]
+    scale = np.where(w > 0, w, 1.0)
+    A = np.zeros((2 * n, 2 * n))
+    A[np.arange(n), n + np.arange(n)] = scale
+    A[n + np.arange(n), np.arange(n)] = -w
+    A[n:, n:] = -G
+    lam = scipy.linalg.eigvals(A)
+    elastic = w[w > 0]
+    floor = 1e-4 * float(elastic[0]) if elastic.size else np.inf
+    osc = sorted((l for l in lam if l.imag > 1e-12 * abs(l) and abs(l) > floor), key=lambda l: l.imag)
     return [Resonance(float(abs(l)), float(max(-l.real / abs(l), 0.0)), float(l.imag)) for l in osc]
 
 
@@ -352,16 +381,16 @@ def _peak(op: Operator, r: Resonance, input: int, output: int) -> tuple[float, f
 
     half = min(3 * r.zeta, 0.5) * r.omega_d
     a, b = r.omega_d - half, r.omega_d + half
-    f = lambda w: -abs(receptance(op, np.array([w]), input, output)[0])  # noqa: E731
+    f = lambda w: -abs(receptance(op, np.array([w]), input, output, certify=False)[0])  # noqa: E731
     sol = minimize_scalar(f, bounds=(a, b), method="bounded", options={"xatol": 1e-13 * r.omega_d})
     w = float(sol.x)
     if not (a + 1e-6 * half < w < b - 1e-6 * half) or -sol.fun <= max(-f(a), -f(b)):
         return None
-    return w, float(-sol.fun)
+    return w, float(abs(receptance(op, np.array([w]), input, output)[0]))  # the peak's value, certified
 
 
 def frequency_response(system: System, input: int, output: int, omega_min: float | None = None,
-                       omega_max: float | None = None, points: int = 400) -> Response:
+                       omega_max: float | None = None, points: int = 400, modes: list | None = None) -> Response:
     """The receptance ``X_output / F_input`` on a grid refined at every resonance.
 
     Parameters
@@ -373,6 +402,9 @@ def frequency_response(system: System, input: int, output: int, omega_min: float
         Range [rad/s]; default from the spectrum (see the module docstring).
     points : int
         Log-spaced base points (the refinement adds up to ``REFINE_POINTS + 2`` per resonance).
+    modes : list of (float, float or None, float), optional
+        The damped modes ``(ω_n, ζ, ω_d)`` of a damped ``[masses]`` scene as ``springchain modes``
+        computes them: the resonance table and the default range then use the same numbers.
 
     Returns
     -------
@@ -380,7 +412,7 @@ def frequency_response(system: System, input: int, output: int, omega_min: float
     """
     op = operator(system)
     natural = undamped_omegas(system, MAX_REFINED)
-    res = resonances(system, op, input, output, natural)
+    res = resonances(system, op, input, output, natural, modes)
     lo, hi = default_range(res, natural) if omega_min is None or omega_max is None else (0.0, 0.0)
     lo = omega_min if omega_min is not None else lo
     hi = omega_max if omega_max is not None else hi

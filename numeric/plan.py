@@ -39,15 +39,14 @@ from typing import Callable
 
 import numpy as np
 
-from .driver import integrate, step_grid
 from .errors import RunRefused
 from .error_models import EPS, LinearChainModel, OscillatorResponse, PowerLaw, roundoff_floor
-from .integrators import ADAPTIVE, INTEGRATORS
-from .integrators.base import Integrator, Problem
-from .integrators.ivp import AdaptiveMethod
-from .modal import ModalSolution
-from .spectrum import Spectrum, spectrum
-from .simulate import system_spectrum
+from .run import registry
+from .run.exact import solve
+from .run.grid import Grid
+from .run.protocol import Kind, Method, Options, SpectrumSource
+from .run.recorder import MemoryRecorder
+from .run.protocol import record
 from .system import System
 from .timing import measure
 
@@ -63,14 +62,6 @@ EXACT_BUDGET = 1_000_000
 MAX_STEPS = 10**12
 #: The planner and the benchmark work on the dense modes of the chain: small and moderate scenes only.
 MAX_MASSES = 2000
-
-
-class ExactModal:
-    """The exact modal solution as a "method" (no step, no force evaluations)."""
-
-    name = "modal"
-    order = math.inf
-    symplectic = True
 
 
 #: ``atol = ATOL_FRACTION · rtol · scale``: the relative tolerance governs; atol only guards zero crossings
@@ -92,7 +83,7 @@ class Candidate:
 
     Attributes
     ----------
-    method : Integrator, AdaptiveMethod or ExactModal
+    method : Method
     dt : float or None
         Planned step ``T/n`` (None for methods without a step).
     steps : int or None
@@ -105,7 +96,7 @@ class Candidate:
         Which model made the prediction.
     """
 
-    method: object
+    method: Method
     dt: float | None
     steps: int | None
     rtol: float | None
@@ -162,47 +153,50 @@ class AdaptiveLaw:
     seconds_per_eval: float
 
 
-def measure_step_cost(integrator: Integrator, problem: Problem, x0: np.ndarray, v0: np.ndarray, h: float,
+def measure_step_cost(method: Method, system: System, x0: np.ndarray, v0: np.ndarray, h: float,
                       short: int = 32, long: int = 288, budget: float = 0.05) -> StepCost:
-    """Seconds per step and set-up of ``integrator`` on this problem, from two timed driver runs."""
-    t_short = measure(lambda: integrate(integrator, problem, x0, v0, h, short), budget=budget).seconds
-    t_long = measure(lambda: integrate(integrator, problem, x0, v0, h, long), budget=budget).seconds
+    """Seconds per step and set-up of a step method on this system, from two timed runs."""
+    t_short = measure(lambda: record(method, system, x0, v0, Grid(h, short)), budget=budget).seconds
+    t_long = measure(lambda: record(method, system, x0, v0, Grid(h, long)), budget=budget).seconds
     per_step = max((t_long - t_short) / (long - short), t_long / long * 0.5)
     return StepCost(per_step, max(t_short - per_step * short, 0.0))
 
 
-def output_grid(t_end: float, dt_out: float) -> np.ndarray:
-    """The scene's output times over ``[0, t_end]``: ``t = i·Δ`` with ``Δ = t_end/ceil(t_end/dt_out)``."""
-    h, n = step_grid(t_end, dt_out)
-    return np.arange(n + 1) * h
+def exact_method(source: SpectrumSource = SpectrumSource.SVD) -> Method:
+    """The registered exact method, its modes from ``source``."""
+    return registry.method(registry.EXACT, Options(spectrum=source, progress=False))
 
 
-def modal_run(system: System, x0: np.ndarray, v0: np.ndarray, t: np.ndarray, source: str = "svd"):
-    """The exact method as one timed unit: the spectrum, the modal projection, the evaluation at ``t``.
+def measure_exact_cost(system: System, x0: np.ndarray, v0: np.ndarray, grid: Grid, sample: int,
+                       budget: float) -> float:
+    """Seconds of the exact method on ``grid``: its set-up (on a fresh system, so nothing it computes is
+    cached) plus its evaluation on the first ``sample`` frames, scaled to the whole grid."""
+    method = exact_method()
+    setup = measure(lambda: method.prepare(system.fresh(), x0, v0), budget=budget)
+    part = grid if sample >= grid.frames else Grid.frames_of(grid.h, sample)
+    evaluate = measure(lambda: setup.result.record(part, MemoryRecorder(part.frames, system.n), system.n, False),
+                       budget=budget).seconds
+    return setup.seconds + evaluate * grid.frames / part.frames
 
-    ``source``: ``svd`` (the accurate route of :mod:`numeric.spectrum`) or ``closed-form``
-    (the generated module's closed-form modes, derived once at derive time).
-    """
-    if source == "closed-form":
-        spec = system_spectrum(system, "closed-form")
-    else:
-        spec = spectrum(system.masses, system.spring_ends, system.stiffness)
-    return ModalSolution.from_initial(spec, x0, v0).at(t)
+
+def with_tolerance(method: Method, x0: np.ndarray, v0: np.ndarray, rtol: float, scale: float | None = None) -> Method:
+    """An adaptive method at ``rtol`` with its paired absolute tolerance (:func:`adaptive_atol`)."""
+    return method.with_options(Options(rtol, adaptive_atol(x0, v0, rtol, scale), progress=False))
 
 
-def calibrate_adaptive(method: AdaptiveMethod, problem: Problem, x0: np.ndarray, v0: np.ndarray,
+def calibrate_adaptive(method: Method, system: System, x0: np.ndarray, v0: np.ndarray,
                        t_pilot: float, dt_out: float,
                        reference: Callable[[np.ndarray], np.ndarray], scale: float | None = None) -> AdaptiveLaw:
     """Two pilot runs (rtol 1e-5 and 1e-8) over ``t_pilot`` against ``reference(t) -> x (S, N)``
     (``scale``: the state scale of the absolute tolerance, see :func:`adaptive_atol`)."""
-    t = output_grid(t_pilot, dt_out)
-    x_ref = reference(t)
+    grid = Grid.covering(t_pilot, dt_out)
+    x_ref = reference(grid.t)
     errs, evals, secs = [], [], 0.0
     for rtol in PILOT_RTOLS:
-        timing = measure(lambda rtol=rtol: method.solve(problem, x0, v0, t, rtol, adaptive_atol(x0, v0, rtol, scale)),
-                         budget=0.0, max_repeats=1)
+        run = with_tolerance(method, x0, v0, rtol, scale)
+        timing = measure(lambda run=run: record(run, system, x0, v0, grid), budget=0.0, max_repeats=1)
         res = timing.result
-        errs.append(max(float(np.max(np.abs(res.x[..., 0] - x_ref))), 1e-300))
+        errs.append(max(float(np.max(np.abs(res.x - x_ref))), 1e-300))
         evals.append(float(res.force_evals))
         secs += timing.seconds
     (r1, r2), (e1, e2), (n1, n2) = PILOT_RTOLS, errs, evals
@@ -212,7 +206,21 @@ def calibrate_adaptive(method: AdaptiveMethod, problem: Problem, x0: np.ndarray,
 
 
 @dataclass(frozen=True)
-class Planner:
+class Horizon:
+    """What a plan is for: errors over ``t = 0 … t_end`` on the output spacing ``dt_out``, ``n`` masses."""
+
+    t_end: float
+    dt_out: float
+    n: int
+
+    @property
+    def output_grid(self) -> Grid:
+        """The output times ``t = i·Δ`` over the horizon (Δ ≤ dt_out)."""
+        return Grid.covering(self.t_end, self.dt_out)
+
+
+@dataclass(frozen=True)
+class Planner(Horizon):
     """Everything measured once for a scene, from which plans for any tolerance follow.
 
     Build with :meth:`for_system`; then :meth:`plan` (cheap) for each tolerance.
@@ -225,13 +233,10 @@ class Planner:
         Modes of the chain (of its linearization for a nonlinear scene).
     exact : bool
         Whether the scene has the exact modal solution (linear, undamped, unforced).
-    step_methods : tuple of Integrator
+    step_methods : tuple of Method
         Finite-order step methods with their :class:`OscillatorResponse` in ``responses``.
     """
 
-    t_end: float
-    dt_out: float
-    n: int
     model: LinearChainModel
     exact: bool
     step_methods: tuple
@@ -260,62 +265,58 @@ class Planner:
                              f"(this scene has {system.n}); for long chains see `springchain scaling`")
         x0 = np.asarray(x0, dtype=float)
         v0 = np.asarray(v0, dtype=float)
-        spec: Spectrum = spectrum(system.masses, system.spring_ends, system.stiffness)
+        spec = system.spectrum
         model = LinearChainModel.from_spectrum(spec, x0, v0)
-        problem = Problem.from_system(system)
-        exact = bool(system.exact_available and system.conservative)
+        exact = bool(system.springs_only and system.exact_available)
         steps_, responses, costs, props = [], {}, {}, []
         h_probe = min(dt_out, 0.5 / max(model.omega_max, 1e-300))
-        for cls_ in INTEGRATORS.values():
-            # implicit steps (Newmark, HHT) are built on the system: they solve with its springs
-            integ = cls_.for_system(system) if getattr(cls_, "implicit", False) else cls_()
-            if not math.isfinite(integ.order):
-                if exact and problem.linear is not None:
-                    props.append(integ)
-                    costs[integ.name] = measure_step_cost(integ, problem, x0, v0, step_grid(t_end, dt_out)[0])
+        for m in registry.methods(Kind.STEP, Options(progress=False)):
+            if m.refusal(system):
                 continue
-            steps_.append(integ)
-            # implicit steps (Newmark, HHT) give their rational per-mode response in closed form
-            responses[integ.name] = (integ.response() if getattr(integ, "implicit", False)
-                                     else OscillatorResponse.from_integrator(integ))
-            costs[integ.name] = measure_step_cost(integ, problem, x0, v0, h_probe)
+            if not math.isfinite(m.traits.order):
+                if exact:
+                    props.append(m)
+                    costs[m] = measure_step_cost(m, system, x0, v0, Grid.covering(t_end, dt_out).h)
+                continue
+            steps_.append(m)
+            responses[m] = m.response()
+            costs[m] = measure_step_cost(m, system, x0, v0, h_probe)
         modal_seconds = math.nan
-        grid = output_grid(t_end, dt_out)
+        grid = Grid.covering(t_end, dt_out)
         if exact:
-            sample = grid if grid.shape[0] <= 200_001 else grid[:20_001]
-            timing = measure(lambda: modal_run(system, x0, v0, sample), budget=0.2)
-            modal_seconds = timing.seconds * (grid.shape[0] / sample.shape[0] if sample is not grid else 1.0)
+            modal_seconds = measure_exact_cost(system, x0, v0, grid, grid.frames if grid.frames <= 200_001 else 20_001,
+                                               budget=0.2)
         periods = 20 if exact else 5  # nonlinear pilots also need a reference run: keep them short
         t_pilot = min(t_end, periods * 2 * math.pi / float(model.omega.min())) if model.omega.size else t_end
         t_pilot = max(dt_out, dt_out * round(t_pilot / dt_out))
         if reference is None:
             if exact:
-                sol = ModalSolution.from_initial(spec, x0, v0)
+                sol = solve(system, x0, v0)
 
                 def reference(t):
                     return sol.at(t)[0]
             else:
-                ref_method = ADAPTIVE["dop853"]()
+                ref_method = registry.method(registry.REFERENCE_ADAPTIVE, Options(1e-13, adaptive_atol(x0, v0, 1e-15),
+                                                                                  progress=False))
                 cache: dict = {}
 
                 def reference(t):
                     key = (t.shape[0], float(t[-1]))
                     if key not in cache:
-                        cache[key] = ref_method.solve(problem, x0, v0, t, 1e-13,
-                                                      adaptive_atol(x0, v0, 1e-15)).x[..., 0]
+                        cache[key] = record(ref_method, system, x0, v0, Grid(float(t[1] - t[0]), t.shape[0] - 1)).x
                     return cache[key]
         laws = {}
         if adaptive:
-            for cls_ in ADAPTIVE.values():
-                method = cls_()
-                laws[method.name] = calibrate_adaptive(method, problem, x0, v0, t_pilot, dt_out, reference)
+            for m in registry.methods(Kind.ADAPTIVE):
+                if m.refusal(system) is None:
+                    laws[m] = calibrate_adaptive(m, system, x0, v0, t_pilot, dt_out, reference)
         planner = cls(float(t_end), float(dt_out), system.n, model, exact, tuple(steps_), responses, costs,
                       tuple(props), laws, modal_seconds)
         if not exact:
-            planner = planner.calibrated(problem, x0, v0, t_pilot, reference)
+            planner = planner.calibrated(system, x0, v0, t_pilot, reference)
         return planner
 
-    def calibrated(self, problem: Problem, x0: np.ndarray, v0: np.ndarray, t_pilot: float,
+    def calibrated(self, system: System, x0: np.ndarray, v0: np.ndarray, t_pilot: float,
                    reference: Callable) -> "Planner":
         """Scale each step method's (linearized) model by measured/predicted on one pilot run.
 
@@ -325,29 +326,29 @@ class Planner:
         """
         pilot = Planner(t_pilot, self.dt_out, self.n, self.model, self.exact, self.step_methods, self.responses,
                         self.step_costs)
-        grid = output_grid(t_pilot, self.dt_out)
-        x_ref = reference(grid)
-        spacing = grid[1] - grid[0]
+        grid = Grid.covering(t_pilot, self.dt_out)
+        x_ref = reference(grid.t)
+        spacing = grid.h
         factors = {}
-        for integ in self.step_methods:
-            h_target = t_pilot / pilot.plan_step(integ, 1e-4).steps
+        for m in self.step_methods:
+            h_target = t_pilot / pilot.plan_step(m, 1e-4).steps
             if h_target >= spacing:
                 h, stride = spacing * math.floor(h_target / spacing), 1
             else:
                 stride = math.ceil(spacing / h_target)
                 h = spacing / stride
             n = stride * math.floor(t_pilot / (h * stride) + 1e-9)
-            tr = integrate(integ, problem, x0, v0, h, n, record_every=stride)
+            tr = record(m, system, x0, v0, Grid(h, n, stride))
             idx = np.rint(tr.t / spacing).astype(int)
-            measured = float(np.max(np.abs(tr.x[..., 0] - x_ref[idx])))
-            predicted = pilot.model.envelope(self.responses[integ.name], h, n)
-            factors[integ.name] = min(max(measured / max(predicted, 1e-300), 1.0 / 30.0), 30.0)
+            measured = float(np.max(np.abs(tr.x - x_ref[idx])))
+            predicted = pilot.model.envelope(self.responses[m], h, n)
+            factors[m] = min(max(measured / max(predicted, 1e-300), 1.0 / 30.0), 30.0)
         return replace(self, calibration=factors)
 
     # -- predictions ---------------------------------------------------------------------------
-    def predict_error(self, integrator: Integrator, steps: int, exact_budget: int = EXACT_BUDGET) -> tuple[float, str]:
-        """Predicted error of ``steps`` steps of ``integrator`` over the horizon, and the model used."""
-        resp = self.responses[integrator.name]
+    def predict_error(self, method: Method, steps: int, exact_budget: int = EXACT_BUDGET) -> tuple[float, str]:
+        """Predicted error of ``steps`` steps of a step method over the horizon, and the model used."""
+        resp = self.responses[method]
         h = self.t_end / steps
         m = self.model
         work = steps * max(m.omega.shape[0], 1) * self.n
@@ -356,7 +357,7 @@ class Planner:
         else:
             e, how = m.envelope(resp, h, steps), "per-mode envelope"
         if not self.exact:
-            f = self.calibration.get(integrator.name)
+            f = self.calibration.get(method)
             if f is not None:
                 e *= f
                 how += f" of the linearization x {f:.3g} (pilot-calibrated)"
@@ -364,24 +365,25 @@ class Planner:
                 how += " (of the linearization: approximate)"
         return e + roundoff_floor(m.size, resp.stages, steps), how
 
-    def _min_steps(self, integrator: Integrator) -> int:
-        limit = integrator.stability_limit
+    def min_steps(self, method: Method) -> int:
+        """The fewest steps over the horizon inside the method's stability limit."""
+        limit = method.traits.stability_limit
         w = self.model.omega_max
-        if math.isinf(limit) and math.isfinite(integrator.order):
+        if math.isinf(limit) and math.isfinite(method.traits.order):
             limit = math.pi  # unconditionally stable (Newmark, HHT): no accuracy beyond half a period per step
         if w == 0 or not math.isfinite(limit):
             return 1
         return max(1, math.floor(self.t_end * w / limit * (1 + 1e-12)) + 1)
 
-    def plan_step(self, integrator: Integrator, tol: float) -> Candidate:
+    def plan_step(self, method: Method, tol: float) -> Candidate:
         """The fewest steps whose predicted error is at most ``SAFETY·tol``."""
-        resp = self.responses[integrator.name]
+        resp = self.responses[method]
         m = self.model
-        cost = self.step_costs[integrator.name]
+        cost = self.step_costs[method]
         target = SAFETY * tol
-        n_lo = self._min_steps(integrator)
+        n_lo = self.min_steps(method)
 
-        scale = self.calibration.get(integrator.name, 1.0)
+        scale = self.calibration.get(method, 1.0)
 
         def env(n):
             return scale * m.envelope(resp, self.t_end / n, n) + roundoff_floor(m.size, resp.stages, n)
@@ -401,7 +403,7 @@ class Planner:
             n_hi *= 2
         if not found:
             h = self.t_end / best_n
-            return Candidate(integrator, h, best_n, None, best_e, cost(best_n), False,
+            return Candidate(method, h, best_n, None, best_e, cost(best_n), False,
                              "rounding floor above the tolerance")
         lo = max(n_lo, n_hi // 2) if n_hi > n_lo else n_lo
         # refine on the envelope between lo (too few) and n_hi (enough)
@@ -415,7 +417,7 @@ class Planner:
         # with the exact closed form, walk down while it still meets the target
         if n * max(m.omega.shape[0], 1) * self.n <= EXACT_BUDGET:
             def exact(k):
-                return self.predict_error(integrator, k)[0]
+                return self.predict_error(method, k)[0]
             lo = max(n_lo, n // 4)
             if exact(lo) <= target:
                 n = lo
@@ -426,17 +428,16 @@ class Planner:
                         n = mid
                     else:
                         lo = mid
-        e, how = self.predict_error(integrator, n)
-        return Candidate(integrator, self.t_end / n, n, None, e, cost(n), e <= tol, how)
+        e, how = self.predict_error(method, n)
+        return Candidate(method, self.t_end / n, n, None, e, cost(n), e <= tol, how)
 
-    def plan_adaptive(self, name: str, tol: float) -> Candidate:
-        law = self.adaptive[name]
-        method = ADAPTIVE[name]()
+    def plan_adaptive(self, method: Method, tol: float) -> Candidate:
+        law = self.adaptive[method]
         rtol = law.error.solve(SAFETY * tol, self.t_end)
         rtol = max(min(rtol, 1e-2), MIN_RTOL)
         # no integrator beats the rounding floor of the exact solution (a power law steeper than
         # rtol¹, as the high-order RKN pairs calibrate to, would otherwise promise 1e-17)
-        floor = self.exact_error(output_grid(self.t_end, self.dt_out).shape[0] - 1)
+        floor = self.exact_error(self.output_grid.steps)
         error = max(law.error(rtol, self.t_end), floor)
         evals = law.evals(rtol, self.t_end)
         return Candidate(method, None, None, rtol, error, evals * law.seconds_per_eval,
@@ -456,20 +457,19 @@ class Planner:
         if not (math.isfinite(tol) and tol > 0):
             raise ValueError(f"tolerance must be finite and > 0, got {tol!r}")
         cands: list[Candidate] = []
-        n_out = output_grid(self.t_end, self.dt_out).shape[0] - 1
+        out = self.output_grid
         if self.exact:
-            e = self.exact_error(n_out)
-            cands.append(Candidate(ExactModal(), None, None, None, e, self.modal_seconds, e <= tol,
+            e = self.exact_error(out.steps)
+            cands.append(Candidate(exact_method(), None, None, None, e, self.modal_seconds, e <= tol,
                                    "exact; error at the rounding level"))
-        for integ in self.step_methods:
-            cands.append(self.plan_step(integ, tol))
-        for integ in self.propagators:
-            h, n = step_grid(self.t_end, self.dt_out)
-            e = self.propagator_error(n)
-            cands.append(Candidate(integ, h, n, None, e, self.step_costs[integ.name](n), e <= tol,
+        for m in self.step_methods:
+            cands.append(self.plan_step(m, tol))
+        for m in self.propagators:
+            e = self.propagator_error(out.steps)
+            cands.append(Candidate(m, out.h, out.steps, None, e, self.step_costs[m](out.steps), e <= tol,
                                    "exact propagator; rounding grows with the number of steps"))
-        for name in self.adaptive:
-            cands.append(self.plan_adaptive(name, tol))
+        for m in self.adaptive:
+            cands.append(self.plan_adaptive(m, tol))
         ok = tuple(c for c in cands if c.reachable)
         bad = tuple(c for c in cands if not c.reachable)
         if not ok:

@@ -204,12 +204,17 @@ def frequency_response(drive: np.ndarray, amplitude: np.ndarray, names, natural:
     if driven is not None:
         for k, w in enumerate(driven):
             ax.axvline(w, color="k", ls="--", lw=1, label="scene's drive Ω" if k == 0 else None)
-    ax.set_xlabel("drive frequency Ω [rad/s]")
-    ax.set_ylabel("steady-state amplitude |X(Ω)| [m]")
-    ax.set_title("Frequency response (K − Ω²M + iΩC)⁻¹ F")
+    finish(ax, "drive frequency Ω [rad/s]", "steady-state amplitude |X(Ω)| [m]", "Frequency response (K − Ω²M + iΩC)⁻¹ F")
+    return fig
+
+
+def finish(ax, xlabel: str, ylabel: str, title: str) -> None:
+    """Labelled axes (with units), a title, a light grid and the legend: how a figure is finished."""
+    ax.set_xlabel(xlabel)
+    ax.set_ylabel(ylabel)
+    ax.set_title(title)
     ax.grid(alpha=0.3, which="both")
     ax.legend(fontsize=8)
-    return fig
 
 
 def bode(omega: np.ndarray, magnitude: np.ndarray, phase: np.ndarray, title: str, *,

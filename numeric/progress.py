@@ -5,6 +5,7 @@ stderr is not a terminal it prints a plain line every few seconds instead, so lo
 still say what is going on. Nothing is printed for phases shorter than about a second.
 
     bar = Reporter("verlet", total=steps)      # bar.update(done) as work proceeds; bar.close()
+    bar.say("reference ready"); bar.count("run 3")   # milestones and counted items, one line each
     with phase("deriving the model"):          # elapsed time after 1 s, then every few seconds
         ...
     note("compiling numba kernels")            # one line
@@ -57,10 +58,15 @@ class Reporter:
         Default: on. ``False`` silences it.
     quiet_seconds : float
         Nothing is shown before this much time has passed.
+    prefix : str
+        What each line starts with (``springchain``, ``bench``, ``sweep``, ...).
+    interval : float, optional
+        Seconds between lines (default: 0.2 s redraws on a terminal, a line every 5 s otherwise).
     """
 
     def __init__(self, label: str, total: int | None = None, *, enabled: bool | None = None,
-                 stream=None, quiet_seconds: float = QUIET_SECONDS, prefix: str = PREFIX):
+                 stream=None, quiet_seconds: float = QUIET_SECONDS, prefix: str = PREFIX,
+                 interval: float | None = None):
         self.label = label
         self.total = None if total is None else max(int(total), 1)
         self.enabled = True if enabled is None else bool(enabled)
@@ -68,6 +74,7 @@ class Reporter:
         self.tty = _isatty(self.stream)
         self.quiet = quiet_seconds
         self.prefix = prefix
+        self.interval = interval
         self.t0 = time.monotonic()
         self.last = -1e300
         self.shown = False  # something was printed
@@ -93,7 +100,8 @@ class Reporter:
         finished = self.total is not None and done is not None and done >= self.total
         if now - self.t0 < self.quiet and not (finished and self.shown):
             return
-        if now - self.last < (TTY_INTERVAL if self.tty else PLAIN_INTERVAL) and not finished:
+        every = self.interval if self.interval is not None else (TTY_INTERVAL if self.tty else PLAIN_INTERVAL)
+        if now - self.last < every and not finished:
             return
         self.last = now
         try:
@@ -108,6 +116,16 @@ class Reporter:
             self.stream.flush()
         except (OSError, ValueError):
             self.enabled = False
+
+    def say(self, text: str) -> None:
+        """One line ``<prefix>: <text>`` now (a phase's milestone), if enabled."""
+        if self.enabled:
+            line(text, prefix=self.prefix, stream=self.stream)
+
+    def count(self, text: str) -> None:
+        """One more unit done, said as ``[done/total] elapsed  text``."""
+        self.done += 1
+        self.say(f"[{self.done:3d}/{self.total}] {time.monotonic() - self.t0:6.1f}s  {text}")
 
     def close(self, message: str | None = None) -> None:
         """End the phase: finish the terminal line; say ``message`` (e.g. "done in 3.2 s") if

@@ -34,6 +34,7 @@ import scipy.linalg
 
 from .distributions import Dist
 from .errors import RunRefused
+from .system import interface
 
 _MODULES: dict[str, types.ModuleType] = {}
 
@@ -110,9 +111,9 @@ def realise(spec: SweepSpec, s: int):
         value = float(dist.grid_values()[idx.pop(0)]) if dist.is_grid else float(dist.draw(rng))
         params[name] = value
         varied[name] = value
-    chain = bool(getattr(mod, "CHAIN", False))
-    if chain:
-        n = int(mod.N)
+    facts = interface(mod)
+    if facts.chain:
+        n = facts.n
         masses = np.array(mod.masses(**params, n=n), dtype=float)
         ends = np.asarray(mod.spring_ends(n), dtype=np.intp).reshape(-1, 2)
         k = np.array(mod.spring_constants(**params, n=n), dtype=float)
@@ -202,7 +203,15 @@ def solve_chain(masses: np.ndarray, ends: np.ndarray, k: np.ndarray, rigid: int)
     rs = 1.0 / np.sqrt(masses)
     if bands is not None:
         diag, off = bands
-        w2, psi = scipy.linalg.eigh_tridiagonal(diag * rs * rs, off * rs[:-1] * rs[1:])
+        # shapes (for the participation ratio) from D; ω² from the bidiagonal spring factor by LAPACK's
+        # dqds, relatively accurate (eigh_tridiagonal's small ω² lose κ(D)·ε at high contrast)
+        _, psi = scipy.linalg.eigh_tridiagonal(diag * rs * rs, off * rs[:-1] * rs[1:])
+        from .chain_spectrum import bidiagonal_factor
+        from .lapack_bidiagonal import bidiagonal_svd
+
+        f = bidiagonal_factor(masses, ends, k)
+        sigma = np.sort(bidiagonal_svd(f.d, f.e, f.upper, vectors=False)[0])[f.size - n:]
+        w2 = sigma * sigma
     else:  # a ring: the accurate dense route (spring-factor SVD; rigid modes exact by structure)
         from .spectrum import spectrum
 
@@ -230,8 +239,9 @@ def compute_batch(spec: SweepSpec, start: int, stop: int) -> dict:
     from threadpoolctl import threadpool_limits
 
     mod = module_of(spec.source)
-    chain = bool(getattr(mod, "CHAIN", False))
-    rigid = int(getattr(mod, "RIGID_MODES", 0)) if chain else 0
+    facts = interface(mod)
+    chain = facts.chain
+    rigid = facts.rigid_modes if chain else 0
     names = [n for n, _ in spec.vary]
     cols: dict[str, list] = {"sample": [], **{n: [] for n in names}, "omega2": []}
     if chain:

@@ -40,10 +40,11 @@ from typing import Callable
 
 import numpy as np
 
-from ..ends import End
+from ..generated.contract import MAX_DENSE, End
 from . import fast
 from .timing import best_seconds, interleaved_samples, interleaved_seconds, single_threaded_blas
 from .chain_modal import ChainModal
+from .system import interface
 
 #: Default chain sizes of ``springchain scaling``.
 DEFAULT_SIZES = (3, 10, 30, 100, 300, 1000, 2000, 4000, 10_000, 30_000, 100_000, 300_000, 1_000_000)
@@ -201,11 +202,11 @@ def _numpy_step(case: ChainCase, n: int, h: float) -> tuple[Callable, str]:
     """The project's ``verlet`` kernel on the generated stencil (or :mod:`numeric.fast`'s NumPy backend)."""
     acc = case.module.make_acceleration(**case.values, n=n)
     try:
-        from .integrators import INTEGRATORS
         from .integrators.base import Problem
+        from .run import registry
 
-        kernel = INTEGRATORS["verlet"]().kernel(Problem(acc), h)
-        return kernel, "numeric.integrators verlet kernel"
+        kernel = registry.implementation(registry.DEFAULT_STEP)().kernel(Problem(acc), h)
+        return kernel, f"numeric.integrators {registry.DEFAULT_STEP} kernel"
     except Exception:  # the integrator package's API moved: time the same formula here
         fv = fast.FusedVerlet.from_module(case.module, case.params, n, h, fast.Backend.NUMPY)
         return fv.kernel(), "numeric.fast NumPy backend"
@@ -302,11 +303,11 @@ def measure_exact_dense(case: ChainCase, n: int, config: ScalingConfig) -> dict:
         out["setup_dense_svd"] = best_seconds(lambda: spectrum(m, ends, k), budget=b)
     if n <= config.dense_max:
         r = 1.0 / np.sqrt(m)
-        K = case.module.stiffness_matrix(**case.values, n=n) if n <= getattr(case.module, "MAX_DENSE", n) else None
+        K = case.module.stiffness_matrix(**case.values, n=n) if n <= MAX_DENSE else None
         if K is not None:
             D = K * r[:, None] * r[None, :]
             out["setup_dense_eigh"] = best_seconds(lambda: scipy.linalg.eigh(D), budget=b)
-    if n <= config.tridiagonal_max and End(str(case.module.LEFT)) is not End.RING:
+    if n <= config.tridiagonal_max and interface(case.module).left is not End.RING:
         diag, off = case.module.stiffness_bands(**case.values, n=n)
         r = 1.0 / np.sqrt(m)
         d, e = diag * r * r, off * r[:-1] * r[1:]
@@ -451,10 +452,10 @@ def _ns(seconds, n) -> str:
 
 
 def print_progress(line: str) -> None:
-    """Progress on stderr (:func:`numeric.progress.line`)."""
-    from . import progress
+    """One progress line on stderr, ``scaling: ...`` (:meth:`numeric.progress.Reporter.say`)."""
+    from .progress import Reporter
 
-    progress.line(line, prefix="scaling")
+    Reporter("scaling", prefix="scaling").say(line)
 
 
 __all__ = ["ScalingConfig", "ScalingResult", "ChainCase", "run", "best_seconds",

@@ -32,16 +32,8 @@ _ROOT_SPLIT = 1.0
 
 
 def omega_from_omega2(omega2: np.ndarray) -> np.ndarray:
-    """``ω = √max(ω², 0)``: roundoff below zero is a rigid mode, never a NaN.
-
-    Parameters
-    ----------
-    omega2 : array_like
-
-    Returns
-    -------
-    ndarray, same shape
-    """
+    """``ω = √max(ω², 0)``: roundoff below zero is a rigid mode, never a NaN (an ndarray of the
+    shape of ``omega2``)."""
     return np.sqrt(np.maximum(np.asarray(omega2, dtype=float), 0.0))
 
 
@@ -49,15 +41,8 @@ def sinc(x: np.ndarray) -> np.ndarray:
     """Unnormalised ``sinc(x) = sin(x)/x``, 1 at x = 0.
 
     ``sin(x)/x`` is accurate for every non-zero float (``sin`` of a tiny
-    argument is the argument itself), so only x = 0 is special.
-
-    Parameters
-    ----------
-    x : array_like
-
-    Returns
-    -------
-    ndarray, same shape
+    argument is the argument itself), so only x = 0 is special. Elementwise: an ndarray of
+    the shape of ``x``.
     """
     return _over_x(np.sin, x)
 
@@ -71,16 +56,8 @@ def _over_x(f, x) -> np.ndarray:
 
 
 def sinhc(x: np.ndarray) -> np.ndarray:
-    """``sinhc(x) = sinh(x)/x``, 1 at x = 0 (``sinh`` is accurate near 0, so no series is needed).
-
-    Parameters
-    ----------
-    x : array_like
-
-    Returns
-    -------
-    ndarray, same shape
-    """
+    """``sinhc(x) = sinh(x)/x``, 1 at x = 0 (``sinh`` is accurate near 0, so no series is needed);
+    elementwise, an ndarray of the shape of ``x``."""
     return _over_x(np.sinh, x)
 
 
@@ -169,12 +146,8 @@ def undamped_forced_sin(omega: np.ndarray, Omega: np.ndarray, t: np.ndarray) -> 
 
     Parameters
     ----------
-    omega : array_like
-        Natural frequency ω ≥ 0.
-    Omega : array_like
-        Drive frequency Ω (any sign: the response is odd in Ω).
-    t : array_like
-        Time since the force was switched on (x(0) = ẋ(0) = 0), t ≥ 0.
+    omega, Omega, t : array_like
+        As for :func:`undamped_forced_cos` (t ≥ 0); the response is odd in Ω.
 
     Returns
     -------

@@ -135,7 +135,8 @@ def stiffness_matrix(n: int, ends: np.ndarray, k: np.ndarray) -> np.ndarray:
     """``K = Bᵀ diag(k) B``, shape (N, N) (for checks; the spectrum never forms it).
 
     Assembled by scattering each spring's 2×2 stamp (not a matrix product, whose blocked sums
-    differ between K_ij and K_ji by an ulp), so K is exactly symmetric.
+    differ between K_ij and K_ji by an ulp; couplings summed once and mirrored), so K is
+    exactly symmetric.
     """
     ends = np.asarray(ends, dtype=np.intp).reshape(-1, 2)
     k = np.asarray(k, dtype=float)
@@ -146,9 +147,12 @@ def stiffness_matrix(n: int, ends: np.ndarray, k: np.ndarray) -> np.ndarray:
         on = (end >= 0) & ~loop
         np.add.at(K, (end[on], end[on]), k[on])
     both = (a >= 0) & (b >= 0) & (a != b)
-    np.add.at(K, (a[both], b[both]), -k[both])
-    np.add.at(K, (b[both], a[both]), -k[both])
-    return K
+    # couplings summed once into the upper triangle, then mirrored: springs listed as (0, 1)
+    # and (1, 0) would otherwise be summed in different orders for K_01 and K_10
+    upper = np.zeros((n, n))
+    lo, hi = np.minimum(a[both], b[both]), np.maximum(a[both], b[both])
+    np.add.at(upper, (lo, hi), -k[both])
+    return K + upper + upper.T
 
 
 def spring_factor(masses: np.ndarray, ends: np.ndarray, k: np.ndarray) -> np.ndarray:

@@ -17,9 +17,7 @@ re-run skips exactly the finished batches.
 from __future__ import annotations
 
 import json
-import sys
 import time
-from dataclasses import dataclass
 from pathlib import Path
 from typing import Callable
 
@@ -27,6 +25,7 @@ import numpy as np
 
 from .errors import RunRefused
 from .files import atomic_path, atomic_write_text
+from .progress import Reporter
 from .realisations import SweepSpec, compute_batch
 
 PARTS = "sweep.parquet"
@@ -109,32 +108,25 @@ def check_manifest(out: Path, manifest: dict) -> bool:
     return False
 
 
-@dataclass
-class Progress:
-    """A line on stderr every few seconds (only for sweeps that take that long)."""
+class Progress(Reporter):
+    """Samples done of a sweep, on the one reporter (:class:`numeric.progress.Reporter`): a line
+    ``sweep: done/total samples, rate, ETA`` every ``every`` seconds (only for sweeps that take that long)."""
 
-    total: int
-    every: float = PROGRESS_EVERY
-    stream: object = None
-    enabled: bool = True
-
-    def __post_init__(self):
-        self.t0 = self.last = time.perf_counter()
-        self.done = 0
+    def __init__(self, total: int, every: float = PROGRESS_EVERY, stream=None, enabled: bool = True):
+        super().__init__("sweep", total, enabled=enabled, stream=stream, quiet_seconds=every, prefix="sweep",
+                         interval=every)
         self.skipped = 0
 
+    def _text(self, done: int | None) -> str:
+        elapsed = max(time.monotonic() - self.t0, 1e-9)
+        rate = self.done / elapsed
+        eta = (self.total - self.done) / rate if rate > 0 else float("inf")
+        return (f"{self.done + self.skipped}/{self.total + self.skipped} samples, {rate:.3g} samples/s, "
+                f"ETA {eta:.0f} s")
+
     def add(self, n: int, force: bool = False) -> None:
-        self.done += n
-        now = time.perf_counter()
-        if self.enabled and (now - self.last >= self.every or (force and now - self.t0 >= self.every)):
-            self.last = now
-            rate = self.done / max(now - self.t0, 1e-9)
-            left = self.total - self.done - self.skipped
-            eta = left / rate if rate > 0 else float("inf")
-            (self.stream or sys.stderr).write(
-                f"sweep: {self.done + self.skipped}/{self.total + self.skipped} samples, {rate:.3g} samples/s, "
-                f"ETA {eta:.0f} s\n")
-            (self.stream or sys.stderr).flush()
+        """``n`` more samples done (``force``: the last call; the total is reached)."""
+        self.update(self.total if force else self.done + n)
 
 
 def local_cluster(workers: int):

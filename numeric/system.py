@@ -1,82 +1,118 @@
-"""A generated module bound to parameter values: the numbers every numeric method consumes."""
+"""A generated module bound to parameter values: the numbers every numeric method consumes.
+
+This is the only reader of a generated module's description: :func:`interface` checks a module
+against :mod:`springchain.generated.contract` and every other numeric module asks a
+:class:`System` (or :func:`interface`) what the module provides, never ``getattr``/``hasattr``
+on the module. The facts numeric code decides by are written here once: what makes a system
+``springs_only`` (free oscillation: the modal solution without augmentation) or
+``energy_conserved``, the stability bound ``ω_max``, and why no exact solution applies.
+"""
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+import math
+from dataclasses import dataclass, field, replace
+from functools import cached_property
 from types import ModuleType
 from typing import Callable
 
 import numpy as np
 
+from ..generated import contract
+from ..generated.contract import MAX_DENSE, End, Ground, Provided
 
 #: Loaded (forced, tabulated, ground) ``[chain]`` scenes have an exact solution (the dense augmented
 #: matrix exponential) up to this many masses.
 LOADED_CHAIN_EXACT_MAX = 400
 
 
+def interface(module: ModuleType) -> Provided:
+    """What a generated module provides (:func:`springchain.generated.contract.read`)."""
+    return contract.read(module)
+
+
+def _provided(name: str, doc: str) -> property:
+    """A property that answers from the module's :class:`Provided` facts."""
+    return property(lambda self: getattr(self.provided, name), doc=doc)
+
+
 @dataclass(frozen=True)
 class System:
-    """A scene's generated equations at fixed parameter values.
+    """A scene's generated equations at fixed parameter values (build with :meth:`from_module`)."""
 
-    Attributes
-    ----------
-    module : module
-        The generated module.
-    params : dict of str to float
-        Parameter values (keyword arguments of the module's functions).
-    masses : ndarray, shape (N,)
-    spring_ends : ndarray of int, shape (S, 2)
-        Mass indices of the spring ends, -1 for a wall.
-    stiffness : ndarray, shape (S,)
-    tables : tuple of (ndarray, ndarray)
-        ``(times, values)`` of each tabulated force, in the module's ``TABLE_FORCE_ON`` order.
-    ground_table : (ndarray, ndarray) or None
-        ``(times, a_g)`` of a ``[ground]`` table.
-    """
-
+    #: The generated module.
     module: ModuleType
+    #: Parameter values (keyword arguments of the module's functions).
     params: dict[str, float]
+    #: Masses, shape (N,).
     masses: np.ndarray = field(repr=False)
+    #: Mass indices of the spring ends, -1 for a wall; int, shape (S, 2).
     spring_ends: np.ndarray = field(repr=False)
+    #: Linear spring constants, shape (S,).
     stiffness: np.ndarray = field(repr=False)
+    #: ``(times, values)`` of each tabulated force, in the module's ``TABLE_FORCE_ON`` order.
     tables: tuple = field(default=(), repr=False)
+    #: ``(times, a_g)`` of a ``[ground]`` table, or None.
     ground_table: tuple | None = field(default=None, repr=False)
+    #: What the module provides (read once through the contract).
+    provided: Provided | None = field(default=None, repr=False)
 
     @classmethod
     def from_module(cls, module: ModuleType, params: dict[str, float] | None = None, *,
                     tables: tuple = (), ground_table: tuple | None = None) -> "System":
-        values = dict(module.DEFAULTS)
+        facts = interface(module)
+        values = dict(facts.defaults)
         values.update(params or {})
-        if getattr(module, "CHAIN", False):
+        if facts.chain:
             ends = np.asarray(module.spring_ends(), dtype=np.intp).reshape(-1, 2)
         else:
             ends = np.asarray(module.SPRING_ENDS, dtype=np.intp).reshape(-1, 2)
-        wanted = len(getattr(module, "TABLE_FORCE_ON", ()))
-        if len(tables) != wanted or (getattr(module, "GROUND", None) == "table") != (ground_table is not None):
+        wanted, table_ground = len(facts.table_force_on), facts.ground is Ground.TABLE
+        if len(tables) != wanted or table_ground != (ground_table is not None):
             raise ValueError(f"System.from_module: the module takes {wanted} force tables"
-                             + (" and a ground table" if getattr(module, "GROUND", None) == "table" else "")
+                             + (" and a ground table" if table_ground else "")
                              + f"; got {len(tables)}" + (" and a ground table" if ground_table is not None else ""))
         return cls(module, values, np.asarray(module.masses(**values), dtype=float),
                    ends, np.asarray(module.spring_constants(**values), dtype=float),
                    tuple((np.asarray(a, dtype=float), np.asarray(b, dtype=float)) for a, b in tables),
-                   None if ground_table is None else tuple(np.asarray(a, dtype=float) for a in ground_table))
+                   None if ground_table is None else tuple(np.asarray(a, dtype=float) for a in ground_table),
+                   facts)
 
+    def __post_init__(self):
+        if self.provided is None:
+            object.__setattr__(self, "provided", interface(self.module))
+
+    def fresh(self) -> "System":
+        """The same system without the results it has cached (spectrum, ω_max): for timing a run
+        with its own set-up."""
+        return replace(self)
+
+    # -- what the module provides ---------------------------------------------------------------
     @property
     def chain(self) -> bool:
         """A [chain] scene: stencil acceleration, no dense matrices for large n."""
-        return bool(getattr(self.module, "CHAIN", False))
+        return self.provided.chain
 
     @property
     def n(self) -> int:
         return int(self.masses.shape[0])
 
-    @property
-    def effects(self) -> frozenset[str]:
-        return frozenset(self.module.EFFECTS)
+    effects = _provided("effects", "The Lagrangian's effects (``spring``, ``damper``, ``gravity``, ...).")
+    linear = _provided("linear", "No cubic springs.")
+    uniform = _provided("uniform", "A uniform ``[chain]`` (coefficients independent of the index).")
+    rigid_modes = _provided("rigid_modes", "The number of rigid-body modes (free pieces).")
+    ground = _provided("ground", "How ``[ground]`` is given (a :class:`Ground`, equal to its word), else None.")
+    ground_displacement = _provided("ground_displacement",
+                                    "Whether the ground displacement x_g(t) is known (``ground_motion``).")
 
     @property
-    def linear(self) -> bool:
-        return bool(self.module.LINEAR)
+    def ends(self) -> tuple[End, End] | None:
+        """``(left, right)`` of a ``[chain]``; None otherwise."""
+        return (self.provided.left, self.provided.right) if self.chain else None
+
+    def has(self, name: str) -> bool:
+        """Whether the module defines the contract function ``name``."""
+        return self.provided.has(name)
 
     def acceleration(self, x: np.ndarray) -> np.ndarray:
         """Conservative acceleration a(x); x shape (N, ...)."""
@@ -86,56 +122,133 @@ class System:
     def acceleration_fn(self) -> Callable[[np.ndarray], np.ndarray]:
         """a(x) with everything that does not depend on x computed once."""
         mod, p = self.module, self.params
-        if hasattr(mod, "make_acceleration"):
-            return mod.make_acceleration(**p, n=self.n) if self.chain else mod.make_acceleration(**p)
-        return lambda x: mod.acceleration(x, **p)
+        return mod.make_acceleration(**p, n=self.n) if self.chain else mod.make_acceleration(**p)
 
     @property
     def damped(self) -> bool:
-        return hasattr(self.module, "damping_matrix")
+        return self.has("damping_matrix")
 
     @property
     def forced(self) -> bool:
         """External forces of any kind: expressions, tables or ground motion."""
-        return hasattr(self.module, "external_acceleration") or self.tabulated or self.ground is not None
+        return self.has("external_acceleration") or self.tabulated or self.ground is not None
 
     @property
     def tabulated(self) -> bool:
         """Tabulated forces ([[forces]] with table)."""
-        return bool(getattr(self.module, "TABLE_FORCE_ON", ()))
+        return bool(self.provided.table_force_on)
 
     @property
-    def ground(self) -> str | None:
-        """``"expression"`` or ``"table"`` for a scene with [ground], else None."""
-        return getattr(self.module, "GROUND", None)
+    def harmonic_forcing(self) -> bool:
+        """Expression forces that are constant + harmonic (``forcing_harmonics``)."""
+        return self.has("forcing_harmonics")
 
     def ground_acceleration(self, t) -> np.ndarray:
         """Ground acceleration a_g(t), shape of t (zeros without [ground])."""
-        if self.ground == "expression":
+        if self.ground is Ground.EXPRESSION:
             return self.module.ground_acceleration(t, **self.params)
-        if self.ground == "table":
+        if self.ground is Ground.TABLE:
             return self.module.ground_table_acceleration(t, self.ground_table)
         return np.zeros(np.shape(t))
+
+    def ground_motion(self, t) -> np.ndarray:
+        """Ground displacement x_g(t), shape of t (only when :attr:`ground_displacement`)."""
+        return self.module.ground_motion(t, **self.params)[1]
 
     def applied_acceleration(self, t) -> np.ndarray:
         """``M⁻¹F(t)`` of the expression and tabulated forces (not the ground), shape (N, *t.shape)."""
         t = np.asarray(t, dtype=float)
         mod, p = self.module, self.params
         out = np.zeros((self.n,) + t.shape)
-        if hasattr(mod, "external_acceleration"):
+        if self.has("external_acceleration"):
             out += mod.external_acceleration(t, **p)
         if self.tabulated:
             out += mod.table_acceleration(t, self.tables, **p)
         return out
 
+    # -- the facts numeric code decides by ------------------------------------------------------
     @property
-    def conservative(self) -> bool:
-        """Springs only (linear or cubic): no dampers, no external forces, no gravity.
+    def springs_only(self) -> bool:
+        """Springs only (linear or cubic): no dampers, no external forces or ground, no gravity.
 
-        The one definition: bench, plan, the fused chain kernel and the modal
-        solution without augmentation all ask this.
+        The one definition of free oscillation: the modal solution without augmentation, the fused
+        chain kernel, and plan/bench's closed-form error models all ask this.
         """
         return not (self.damped or self.forced or "gravity" in self.effects)
+
+    @property
+    def energy_conserved(self) -> bool:
+        """Whether :meth:`energy` is conserved: no dampers, no external forces or ground (gravity
+        conserves it: its potential is part of the energy)."""
+        return not (self.damped or self.forced)
+
+    @property
+    def no_exact_solution(self) -> str | None:
+        """Why no exact solution applies (None when one does): the one wording of the reason.
+
+        Exact solutions: linear springs; expression forces and ground acceleration (if any)
+        constant + harmonic (tables are exact by first-order hold); a loaded ``[chain]`` only up to
+        ``LOADED_CHAIN_EXACT_MAX`` masses and an index-dependent one up to ``MAX_DENSE`` (both dense).
+        """
+        if not self.linear:
+            return "this scene has cubic springs"
+        if self.has("external_acceleration") and not self.provided.forcing_harmonic:
+            return "its external forces are not constant + harmonic"
+        if self.ground is Ground.EXPRESSION and not self.provided.ground_harmonic:
+            return "its ground acceleration is not constant + harmonic"
+        if self.chain and not self.springs_only and self.n > LOADED_CHAIN_EXACT_MAX:
+            return f"a loaded [chain] of more than {LOADED_CHAIN_EXACT_MAX} masses (the exact solution is dense)"
+        if self.chain and not self.uniform and self.n > MAX_DENSE:
+            return (f"an index-dependent [chain] of more than {MAX_DENSE} masses (no closed-form modes, and "
+                    f"the eigenvector solution is dense)")
+        return None
+
+    @property
+    def exact_available(self) -> bool:
+        """Whether an exact solution exists (see :attr:`no_exact_solution`)."""
+        return self.no_exact_solution is None
+
+    @cached_property
+    def spectrum(self):
+        """The accurate modes (:func:`numeric.spectrum.spectrum`: the spring-factor SVD), computed once."""
+        from .spectrum import spectrum
+
+        return spectrum(self.masses, self.spring_ends, self.stiffness)
+
+    def omega_max_bound(self) -> float:
+        """A proven upper bound on ω_max (Gershgorin, :func:`numeric.bounds.omega2_bound`): no eigen-solve."""
+        from .bounds import omega2_bound
+
+        return math.sqrt(omega2_bound(self.masses, self.spring_ends, self.stiffness))
+
+    @cached_property
+    def omega_max(self) -> float:
+        """ω_max of the linear springs: the one rule for stability checks and step plans.
+
+        Exact from the accurate spectrum for ``[masses]`` scenes, from the closed form
+        ``mode_omega()`` for uniform chains, and the proven Gershgorin bound for index-dependent
+        chains (no eigen-solve of a long chain).
+        """
+        if not self.chain:
+            return float(self.spectrum.omega_max)
+        if self.has("mode_omega"):
+            return float(np.max(self.module.mode_omega(**self.params, n=self.n), initial=0.0))
+        return self.omega_max_bound()
+
+    def stable(self, h: float, limit: float = 2.0) -> bool:
+        """Whether a step ``h`` is inside the stability limit, ``ω_max·h < limit`` (the cheap bound
+        clears the usual case without computing ω_max)."""
+        return self.omega_max_bound() * h < limit or self.omega_max * h < limit
+
+    # -- operators --------------------------------------------------------------------------------
+    @cached_property
+    def cubic_stiffness(self) -> np.ndarray | None:
+        """Cubic coefficient k₃ of each spring in ``spring_ends`` order (0 where linear), shape (S,);
+        None for linear springs."""
+        if self.linear:
+            return None
+        k3 = self.module.cubic_constants(**self.params, **({"n": self.n} if self.chain else {}))
+        return np.asarray(k3, dtype=float) * np.ones(self.spring_ends.shape[0])
 
     def damping_rate_matrix(self):
         """``-M⁻¹C``, shape (N, N); None without dampers.
@@ -177,24 +290,17 @@ class System:
 
         return external
 
-    @property
-    def exact_available(self) -> bool:
-        """Whether an exact solution exists: linear; expression forces and ground acceleration (if
-        any) constant + harmonic (tables are exact by first-order hold); a loaded ``[chain]`` only
-        up to ``LOADED_CHAIN_EXACT_MAX`` masses (its exact solution is dense)."""
-        mod = self.module
-        if not self.linear:
-            return False
-        if hasattr(mod, "external_acceleration") and not getattr(mod, "FORCING_HARMONIC", False):
-            return False
-        if self.ground == "expression" and not getattr(mod, "GROUND_HARMONIC", False):
-            return False
-        return not (self.chain and not self.conservative and self.n > LOADED_CHAIN_EXACT_MAX)
-
     def energy(self, x: np.ndarray, v: np.ndarray) -> np.ndarray:
         """Total energy; x, v shape (N, ...) -> (...)."""
         return self.module.energy(x, v, **self.params)
 
+    def kinetic_energy(self, v: np.ndarray) -> np.ndarray:
+        """``Σ m_i v_i² / 2``; v shape (N, ...) -> (...)."""
+        return 0.5 * np.tensordot(self.masses, np.asarray(v) ** 2, axes=(0, 0))
+
     def momentum(self, v: np.ndarray) -> np.ndarray:
         """Total momentum Σ m_i v_i; v shape (N, ...) -> (...)."""
         return np.tensordot(self.masses, v, axes=(0, 0))
+
+
+__all__ = ["System", "interface", "LOADED_CHAIN_EXACT_MAX", "MAX_DENSE"]

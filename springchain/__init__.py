@@ -11,6 +11,8 @@ The public API (each name loads what it needs on first use, so ``import springch
     run = sc.simulate(scene)           # run.t (S,), run.x["modal"] (S, N), run.plot(), run.save(path)
     sc.plan(scene, tol=1e-6)           # the cheapest method and step for a tolerance
     sc.bench(scene, quick=True)        # work-precision benchmark
+    sc.generate(["seed"], out="generated")  # `springchain derive`: write modules (check=True: compare)
+    sc.scaling(max_n=10_000)           # exact set-up vs Verlet step for long chains (files in springchain-out)
     sc.sweep("chain100k", disorder=["mass=uniform(0.5, 1.5)"], samples=100)  # ensembles on Dask
     h = sc.frf("building", input="floor3", output="floor3")  # h.omega, h.magnitude, h.phase, h.plot()
     sc.animate("seed", mode=2, out="springchain-out")          # a GIF of mode 2 oscillating
@@ -29,11 +31,12 @@ __version__ = "0.3.0"
 #: Public names and the module that defines each (imported on first use).
 _LAZY = {
     "load": "._api", "modes": "._api", "simulate": "._api", "plan": "._api", "bench": "._api",
+    "generate": "._api", "scaling": "._api",
     "method_names": "._api", "Modes": "._api", "parse_expression": "._api", "Simulation": "._api",
     "SceneError": ".derive.errors", "RunRefused": ".numeric.errors", "Scene": ".derive.scene",
     "bundled_scenes": "._scenes", "sweep": "._sweep", "SweepResult": "._sweep",
     "frf": "._frf", "FrequencyResponse": "._frf", "animate": "._animate", "Animation": "._animate",
-    "scene_from_dict": ".derive.scene_edit",
+    "scene_from_dict": ".derive.scene",
     "rayleigh_coefficients": "._structural", "response_spectrum": "._structural", "rsa": "._structural",
     "SpectrumResult": "._structural", "RSA": "._structural",
 }

@@ -10,6 +10,7 @@ import math
 from dataclasses import dataclass
 from pathlib import Path
 
+from ._defaults import DEFAULT_OUT
 from .derive.scene import Scene
 
 #: Most frames accepted (a GIF of more is rarely what anyone wants, and memory grows with it).
@@ -60,7 +61,7 @@ def _check(frames, fps):
 
 
 def animate(scene: str | Path | Scene, mode: int | None = None, method: str | None = None, *,
-            out: str | Path = "springchain-out", frames: int = 48, fps: float = 16.0) -> Animation:
+            out: str | Path = DEFAULT_OUT, frames: int = 48, fps: float = 16.0) -> Animation:
     """Write a GIF: mode ``mode`` oscillating through one period, or the trajectory of ``method``.
 
     Parameters
@@ -85,7 +86,7 @@ def animate(scene: str | Path | Scene, mode: int | None = None, method: str | No
     """
     import numpy as np
 
-    from ._api import _system, load, method_names, simulate
+    from ._api import _system, load, simulate
     from .numeric import animation as anim
     from .numeric.errors import RunRefused
 
@@ -93,8 +94,10 @@ def animate(scene: str | Path | Scene, mode: int | None = None, method: str | No
     _check(frames, fps)
     if mode is not None and method is not None:
         raise RunRefused("give a mode or a method, not both", quantity="mode")
-    if method is not None and method not in method_names():
-        raise RunRefused(f"method {method!r} is unknown; accepted: {', '.join(method_names())}", quantity="method")
+    if method is not None:
+        from .numeric.run import registry
+
+        registry.entry(method)  # an unknown name: one line naming the accepted ones
     if mode is not None and (isinstance(mode, bool) or not isinstance(mode, int | np.integer)):
         raise RunRefused(f"mode {mode!r}: accepted: a whole number >= 0", quantity="mode")
     out = Path(out)
@@ -104,7 +107,7 @@ def animate(scene: str | Path | Scene, mode: int | None = None, method: str | No
         if mode is None:
             from .numeric.spectrum import free_pieces
 
-            rigid = int(getattr(system.module, "RIGID_MODES", 0)) if chain else \
+            rigid = system.rigid_modes if chain else \
                 len(free_pieces(system.n, system.spring_ends))
             mode = min(rigid, system.n - 1)  # the lowest elastic mode
         omega, shape, rigid = anim.mode_shape(system, int(mode))

@@ -11,76 +11,45 @@ import shutil
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from ._scenes import resolve
+from ._modules import load_tables, system_of as _system  # noqa: F401  (tests and scripts use these names)
+from ._defaults import DEFAULT_OUT
+from ._scenes import load
 from .derive.errors import SceneError
 from .derive.scene import Scene
 from .numeric.files import human_bytes as _human_bytes
+from .numeric.run.protocol import DEFAULT_ATOL, DEFAULT_RTOL
 
 #: The most memory a simulation's recorded trajectories may take (in-memory runs).
 MAX_RECORDED_BYTES = 4 * 2**30
-#: Default output folder of the commands that write files.
-DEFAULT_OUT = "springchain-out"
-
-
-# -- scenes -----------------------------------------------------------------------------------------
-def load(source: str | Path | Scene | dict) -> Scene:
-    """Read and validate a scene.
-
-    Parameters
-    ----------
-    source : str, Path, Scene or dict
-        A path to a TOML scene file, or the name of a bundled scene (``"seed"``,
-        ``"building"``, ...). A :class:`Scene` is returned as it is; a dict goes through
-        :func:`scene_from_dict`.
-
-    Returns
-    -------
-    Scene
-
-    Raises
-    ------
-    SceneError
-        (a ``ValueError``) with the one-line message the command prints.
-    """
-    if isinstance(source, Scene):
-        return source
-    if isinstance(source, dict):
-        from .derive.scene_edit import scene_from_dict
-
-        return scene_from_dict(source)
-    from .derive.scene import load_scene
-
-    from .numeric.progress import phase
-
-    path = resolve(source)
-    with phase(f"reading {Path(path).name}"):  # a long chain's expressions are checked at every index
-        return load_scene(path)
-
-
-def _system(scene: Scene):
-    """The generated module bound to the scene's parameters (no SymPy for fresh bundled scenes)."""
-    from ._modules import load_module
-    from .numeric.system import System
-
-    module, origin = load_module(scene)  # keyed by the scene's whole content: a changed scene has its own
-    return System.from_module(module, scene.parameters, **load_tables(scene)), origin
-
-
-def load_tables(scene: Scene) -> dict:
-    """The scene's tables as keyword arguments of ``System.from_module`` (data, never source)."""
-    ground = scene.ground
-    return {"tables": tuple((tf.table.t, tf.table.y) for tf in scene.table_forces),
-            "ground_table": None if ground is None or ground.table is None else (ground.table.t, ground.table.y)}
 
 
 # -- modes ------------------------------------------------------------------------------------------
 def _chain_omega2(scene: Scene, chain_modes):
-    """ω² of a chain without closed form from its generated module (None when too large)."""
+    """ω² of a chain without closed form (None when too large): every value from the generated
+    module's ``omega2()`` for a chain whose modes are all listed, else ``{position: ω²}`` of the
+    listed lowest and highest only, by bisection on the bidiagonal spring factor (the route of
+    ``omega2()``, O(n) per value; :mod:`numeric.chain_spectrum`)."""
     if chain_modes.omega2 is not None:
         return None
     from ._modules import load_module
+    from .derive.chain import MAX_MODES_LISTED, MODES_LISTED_EACH_END
+    from .generated.contract import End, read
 
     module, _ = load_module(scene)
+    n = scene.chain.n
+    if n > MAX_MODES_LISTED and read(module).left is not End.RING:
+        import numpy as np
+
+        from .numeric.chain_spectrum import bidiagonal_factor, singular_values
+        from .numeric.progress import phase
+
+        e = MODES_LISTED_EACH_END
+        with phase(f"modes: the {e} lowest and {e} highest of {n} (bisection on the spring factor)"):
+            p = scene.parameters
+            f = bidiagonal_factor(np.asarray(module.masses(**p), dtype=float), module.spring_ends(n=n),
+                                  np.asarray(module.spring_constants(**p), dtype=float))
+            w = singular_values(f, e, e)
+        return dict(zip(list(range(e)) + list(range(n - e, n)), (w * w).tolist()))
     try:
         return module.omega2(**scene.parameters)
     except ValueError:  # a non-uniform ring longer than the module's MAX_DENSE
@@ -241,9 +210,9 @@ def modes(scene: str | Path | Scene) -> Modes:
 # -- simulation -------------------------------------------------------------------------------------
 def method_names() -> list[str]:
     """Every method :func:`simulate` takes by name, the exact one first."""
-    from .numeric.methods import METHOD_NAMES
+    from .numeric.run import registry
 
-    return list(METHOD_NAMES)
+    return list(registry.names())
 
 
 @dataclass(frozen=True)
@@ -280,7 +249,7 @@ class Simulation:
 
     def save(self, path: str | Path) -> Path:
         """Write the NPZ ``springchain simulate`` writes (``t``, ``x_<method>``, ``v_<method>``)."""
-        from .numeric.simulate import save_npz
+        from .numeric.npz import save_npz
 
         path = Path(path)
         save_npz(path, self.t, self.x, self.v, self.extra)
@@ -362,35 +331,110 @@ class Simulation:
         return simulation_bundle(self)
 
 
+def _recorded(scene: Scene, steps: int, record_every: int, methods: int) -> tuple[int, str]:
+    """Bytes of the recorded trajectories, and how the run is described in a refusal."""
+    need = (steps // record_every + 1) * scene.n * 8 * 2 * methods
+    return need, (f"{steps}: {steps} steps x {scene.n} masses (recorded every {record_every}, {methods} methods) "
+                  f"would {{}} {_human_bytes(need)}")
+
+
 def _check_memory(scene: Scene, steps: int, record_every: int, methods: int, key: str) -> None:
-    frames = steps // record_every + 1
-    need = frames * scene.n * 8 * 2 * methods
+    need, what = _recorded(scene, steps, record_every, methods)
     if need > MAX_RECORDED_BYTES:
         raise SceneError(scene.file, key,
-                         f"{steps}: {steps} steps x {scene.n} masses (recorded every {record_every}, "
-                         f"{methods} methods) would need {_human_bytes(need)} for the trajectories; "
-                         f"accepted: at most {_human_bytes(MAX_RECORDED_BYTES)} - raise the recording "
-                         f"stride (--record-every) or lower the steps (--steps)")
+                         what.format("need") + f" for the trajectories; accepted: at most "
+                         f"{_human_bytes(MAX_RECORDED_BYTES)} - raise the recording stride (--record-every) or "
+                         f"lower the steps (--steps)")
 
 
 def _check_disk(scene: Scene, steps: int, record_every: int, methods: int, out: Path, key: str) -> None:
-    frames = steps // record_every + 1
-    need = frames * scene.n * 8 * 2 * methods
+    need, what = _recorded(scene, steps, record_every, methods)
     probe = out
     while not probe.exists() and probe != probe.parent:
         probe = probe.parent
     free = shutil.disk_usage(probe).free
     if need > 0.95 * free:
         raise SceneError(scene.file, key,
-                         f"{steps}: {steps} steps x {scene.n} masses (recorded every {record_every}, "
-                         f"{methods} methods) would write {_human_bytes(need)} into {out}, which has "
-                         f"{_human_bytes(free)} free; accepted: a run that fits - raise the recording "
-                         f"stride (--record-every), lower the steps (--steps) or choose another --out")
+                         what.format("write") + f" into {out}, which has {_human_bytes(free)} free; accepted: a run "
+                         f"that fits - raise the recording stride (--record-every), lower the steps (--steps) or "
+                         f"choose another --out")
+
+
+def _grid_settings(sc: Scene, dt, steps, record_every) -> tuple[float, int, int]:
+    """The run's step, steps and recording stride: the arguments, else the scene's; refused when not
+    a finite dt > 0 and whole numbers > 0."""
+    import numpy as np
+
+    from .numeric.errors import RunRefused
+
+    dt = dt if dt is not None else sc.dt
+    steps = steps if steps is not None else sc.steps
+    record_every = record_every if record_every is not None else sc.record_every
+    if not (isinstance(dt, float | int) and math.isfinite(dt) and dt > 0):
+        raise RunRefused(f"dt {dt!r}: accepted: a finite number > 0", quantity="dt")
+    for what, value in (("steps", steps), ("record_every", record_every)):
+        if not (isinstance(value, int | np.integer) and value > 0):
+            raise RunRefused(f"{what} {value!r}: accepted: a whole number > 0", quantity=what)
+    return dt, steps, record_every
+
+
+def _streamed(sc: Scene, system, names, dt, steps, record_every, out, figures, progress):
+    """A ``[chain]`` run streamed into ``out`` (bounded memory), read back from its NPZ."""
+    import numpy as np
+
+    from .numeric.simulate import stream_methods
+
+    out = Path(out if out is not None else DEFAULT_OUT)
+    _check_disk(sc, steps, record_every, len(names), out, "steps")
+    out.mkdir(parents=True, exist_ok=True)
+    summary = stream_methods(system, sc.x0, sc.v0, dt, steps, names, record_every, out, sc.name,
+                             figures=figures, progress=progress)
+    npz = Path(summary["npz"])
+    data = np.load(npz)
+    extra = {k: data[k] for k in data.files if k.startswith(("aabs_", "xabs_"))}
+    return (summary, data["t"], {m: data[f"x_{m}"] for m in names}, {m: data[f"v_{m}"] for m in names}, extra,
+            npz, tuple(Path(p) for p in summary["figures"]))
+
+
+def _kept(sc: Scene, system, names, dt, steps, record_every, options, out, figures, springs=False):
+    """An in-memory run; the NPZ (and figures) written into ``out`` when given; with ``springs`` the
+    drift, spring-force and base-shear arrays of every method among its NPZ arrays."""
+    from .numeric.absolute import absolute_npz_arrays
+    from .numeric.compare import compare
+    from .numeric.progress import phase
+    from .numeric.simulate import run_methods
+
+    _check_memory(sc, steps, record_every, len(names), "steps")
+    runs = run_methods(system, sc.x0, sc.v0, dt, steps, names, record_every, spectrum_source=options.spectrum,
+                       rtol=options.rtol, atol=options.atol, progress=options.progress)
+    t = next(iter(runs.values())).t
+    x, v = {m: r.x for m, r in runs.items()}, {m: r.v for m, r in runs.items()}
+    extra = absolute_npz_arrays(system, t, x, v)
+    if springs:
+        from ._structural import spring_series
+
+        for m in names:
+            extra[f"drift_{m}"], extra[f"spring_force_{m}"], extra[f"base_shear_{m}"] = spring_series(sc, x[m])
+    npz, figs = None, ()
+    if out is not None:
+        from .numeric.npz import save_npz
+
+        out = Path(out)
+        out.mkdir(parents=True, exist_ok=True)
+        npz = out / f"{sc.name}.npz"
+        with phase(f"writing {npz.name}", enabled=options.progress):
+            save_npz(npz, t, x, v, extra)
+        if figures:
+            from .numeric.figures import write_figures
+
+            with phase("figures", enabled=options.progress):
+                figs = tuple(write_figures(out, sc.name, sc.mass_names, system, runs))
+    return compare(system, runs), t, x, v, extra, npz, figs
 
 
 def simulate(scene: str | Path | Scene, methods: list[str] | None = None, dt: float | None = None,
              steps: int | None = None, record_every: int | None = None, *, spectrum: str = "svd",
-             rtol: float = 1e-10, atol: float = 1e-12, out: str | Path | None = None,
+             rtol: float = DEFAULT_RTOL, atol: float = DEFAULT_ATOL, out: str | Path | None = None,
              figures: bool = False, progress: bool | None = None, springs: bool = False) -> Simulation:
     """Simulate a scene from its initial state with exact and numerical methods.
 
@@ -406,10 +450,10 @@ def simulate(scene: str | Path | Scene, methods: list[str] | None = None, dt: fl
     spectrum : {"svd", "closed-form"}
         Modes of the exact solution: the spring-factor SVD (accurate) or the generated closed forms.
     rtol, atol : float
-        Tolerances of the adaptive methods (``rk45``, ``dop853``, ``lsoda``).
+        Tolerances of the adaptive methods (``rk45``, ``dop853``, ``lsoda``, ``dprkn6/8/12``).
     out : str or Path, optional
         Folder for ``<scene>.npz`` (and figures with ``figures=True``). ``[chain]`` scenes stream
-        their frames to disk, into ``out`` or ``springchain-out``.
+        their frames to disk, into ``out`` or :data:`DEFAULT_OUT` (``springchain-out``).
     figures : bool
         Write PNG figures into ``out``.
     progress : bool, optional
@@ -425,82 +469,40 @@ def simulate(scene: str | Path | Scene, methods: list[str] | None = None, dt: fl
     """
     import time
 
-    import numpy as np
-
-    from .numeric.errors import RunRefused
     from .numeric import simulate as sim
+    from .numeric.progress import phase
+    from .numeric.run import registry
+    from .numeric.run.protocol import Options
 
     sc = load(scene)
     _check_motion(sc, "simulate")
-    dt = dt if dt is not None else sc.dt
-    steps = steps if steps is not None else sc.steps
-    record_every = record_every if record_every is not None else sc.record_every
-    if not (isinstance(dt, float | int) and math.isfinite(dt) and dt > 0):
-        raise RunRefused(f"dt {dt!r}: accepted: a finite number > 0", quantity="dt")
-    for what, value in (("steps", steps), ("record_every", record_every)):
-        if not (isinstance(value, int | np.integer) and value > 0):
-            raise RunRefused(f"{what} {value!r}: accepted: a whole number > 0", quantity=what)
-    if sc.chain is None:  # refuse before any derivation when even one method would not fit
-        _check_memory(sc, steps, record_every, len(methods) if methods else 1, "steps")
-    from .numeric.progress import phase
+    dt, steps, record_every = _grid_settings(sc, dt, steps, record_every)
+    if springs and sc.chain is not None:
+        from .numeric.errors import RunRefused
 
-    with phase("loading the generated module (deriving it if not cached)", enabled=progress):
-        system, origin = _system(sc)
-    names = methods or sim.default_methods(system)
-    notes: list[str] = []
-    if not methods:  # a default Verlet that would be unstable at this dt gives way to the exact method
-        names, notes = sim.unstable_defaults(system, names, dt)
-    unknown = [m for m in names if m not in method_names()]
-    if unknown:
-        raise RunRefused(f"method {unknown[0]!r} is unknown; accepted: {', '.join(method_names())}",
-                         quantity="method")
-    if spectrum not in ("svd", "closed-form"):
-        raise RunRefused(f"spectrum {spectrum!r}: accepted: 'svd' or 'closed-form'", quantity="spectrum")
-    t0 = time.perf_counter()
-    if springs and system.chain:
         raise RunRefused("springs: the drift and spring-force arrays of a [chain] scene are not written yet "
                          "(streamed runs); accepted: a [masses] scene", quantity="springs")
+    if sc.chain is None:  # refuse before any derivation when even one method would not fit
+        _check_memory(sc, steps, record_every, len(methods) if methods else 1, "steps")
+    with phase("loading the generated module (deriving it if not cached)", enabled=progress):
+        system, origin = _system(sc)
+    names, notes = methods, []
+    if not methods:  # a default Verlet that would be unstable at this dt gives way to the exact method
+        names, notes = sim.unstable_defaults(system, sim.default_methods(system), dt)
+    for name in names:
+        registry.entry(name)  # unknown names: one line naming the accepted ones
+    options = Options(rtol, atol, spectrum, progress)  # refuses an unknown spectrum source
+    t0 = time.perf_counter()
     if system.chain:
-        out = Path(out if out is not None else DEFAULT_OUT)
-        _check_disk(sc, steps, record_every, len(names), out, "steps")
-        out.mkdir(parents=True, exist_ok=True)
-        summary = sim.stream_methods(system, sc.x0, sc.v0, dt, steps, names, record_every, out, sc.name,
-                                     figures=figures, progress=progress)
-        npz = Path(summary["npz"])
-        figs = tuple(Path(p) for p in summary["figures"])
-        data = np.load(npz)
-        t = data["t"]
-        x = {m: data[f"x_{m}"] for m in names}
-        v = {m: data[f"v_{m}"] for m in names}
-        extra = {k: data[k] for k in data.files if k.startswith(("aabs_", "xabs_"))}
+        summary, t, x, v, extra, npz, figs = _streamed(sc, system, names, dt, steps, record_every, out, figures,
+                                                       progress)
     else:
-        _check_memory(sc, steps, record_every, len(names), "steps")
-        runs = sim.run_methods(system, sc.x0, sc.v0, dt, steps, names, record_every,
-                               spectrum_source=spectrum, rtol=rtol, atol=atol, progress=progress)
-        summary = sim.compare(system, runs)
-        t = next(iter(runs.values())).t
-        x = {m: r.x for m, r in runs.items()}
-        v = {m: r.v for m, r in runs.items()}
-        npz, figs = None, ()
-        extra = sim.absolute_npz_arrays(system, t, x, v)
-        if springs:
-            from ._structural import spring_series
-
-            for m in names:
-                extra[f"drift_{m}"], extra[f"spring_force_{m}"], extra[f"base_shear_{m}"] = spring_series(sc, x[m])
-        if out is not None:
-            out = Path(out)
-            out.mkdir(parents=True, exist_ok=True)
-            npz = out / f"{sc.name}.npz"
-            with phase(f"writing {npz.name}", enabled=progress):
-                sim.save_npz(npz, t, x, v, extra)
-            if figures:
-                with phase("figures", enabled=progress):
-                    figs = tuple(sim.write_figures(out, sc.name, sc.mass_names, system, runs))
+        summary, t, x, v, extra, npz, figs = _kept(sc, system, names, dt, steps, record_every, options, out, figures,
+                                                   springs)
     summary.update({"scene": sc.name, "module": origin, "dt": dt, "steps": steps, "t_end": steps * dt,
                     "npz": None if npz is None else str(npz), "figures": [str(p) for p in figs],
                     "methods_that_apply": sim.applicable(system),
-                    "energy_conserved": not (system.damped or system.forced),
+                    "energy_conserved": system.energy_conserved,
                     "seconds": time.perf_counter() - t0, "notes": notes})
     return Simulation(sc, t, x, v, summary, npz, figs, extra)
 
@@ -588,6 +590,127 @@ def bench(scene: str | Path | Scene = "seed", t_end: float | None = None, *, qui
     return with_derive_seconds(result, derive_seconds)
 
 
+# -- generated modules -------------------------------------------------------------------------------
+@dataclass(frozen=True)
+class Generated:
+    """One scene's generated module, written or checked (see :func:`generate`)."""
+
+    scene: Scene
+    path: Path  #: where the module is
+    fresh: bool | None  #: with ``check``, whether it equals a fresh render; None when it was written
+    lines: int | None  #: lines written (None with ``check``)
+    seconds: float
+    message: str = ""  #: ``"<path>: fresh"``, ``"<path>: stale (run ...)"``, ``"<path>: missing (run ...)"``
+
+
+def generate(scenes=(), out: str | Path | None = None, *, check: bool = False) -> list[Generated]:
+    """What ``springchain derive`` does: write the generated module of each scene into ``out``, or
+    (``check``) compare it with a fresh render. (``springchain.derive`` is the symbolic subpackage,
+    so the function is called ``generate``.)
+
+    Parameters
+    ----------
+    scenes : iterable of (str, Path or Scene)
+        As for :func:`load`; empty: every bundled scene. All are loaded before anything is written.
+    out : str or Path, optional
+        Folder of the modules, written or checked (default ``./generated``: ``check`` reads where
+        writing writes).
+    check : bool
+        Write nothing; report whether each module on disk is fresh.
+
+    Returns
+    -------
+    list of Generated
+    """
+    import time
+
+    from . import _modules
+    from ._scenes import bundled_scenes
+    from .numeric.progress import phase
+
+    sources = list(scenes) or bundled_scenes()
+    if not sources:
+        raise SceneError(None, "SCENE", "nothing to derive: no scene given and no bundled scenes found; "
+                                        "accepted: scene files, e.g. `springchain derive my_scene.toml`")
+    loaded = [load(p) for p in sources]  # validate everything before writing anything
+    folder = Path(out) if out is not None else Path.cwd() / "generated"
+    done = []
+    for sc in loaded:
+        t0 = time.perf_counter()
+        if check:
+            ok, msg = _modules.check(sc, folder)
+            done.append(Generated(sc, _modules.module_path(sc, folder), ok, None, time.perf_counter() - t0, msg))
+            continue
+        with phase(f"deriving {sc.name!r}"):
+            d = _modules.derive(sc)
+        path = _modules.write(d, folder)
+        done.append(Generated(sc, path, None, len(d.source.splitlines()), time.perf_counter() - t0, f"{path}: written"))
+    return done
+
+
+# -- scaling ---------------------------------------------------------------------------------------
+@dataclass(frozen=True)
+class Scaling:
+    """``springchain scaling``'s measurements: the numeric scaling table and the symbolic cost.
+
+    Attributes
+    ----------
+    result : springchain.numeric.scaling.ScalingResult
+    symbolic : springchain.symbolic_cost.SymbolicResult or None
+    files : tuple of Path
+    """
+
+    result: object = field(repr=False)
+    symbolic: object = field(repr=False)
+    files: tuple[Path, ...] = ()
+
+    def to_json(self) -> dict:
+        """What ``springchain scaling --json`` prints."""
+        from .numeric import scaling_report
+
+        return {"scaling": scaling_report.jsonable(self.result.to_json()),
+                "symbolic": None if self.symbolic is None else scaling_report.jsonable(self.symbolic.to_json()),
+                "files": [str(p) for p in self.files]}
+
+    def to_markdown(self) -> str:
+        """The tables ``springchain scaling`` prints."""
+        from . import symbolic_cost
+        from .numeric import scaling_report
+
+        text = scaling_report.markdown(self.result) + "\n"
+        return text + (symbolic_cost.markdown(self.symbolic) + "\n" if self.symbolic is not None else "")
+
+
+def scaling(max_n: int = 1_000_000, symbolic_max_n: int = 40, out: str | Path = DEFAULT_OUT, *,
+            progress: bool = True) -> Scaling:
+    """Exact-solution set-up against one Verlet step for chains of N = 3 … ``max_n`` masses, the memory
+    floor, and (up to ``symbolic_max_n`` masses; 0 skips it) derive time against SymPy's ``LagrangesMethod``.
+
+    Writes ``scaling.{json,md,png}`` (and ``symbolic-cost.*``) into ``out``.
+    """
+    from . import symbolic_cost
+    from .numeric import scaling as sc_mod, scaling_report
+    from .numeric.errors import RunRefused
+
+    if isinstance(max_n, bool) or not isinstance(max_n, int) or max_n < 3:
+        raise RunRefused(f"max_n {max_n!r}: accepted: a whole number >= 3", quantity="max_n")
+    if isinstance(symbolic_max_n, bool) or not isinstance(symbolic_max_n, int) or symbolic_max_n < 0:
+        raise RunRefused(f"symbolic_max_n {symbolic_max_n!r}: accepted: a whole number >= 0 (0 skips it)",
+                         quantity="symbolic_max_n")
+    say = sc_mod.print_progress if progress else (lambda line: None)
+    out = Path(out)
+    sizes = tuple(n for n in sc_mod.DEFAULT_SIZES if n < max_n) + (max_n,)
+    uniform, random = symbolic_cost.scaling_cases()
+    result = sc_mod.run(uniform, random, sc_mod.ScalingConfig(sizes=sizes), progress=say)
+    files = scaling_report.write(result, out)
+    sym = None
+    if symbolic_max_n:
+        small = tuple(n for n in (3, 10, 20, 40, 80, 160, 320) if n <= symbolic_max_n)
+        sym = symbolic_cost.run(small, symbolic_cost.DEFAULT_CHAIN_SIZES, progress=lambda line: say("symbolic: " + line))
+        files += symbolic_cost.write(sym, out)
+    return Scaling(result, sym, tuple(files))
+
+
 def sweep(*args, **kwargs):
     """Ensembles and parameter studies on Dask: see :func:`springchain._sweep.sweep`."""
     from ._sweep import sweep as _sweep
@@ -595,5 +718,5 @@ def sweep(*args, **kwargs):
     return _sweep(*args, **kwargs)
 
 
-__all__ = ["load", "modes", "simulate", "plan", "bench", "sweep", "method_names", "Modes", "Simulation",
-           "MAX_RECORDED_BYTES"]
+__all__ = ["load", "modes", "simulate", "plan", "bench", "generate", "scaling", "sweep", "method_names", "Modes",
+           "Simulation", "Generated", "Scaling", "MAX_RECORDED_BYTES", "DEFAULT_OUT"]

@@ -9,6 +9,7 @@ import math
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from ._defaults import DEFAULT_OUT
 from .derive.scene import Scene
 
 #: Most base grid points accepted.
@@ -105,7 +106,7 @@ class FrequencyResponse:
                           f"{self.scene.name}: receptance X_{self.output} / F_{self.input}",
                           peaks=peaks, infinite=infinite[:200], hidden=hidden[:200])
 
-    def save(self, out: str | Path = "springchain-out") -> Path:
+    def save(self, out: str | Path = DEFAULT_OUT) -> Path:
         """Write the Bode figure as ``OUT/<scene>-frf-<input>-<output>.png``; returns its path."""
         from .numeric import plots
 
@@ -198,7 +199,8 @@ def frf(scene: str | Path | Scene, input, output, omega_min: float | None = None
     sides and the figure marks ω_j by a line. Cubic springs enter by their linear part; forces,
     gravity and ground motion do not change H.
     """
-    from ._api import _system, load
+    from ._modules import system_of as _system
+    from ._scenes import load
     from .numeric.errors import RunRefused
     from .numeric.frf import frequency_response
 
@@ -208,7 +210,14 @@ def frf(scene: str | Path | Scene, input, output, omega_min: float | None = None
     if isinstance(points, bool) or not isinstance(points, int) or not 2 <= points <= MAX_POINTS:
         raise RunRefused(f"points {points!r}: accepted: a whole number 2 ... {MAX_POINTS}", quantity="points")
     system, _ = _system(sc)
-    response = frequency_response(system, i, o, lo, hi, points)
+    model, modes = None, None
+    if sc.chain is None and system.damped:  # the resonance table from the damped modes `modes` prints
+        from .derive.damping_report import damped_modes
+        from .derive.model import Model
+
+        model = Model(sc)
+        modes = [(r.omega_n, r.zeta, r.omega_d) for r in damped_modes(model, None).rows]
+    response = frequency_response(system, i, o, lo, hi, points, modes)
     notes = []
     if not system.linear:
         notes.append("cubic springs: the response of the linearisation about x = 0 (their linear part)")
@@ -221,7 +230,7 @@ def frf(scene: str | Path | Scene, input, output, omega_min: float | None = None
         from .derive.transfer import MAX_MASSES, transfer_function
 
         if sc.n <= MAX_MASSES:
-            tf = transfer_function(Model(sc), i, o)
+            tf = transfer_function(model or Model(sc), i, o)
             if tf is None:
                 notes.append("the closed-form transfer function exceeded its time budget")
     name = lambda k: str(k) if sc.chain is not None else sc.mass_names[k]  # noqa: E731

@@ -56,6 +56,30 @@ def resolve(source: str | Path) -> Path:
                      f"accepted: a path to a TOML scene or one of {', '.join(names)}")
 
 
+def load(source):
+    """Read and validate a scene (:func:`springchain.load`): a path to a TOML file, the name of a
+    bundled scene, a :class:`~springchain.derive.scene.Scene` (returned as it is) or a dict (through
+    :func:`springchain.scene_from_dict`).
+
+    Raises
+    ------
+    SceneError
+        (a ``ValueError``) with the one-line message the command prints.
+    """
+    from .derive.scene import Scene, load_scene
+    from .numeric.progress import phase
+
+    if isinstance(source, Scene):
+        return source
+    if isinstance(source, dict):
+        from .derive.scene import scene_from_dict
+
+        return scene_from_dict(source)
+    path = resolve(source)
+    with phase(f"reading {Path(path).name}"):  # a long chain's expressions are checked at every index
+        return load_scene(path)
+
+
 def display_path(path: Path) -> Path:
     """``path`` relative to the current folder when it lies below it (shorter messages)."""
     try:

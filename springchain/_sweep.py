@@ -7,11 +7,10 @@ import os
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from ._defaults import DEFAULT_SWEEP_OUT
 from .derive.scene import Scene
 from .numeric.errors import RunRefused
 
-#: Default output folder of a sweep.
-DEFAULT_SWEEP_OUT = "springchain-sweep"
 #: A sweep whose remaining samples would take less than this in-process (predicted from two probe
 #: samples) runs in-process: starting worker processes costs seconds of its own.
 IN_PROCESS_SECONDS = 10.0
@@ -167,7 +166,8 @@ def sweep(scene: str | Path | Scene, vary=(), disorder=(), samples: int = 100, *
     -------
     SweepResult
     """
-    from ._api import _system, load
+    from ._modules import system_of as _system
+    from ._scenes import load
     from .numeric import sweep_driver, sweep_summary
     from .numeric.realisations import SweepSpec
 

@@ -13,7 +13,9 @@ import time
 from pathlib import Path
 
 from . import __version__
+from ._defaults import DEFAULT_BENCH_OUT, DEFAULT_OUT, DEFAULT_SWEEP_OUT
 from .derive.errors import SceneError
+from .numeric.run.protocol import DEFAULT_ATOL, DEFAULT_RTOL
 
 EXIT_USAGE = 2
 
@@ -31,40 +33,29 @@ class _Parser(argparse.ArgumentParser):
         raise SystemExit(EXIT_USAGE)
 
 
-def _positive_float(flag):
+def _number(flag: str, parse, ok, accepted: str):
+    """An argparse type: ``parse(text)`` checked by ``ok(value)``; one line naming the flag otherwise."""
     def conv(text):
         try:
-            value = float(text)
+            value = parse(text)
         except ValueError:
-            raise argparse.ArgumentTypeError(f"{flag} {text!r}: not a number; accepted: a number > 0") from None
-        if not math.isfinite(value) or value <= 0:
-            raise argparse.ArgumentTypeError(f"{flag} {text!r}: accepted: a finite number > 0")
+            raise argparse.ArgumentTypeError(f"{flag} {text!r}: accepted: {accepted}") from None
+        if not ok(value):
+            raise argparse.ArgumentTypeError(f"{flag} {text!r}: accepted: {accepted}")
         return value
     return conv
+
+
+def _positive_float(flag):
+    return _number(flag, float, lambda v: math.isfinite(v) and v > 0, "a finite number > 0")
 
 
 def _positive_int(flag):
-    def conv(text):
-        try:
-            value = int(text)
-        except ValueError:
-            raise argparse.ArgumentTypeError(f"{flag} {text!r}: accepted: a whole number > 0") from None
-        if value <= 0:
-            raise argparse.ArgumentTypeError(f"{flag} {text!r}: accepted: a whole number > 0")
-        return value
-    return conv
+    return _number(flag, int, lambda v: v > 0, "a whole number > 0")
 
 
 def _whole(flag):
-    def conv(text):
-        try:
-            value = int(text)
-        except ValueError:
-            raise argparse.ArgumentTypeError(f"{flag} {text!r}: accepted: a whole number >= 0") from None
-        if value < 0:
-            raise argparse.ArgumentTypeError(f"{flag} {text!r}: accepted: a whole number >= 0")
-        return value
-    return conv
+    return _number(flag, int, lambda v: v >= 0, "a whole number >= 0")
 
 
 #: The commands that take a SCENE, and so ``--set NAME=VALUE``.
@@ -107,31 +98,15 @@ def _apply_set(args) -> None:
 
 # -- commands: parse, call the API, print -------------------------------------------------------
 def cmd_derive(args) -> int:
-    from . import _modules
-    from ._api import load
-    from ._scenes import bundled_scenes
+    from ._api import generate
 
-    sources = args.scene or bundled_scenes()
-    if not sources:
-        raise SceneError(None, "SCENE", "nothing to derive: no scene given and no bundled scenes found; "
-                                        "accepted: scene files, e.g. `springchain derive my_scene.toml`")
-    scenes = [load(p) for p in sources]  # validate everything before writing anything
-    out = Path(args.out) if args.out else Path.cwd() / "generated"  # --check reads where derive writes
-    status = 0
-    for scene in scenes:
-        t0 = time.perf_counter()
+    results = generate(args.scene, args.out, check=args.check)
+    for d in results:
         if args.check:
-            ok, msg = _modules.check(scene, out)
-            print(("ok     " if ok else "STALE  ") + msg)
-            status |= 0 if ok else 1
+            print(("ok     " if d.fresh else "STALE  ") + d.message)
         else:
-            from .numeric.progress import phase
-
-            with phase(f"deriving {scene.name!r}"):
-                d = _modules.derive(scene)
-            path = _modules.write(d, out)
-            print(f"wrote {path} ({len(d.source.splitlines())} lines, {time.perf_counter() - t0:.2f} s)")
-    return status
+            print(f"wrote {d.path} ({d.lines} lines, {d.seconds:.2f} s)")
+    return 0 if all(d.fresh is not False for d in results) else 1
 
 
 def cmd_modes(args) -> int:
@@ -170,22 +145,18 @@ def _print_simulation(result) -> None:
         print(f"  wrote {p}")
 
 
-def _simulate(args, scene) -> "object":
+def cmd_simulate(args) -> int:
     from ._api import simulate
 
     try:
-        return simulate(scene, methods=args.method, dt=args.dt, steps=args.steps, record_every=args.record_every,
-                        spectrum=args.spectrum, rtol=args.rtol, atol=args.atol, out=args.out,
-                        figures=not args.no_figures, springs=getattr(args, "springs", False))
+        result = simulate(args.scene, methods=args.method, dt=args.dt, steps=args.steps, record_every=args.record_every,
+                          spectrum=args.spectrum, rtol=args.rtol, atol=args.atol, out=args.out,
+                          figures=not args.no_figures, springs=args.springs)
     except SceneError as exc:  # name the flag that set the value, when one did
         flag = {"steps": "--steps" if args.steps is not None else "simulation.steps"}.get(exc.key)
         if flag and flag != exc.key:
             raise SceneError(exc.file, flag, exc.detail) from None
         raise
-
-
-def cmd_simulate(args) -> int:
-    result = _simulate(args, args.scene)
     if args.json:
         print(_dumps(result.summary, indent=2))
     else:
@@ -194,24 +165,18 @@ def cmd_simulate(args) -> int:
 
 
 def cmd_run(args) -> int:
-    from . import _modules
-    from ._api import load, modes
+    from ._api import generate, load, modes, simulate
+    from ._modules import generated_dir
     from ._scenes import display_path, resolve
 
     t0 = time.perf_counter()
     scene = load(display_path(resolve("seed")))
-    m = modes(scene)
-    print(m.to_text())
-    path = _modules.module_path(scene)
-    d = _modules.derive(scene)
-    if path.exists() and path.read_text(encoding="utf-8") == d.source:
-        print(f"generated module {display_path(path)} is fresh (equals a new render)")
-    else:
-        print(f"generated module {display_path(path)} is STALE: regenerate with `springchain derive`")
+    print(modes(scene).to_text())
+    d = generate([scene], generated_dir(), check=True)[0]  # the package's own module
+    print(f"generated module {display_path(d.path)} is " + ("fresh (equals a new render)" if d.fresh else
+                                                           "STALE: regenerate with `springchain derive`"))
     print()
-    args.method, args.dt, args.steps, args.record_every = None, None, None, None
-    args.spectrum, args.no_figures, args.rtol, args.atol = "svd", False, 1e-10, 1e-12
-    _print_simulation(_simulate(args, scene))
+    _print_simulation(simulate(scene, out=args.out, figures=True))
     print(f"\nfigures and data are in {Path(args.out).resolve()}  ({time.perf_counter() - t0:.2f} s in all)")
     return 0
 
@@ -257,35 +222,14 @@ def cmd_plan(args) -> int:
 
 
 def cmd_scaling(args) -> int:
-    """Scaling to long chains (numeric.scaling) and the symbolic cost (symbolic_cost)."""
-    from . import symbolic_cost
-    from .numeric import scaling, scaling_report
-    from .numeric.errors import RunRefused
+    from ._api import scaling
 
-    if args.max_n < 3:
-        raise RunRefused(f"--max-n {args.max_n}: accepted: a whole number >= 3")
-    if args.symbolic_max_n < 0:
-        raise RunRefused(f"--symbolic-max-n {args.symbolic_max_n}: accepted: a whole number >= 0 (0 skips it)")
-    out = Path(args.out)
-    sizes = tuple(n for n in scaling.DEFAULT_SIZES if n < args.max_n) + (args.max_n,)
-    uniform, random = symbolic_cost.scaling_cases()
-    result = scaling.run(uniform, random, scaling.ScalingConfig(sizes=sizes), progress=scaling.print_progress)
-    paths = scaling_report.write(result, out)
-    sym = None
-    if args.symbolic_max_n:
-        say = lambda line: scaling.print_progress("symbolic: " + line)  # noqa: E731
-        small = tuple(n for n in (3, 10, 20, 40, 80, 160, 320) if n <= args.symbolic_max_n)
-        sym = symbolic_cost.run(small, symbolic_cost.DEFAULT_CHAIN_SIZES, progress=say)
-        paths += symbolic_cost.write(sym, out)
+    result = scaling(args.max_n, args.symbolic_max_n, args.out)
     if args.json:
-        print(_dumps({"scaling": scaling_report.jsonable(result.to_json()),
-                          "symbolic": None if sym is None else scaling_report.jsonable(sym.to_json()),
-                          "files": [str(p) for p in paths]}, indent=1))
+        print(_dumps(result.to_json(), indent=1))
         return 0
-    print(scaling_report.markdown(result))
-    if sym is not None:
-        print(symbolic_cost.markdown(sym))
-    for path in paths:
+    print(result.to_markdown(), end="")
+    for path in result.files:
         print(f"wrote {path}")
     return 0
 
@@ -400,24 +344,37 @@ def add_structural_commands(sub) -> None:
     rs.set_defaults(func=cmd_rsa)
 
 
-# -- parser ---------------------------------------------------------------------------------
-def build_parser() -> argparse.ArgumentParser:
-    p = _Parser(prog="springchain",
-                description="Mass-spring chains: a scene file -> equations of motion and closed-form "
-                            "normal modes (SymPy) -> generated NumPy code -> exact and numerical "
-                            "simulations with plots.",
-                epilog="Start with `springchain run` (the bundled three-mass reference scene).")
-    p.add_argument("--version", action="version", version=f"springchain {__version__}")
-    sub = p.add_subparsers(dest="command", required=True, parser_class=_Parser)
+# -- parser: one function per command ---------------------------------------------------------
+def _scene(p, example: str = "seed") -> None:
+    """The SCENE argument: a path or a bundled scene's name."""
+    p.add_argument("scene", help="a scene file (TOML) or the name of a bundled scene" + (f", e.g. {example}" if example else ""))
 
+
+def _out(p, default: str, help: str = "output folder (default: %(default)s)", **kw) -> None:
+    p.add_argument("--out", default=default, help=help, **kw)
+
+
+def _json(p, help: str = "print one JSON object and nothing else") -> None:
+    p.add_argument("--json", action="store_true", help=help)
+
+
+def _no_progress(p) -> None:
+    p.add_argument("--no-progress", action="store_true", help="no progress lines on stderr")
+
+
+def _add_run(sub) -> None:
+    """``springchain run``: the main job."""
     r = sub.add_parser("run", help="the main job on the bundled reference scene",
                        description="Derive the bundled reference scene (masses m, 3m, m; springs k), print "
                                    "its equations and closed-form modes, check the checked-in generated "
                                    "module is fresh, simulate with the exact modal solution and velocity "
                                    "Verlet, and write figures.")
-    r.add_argument("--out", default="springchain-out", help="folder for figures and data (default: %(default)s)")
+    r.add_argument("--out", default=DEFAULT_OUT, help="folder for figures and data (default: %(default)s)")
     r.set_defaults(func=cmd_run)
 
+
+def _add_derive(sub) -> None:
+    """``springchain derive``: write or check generated modules."""
     d = sub.add_parser("derive", help="generate NumPy modules from scenes",
                        description="Derive each scene and write DIR/<name>.py (plain NumPy, deterministic). "
                                    "With no SCENE: every bundled scene. --check compares with the same DIR.")
@@ -428,24 +385,27 @@ def build_parser() -> argparse.ArgumentParser:
                         "./generated) differs from a fresh render")
     d.set_defaults(func=cmd_derive)
 
+
+def _add_modes(sub) -> None:
+    """``springchain modes``: equations and modes."""
     m = sub.add_parser("modes", help="print equations of motion and closed-form normal modes",
                        description="Print the Lagrangian derivation and the normal modes of a scene.")
-    m.add_argument("scene", help="a scene file (TOML) or the name of a bundled scene, e.g. seed")
+    _scene(m)
     g = m.add_mutually_exclusive_group()
     g.add_argument("--json", action="store_true", help="print one JSON object (see README) and nothing else")
     g.add_argument("--latex", action="store_true", help="print the derivation as LaTeX (amsmath)")
     m.set_defaults(func=cmd_modes)
 
-    from .numeric.methods import METHOD_NAMES
 
-    method_names = lambda: METHOD_NAMES  # noqa: E731
+def _add_simulate(sub) -> None:
+    """``springchain simulate``: run methods."""
     s = sub.add_parser("simulate", help="simulate a scene with exact and numerical methods",
                        description="Run the chosen methods from the scene's initial state and write "
                                    "DIR/<name>.npz (t, x_<method>, v_<method>) and PNG figures: positions, "
                                    "velocities, method - exact, energy.")
-    s.add_argument("scene", help="a scene file (TOML) or the name of a bundled scene, e.g. seed")
-    s.add_argument("--method", action="append", choices=method_names(), metavar="NAME",
-                   help=f"method to run, repeatable ({', '.join(method_names())}; default: modal and verlet "
+    _scene(s)
+    s.add_argument("--method", action="append", choices=_method_names(), metavar="NAME",
+                   help=f"method to run, repeatable ({', '.join(_method_names())}; default: modal and verlet "
                         "for linear scenes, verlet otherwise)")
     s.add_argument("--dt", type=_positive_float("--dt"), help="time step (default: the scene's)")
     s.add_argument("--steps", type=_positive_int("--steps"), help="number of steps (default: the scene's)")
@@ -454,16 +414,20 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("--spectrum", choices=("svd", "closed-form"), default="svd",
                    help="modes for the exact solution: SVD of the spring factor (accurate, default) or the "
                         "generated closed forms")
-    s.add_argument("--rtol", type=_positive_float("--rtol"), default=1e-10,
+    s.add_argument("--rtol", type=_positive_float("--rtol"), default=DEFAULT_RTOL,
                    help="relative tolerance of the adaptive methods rk45, dop853, lsoda (default: %(default)g)")
-    s.add_argument("--atol", type=_positive_float("--atol"), default=1e-12,
+    s.add_argument("--atol", type=_positive_float("--atol"), default=DEFAULT_ATOL,
                    help="absolute tolerance of the adaptive methods (default: %(default)g)")
-    s.add_argument("--out", default="springchain-out", help="output folder (default: %(default)s)")
+    _out(s, DEFAULT_OUT)
     s.add_argument("--no-figures", action="store_true", help="write only the NPZ")
     s.add_argument("--json", action="store_true", help="print a JSON summary instead of text")
     s.add_argument("--springs", action="store_true",
                    help="add drift_<method>, spring_force_<method> (S x springs) and base_shear_<method> (S) to the NPZ")
     s.set_defaults(func=cmd_simulate)
+
+
+def _add_bench(sub) -> None:
+    """``springchain bench``: work-precision benchmark."""
     b = sub.add_parser("bench", help="work-precision benchmark of every method (figures and a table)",
                        description="Sweep the step of every fixed-step method and the tolerance of the adaptive "
                                    "ones, measure the largest position error against an exact (extended-"
@@ -474,23 +438,30 @@ def build_parser() -> argparse.ArgumentParser:
     b.add_argument("--t-end", type=_positive_float("--t-end"),
                    help="horizon T (default: the scene's dt x steps)")
     b.add_argument("--quick", action="store_true", help="a small sweep (seconds, for tests)")
-    b.add_argument("--method", action="append", choices=method_names(), metavar="NAME",
+    b.add_argument("--method", action="append", choices=_method_names(), metavar="NAME",
                    help="restrict to these methods, repeatable (default: every method that applies; the "
                         "error-vs-horizon study runs only with the default)")
-    b.add_argument("--out", default="springchain-bench", help="output folder (default: %(default)s)")
+    _out(b, DEFAULT_BENCH_OUT)
     b.add_argument("--json", action="store_true", help="print the records and targets as JSON")
-    b.add_argument("--no-progress", action="store_true", help="no progress lines on stderr")
+    _no_progress(b)
     b.set_defaults(func=cmd_bench)
 
+
+def _add_plan(sub) -> None:
+    """``springchain plan``: the cheapest method for a tolerance."""
     pl = sub.add_parser("plan", help="cheapest method and step to reach a tolerance",
                         description="Predict, from closed-form error models and measured costs, the step (or "
                                     "tolerance) each method needs to keep the largest position error below TOL "
                                     "over the horizon, and recommend the cheapest.")
-    pl.add_argument("scene", help="a scene file (TOML) or the name of a bundled scene, e.g. seed")
+    _scene(pl)
     pl.add_argument("--tol", type=_positive_float("--tol"), required=True, help="largest position error allowed")
     pl.add_argument("--t-end", type=_positive_float("--t-end"), help="horizon T (default: the scene's dt x steps)")
-    pl.add_argument("--json", action="store_true", help="print one JSON object and nothing else")
+    _json(pl)
     pl.set_defaults(func=cmd_plan)
+
+
+def _add_scaling(sub) -> None:
+    """``springchain scaling``: long-chain scaling."""
     sc = sub.add_parser("scaling", help="setup-vs-step cost from N = 3 to 10^6, and the symbolic cost",
                         description="Time the exact solution's set-up (dense, tridiagonal, transform) against one "
                                     "Verlet step (NumPy stencil, fused) and the 32-byte-per-mass memory floor for "
@@ -503,9 +474,12 @@ def build_parser() -> argparse.ArgumentParser:
                     help="largest N for [masses] derive and LagrangesMethod (0: skip the symbolic part; "
                          "LagrangesMethod takes ~13 s at 80; default: %(default)s)")
     sc.add_argument("--json", action="store_true", help="print one JSON object with both tables")
-    sc.add_argument("--out", default="springchain-out", help="output folder (default: %(default)s)")
+    _out(sc, DEFAULT_OUT)
     sc.set_defaults(func=cmd_scaling)
 
+
+def _add_sweep(sub) -> None:
+    """``springchain sweep``: Dask studies."""
     sw = sub.add_parser("sweep", help="ensembles and parameter studies on Dask (parquet, summary, figures)",
                         description="Draw S realisations of a scene (parameters with --vary, per-mass or "
                                     "per-spring disorder of [chain] scenes with --disorder), compute every "
@@ -514,7 +488,7 @@ def build_parser() -> argparse.ArgumentParser:
                                     "DIR/sweep.parquet (one part per batch), DIR/summary.json and figures. "
                                     "DIST: uniform(a, b), normal(mu, sigma), lognormal(mu, sigma) or "
                                     "grid(a, b, n). Re-running into the same DIR resumes.")
-    sw.add_argument("scene", help="a scene file (TOML) or the name of a bundled scene")
+    _scene(sw, "")
     sw.add_argument("--vary", action="append", metavar="NAME=DIST",
                     help="draw scene parameter NAME per sample, repeatable; grids form their product")
     sw.add_argument("--disorder", action="append", metavar="mass=DIST|k=DIST",
@@ -529,11 +503,14 @@ def build_parser() -> argparse.ArgumentParser:
                        help="processes of the embedded LocalCluster (default: the cores)")
     where.add_argument("--scheduler", metavar="ADDRESS",
                        help="use a running `dask scheduler`, e.g. tcp://127.0.0.1:8786")
-    sw.add_argument("--out", default="springchain-sweep", help="output folder (default: %(default)s)")
-    sw.add_argument("--json", action="store_true", help="print one JSON object and nothing else")
-    sw.add_argument("--no-progress", action="store_true", help="no progress lines on stderr")
+    _out(sw, DEFAULT_SWEEP_OUT)
+    _json(sw)
+    _no_progress(sw)
     sw.set_defaults(func=cmd_sweep)
 
+
+def _add_frf(sub) -> None:
+    """``springchain frf``: frequency response."""
     fr = sub.add_parser("frf", help="frequency response X_out/F_in: Bode figure, JSON, transfer function",
                         description="The receptance H(iw) = X_out / F_in of (K - w^2 M + i w C) X = F (a dense "
                                     "solve per frequency; a tridiagonal one for [chain] scenes) on a log grid "
@@ -542,7 +519,7 @@ def build_parser() -> argparse.ArgumentParser:
                                     "Prints the resonances and, for scenes of at most 6 masses, the transfer "
                                     "function H(s) as a ratio of polynomials in s (text and LaTeX); writes the "
                                     "Bode figure DIR/<scene>-frf-<in>-<out>.png.")
-    fr.add_argument("scene", help="a scene file (TOML) or the name of a bundled scene, e.g. building")
+    _scene(fr, "building")
     fr.add_argument("--input", required=True, metavar="MASS",
                     help="the mass the unit harmonic force drives (a name; an index for [chain] scenes)")
     fr.add_argument("--output", required=True, metavar="MASS",
@@ -556,28 +533,51 @@ def build_parser() -> argparse.ArgumentParser:
     fr.add_argument("--json", action="store_true",
                     help='print one JSON object {"omega", "magnitude", "phase" (deg), "resonances", '
                          '"transfer_function", ...} and nothing else')
-    fr.add_argument("--out", default="springchain-out", metavar="DIR", help="folder for the Bode figure (default: %(default)s)")
+    fr.add_argument("--out", default=DEFAULT_OUT, metavar="DIR", help="folder for the Bode figure (default: %(default)s)")
     fr.set_defaults(func=cmd_frf)
 
+
+def _add_animate(sub) -> None:
+    """``springchain animate``: GIFs."""
     an = sub.add_parser("animate", help="a GIF of a mode shape oscillating or of a simulated trajectory",
                         description="Write DIR/<scene>-mode<J>.gif (mode J, counted from 0 in ascending "
                                     "frequency, rigid-body modes included) or DIR/<scene>-<method>.gif (the "
                                     "scene simulated from its initial state by METHOD, a few frames recorded). "
                                     "Masses are dots on a line joined by springs, displacements scaled to be "
                                     "visible; [chain] scenes show a decimated displacement profile.")
-    an.add_argument("scene", help="a scene file (TOML) or the name of a bundled scene, e.g. seed")
+    _scene(an)
     what = an.add_mutually_exclusive_group()
     what.add_argument("--mode", type=_whole("--mode"), metavar="J",
                       help="animate mode J (0 = lowest frequency; default: the lowest elastic mode)")
     what.add_argument("--method", metavar="NAME",
-                      help=f"animate the trajectory of method NAME ({', '.join(method_names())})")
+                      help=f"animate the trajectory of method NAME ({', '.join(_method_names())})")
     an.add_argument("--frames", type=_positive_int("--frames"), default=48, metavar="F",
                     help="frames in the GIF (default: %(default)s)")
     an.add_argument("--fps", type=_positive_float("--fps"), default=16.0, metavar="R",
                     help="frames per second (default: %(default)g)")
-    an.add_argument("--out", default="springchain-out", metavar="DIR", help="output folder (default: %(default)s)")
+    _out(an, DEFAULT_OUT, metavar="DIR")
     an.set_defaults(func=cmd_animate)
-    add_structural_commands(sub)
+
+
+# -- parser ---------------------------------------------------------------------------------
+def _method_names() -> tuple[str, ...]:
+    """The registered method names (the registry lists them without importing any integrator)."""
+    from .numeric.run import registry
+
+    return registry.names()
+
+
+def build_parser() -> argparse.ArgumentParser:
+    p = _Parser(prog="springchain",
+                description="Mass-spring chains: a scene file -> equations of motion and closed-form "
+                            "normal modes (SymPy) -> generated NumPy code -> exact and numerical "
+                            "simulations with plots.",
+                epilog="Start with `springchain run` (the bundled three-mass reference scene).")
+    p.add_argument("--version", action="version", version=f"springchain {__version__}")
+    sub = p.add_subparsers(dest="command", required=True, parser_class=_Parser)
+    for add in (_add_run, _add_derive, _add_modes, _add_simulate, _add_bench, _add_plan, _add_scaling, _add_sweep,
+                _add_frf, _add_animate, add_structural_commands):
+        add(sub)
     for name in SCENE_COMMANDS:  # one option, the same on every command that takes a SCENE
         sub.choices[name].add_argument(
             "--set", action="append", metavar="NAME=VALUE",
@@ -590,8 +590,9 @@ def build_parser() -> argparse.ArgumentParser:
 FLAGS = {"dt": "--dt", "steps": "--steps", "record_every": "--record-every", "method": "--method",
          "rtol": "--rtol", "atol": "--atol", "tol": "--tol", "spectrum": "--spectrum",
          "input": "--input", "output": "--output", "omega_min": "--omega-min", "omega_max": "--omega-max",
-         "points": "--points", "mode": "--mode", "frames": "--frames", "fps": "--fps",
-         "zeta": "--zeta", "periods": "--periods", "combine": "--combine", "springs": "--springs"}
+         "points": "--points", "mode": "--mode", "frames": "--frames", "fps": "--fps", "max_n": "--max-n",
+         "symbolic_max_n": "--symbolic-max-n", "zeta": "--zeta", "periods": "--periods", "combine": "--combine",
+         "springs": "--springs"}
 
 
 def _flag_for(args, quantity: str | None) -> str | None:

@@ -158,7 +158,8 @@ def work(route: Route, n: int) -> dict:
     from .derive.scene import load_scene
 
     if route is Route.CHAIN:
-        from .derive.chain import ChainModel, chain_modes, render_chain_module
+        from .derive.chain import ChainModel, chain_modes
+        from .derive.chain_codegen import render_chain_module
 
         t0 = time.perf_counter()
         scene = load_scene(f"costchain{n}.toml", chain_scene_text(n))
@@ -325,6 +326,7 @@ def figure(result: SymbolicResult):
     """Work seconds vs N (log–log), one line per route (and the modes share of [masses])."""
     import matplotlib
 
+    from .numeric import plots
     from .numeric.plots import new_figure
 
     fig, ax = new_figure(figsize=(8, 5))
@@ -339,11 +341,7 @@ def figure(result: SymbolicResult):
         ax.plot(*zip(*pts), "s:", color="C0", alpha=0.6, label="  of which: normal modes")
     ax.set_xscale("log")
     ax.set_yscale("log")
-    ax.set_xlabel("chain size N")
-    ax.set_ylabel("seconds of work (imports excluded)")
-    ax.set_title("Deriving the equations of motion: work vs N")
-    ax.grid(alpha=0.3, which="both")
-    ax.legend(fontsize=8)
+    plots.finish(ax, "chain size N", "seconds of work (imports excluded)", "Deriving the equations of motion: work vs N")
     return fig
 
 

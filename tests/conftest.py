@@ -2,12 +2,14 @@
 
 * matplotlib is forced to the non-interactive Agg backend before anything imports it;
 * ``SPRINGCHAIN_CACHE`` points at a per-session temporary folder, so no test writes
-  into the user's cache (and a subprocess started by a test inherits it);
+  into the user's cache (and a subprocess started by a test inherits it); ``fresh_cache``
+  gives one test a cache of its own;
 * a hypothesis profile ``ci`` (no deadline, a moderate number of examples) is
   registered and loaded unless ``HYPOTHESIS_PROFILE`` names another one;
 * fixtures for the repository root, the bundled reference scene, its checked-in
   generated module and the :class:`numeric.system.System` bound to it, plus
-  helpers that build scenes from TOML text and import rendered module source.
+  helpers that build scenes from TOML text and import rendered module source (``chain_module_of``
+  for ``[chain]`` modules). Plain functions shared by the test modules live in :mod:`helpers`.
 """
 
 from __future__ import annotations
@@ -26,6 +28,7 @@ matplotlib.use("Agg")
 
 import numpy as np  # noqa: E402
 import pytest  # noqa: E402
+from helpers import scene_toml  # noqa: E402
 from hypothesis import HealthCheck, settings  # noqa: E402
 
 settings.register_profile(
@@ -134,61 +137,77 @@ def import_source(tmp_path_factory):
     return load
 
 
-def chain_toml(name: str, params: dict[str, float], masses: dict[str, str],
-               springs: list[tuple[str, ...]], *, extra: str = "") -> str:
+@pytest.fixture(scope="session")
+def chain_module_of(import_source):
+    """``chain_module_of(text, label)``: a ``[chain]`` scene's module rendered afresh from its TOML
+    text (never the cache's), imported once per text."""
+    from springchain.derive.chain import ChainModel
+    from springchain.derive.chain_codegen import render_chain_module
+    from springchain.derive.scene import load_scene
+
+    modules: dict = {}
+
+    def get(text: str, label: str = "chain"):
+        if text not in modules:
+            scene = load_scene(f"{label}.toml", text)
+            modules[text] = import_source(render_chain_module(ChainModel(scene), bundled=False), label)
+        return modules[text]
+
+    return get
+
+
+@pytest.fixture
+def fresh_cache(tmp_path, monkeypatch):
+    """A SPRINGCHAIN_CACHE of the test's own (``pytestmark = pytest.mark.usefixtures("fresh_cache")``)."""
+    monkeypatch.setenv("SPRINGCHAIN_CACHE", str(tmp_path / "cache"))
+    return tmp_path / "cache"
+
+
+def masses_toml(name: str, params: dict[str, float], masses: dict[str, str],
+                springs: list[tuple[str, ...]], *, extra: str = "") -> str:
     """TOML text for a scene of point masses and springs (initial state: small x, zero v).
 
     ``springs`` holds ``(end, end, k)`` or ``(end, end, k, k3)`` tuples; ``extra`` is
     TOML appended before ``[initial]`` (e.g. a ``[gravity]`` table).
     """
-    lines = [f'name = "{name}"', "", "[parameters]"]
-    lines += [f"{k} = {float(v)!r}" for k, v in params.items()]
-    lines += ["", "[masses]"]
-    lines += [f'{k} = "{v}"' for k, v in masses.items()]
-    for a, b, k, *k3 in springs:
-        lines += ["", "[[springs]]", f'between = ["{a}", "{b}"]', f'k = "{k}"']
-        lines += [f'k3 = "{c}"' for c in k3]
-    if extra:
-        lines += ["", extra.strip()]
+    entries = [{"between": [a, b], "k": k, **({"k3": k3[0]} if k3 else {})} for a, b, k, *k3 in springs]
     n = len(masses)
-    x = ", ".join(repr(0.1 * (j + 1)) for j in range(n))
-    v = ", ".join("0.0" for _ in range(n))
-    lines += ["", "[initial]", f"x = [{x}]", f"v = [{v}]", ""]
-    return "\n".join(lines)
+    return scene_toml(name, params, masses=masses, springs=entries, extra=extra,
+                      initial={"x": [0.1 * (j + 1) for j in range(n)], "v": [0.0] * n})
 
 
 @pytest.fixture(scope="session")
 def make_chain_toml():
-    """The :func:`chain_toml` helper as a fixture."""
-    return chain_toml
+    """The :func:`masses_toml` helper (point masses along a line) as a fixture."""
+    return masses_toml
 
 
 #: Small scenes built from TOML text, shared by the symbolic and generated-code tests.
 EXAMPLE_SCENES: dict[str, str] = {
     # wall - ka - p - kb - q (free end), general masses and springs: a quadratic in ω²
-    "wall2": chain_toml("wall2", {"ma": 1.0, "mb": 2.0, "ka": 3.0, "kb": 0.5},
+    "wall2": masses_toml("wall2", {"ma": 1.0, "mb": 2.0, "ka": 3.0, "kb": 0.5},
                         {"p": "ma", "q": "mb"}, [("wall", "p", "ka"), ("p", "q", "kb")]),
     # wall - k - p - k - q - k - wall, equal masses: ω² = k/m, 3k/m (mirror symmetric)
-    "sym2": chain_toml("sym2", {"m": 1.0, "k": 1.0}, {"p": "m", "q": "m"},
+    "sym2": masses_toml("sym2", {"m": 1.0, "k": 1.0}, {"p": "m", "q": "m"},
                        [("wall", "p", "k"), ("p", "q", "k"), ("q", "wall", "k")]),
     # wall-m-m-m-m-wall: ω²_j = (2 - 2 cos(jπ/5)) k/m
-    "four": chain_toml("four", {"m": 1.0, "k": 1.0},
+    "four": masses_toml("four", {"m": 1.0, "k": 1.0},
                        {"m1": "m", "m2": "m", "m3": "m", "m4": "m"},
                        [("wall", "m1", "k"), ("m1", "m2", "k"), ("m2", "m3", "k"),
                         ("m3", "m4", "k"), ("m4", "wall", "k")]),
     # a spring joining non-neighbours, and two springs between the same pair (K adds)
-    "nonneigh": chain_toml("nonneigh", {"m": 1.0, "k": 1.0}, {"p1": "m", "p2": "2*m", "p3": "m"},
+    "nonneigh": masses_toml("nonneigh", {"m": 1.0, "k": 1.0}, {"p1": "m", "p2": "2*m", "p3": "m"},
                            [("p1", "p3", "k"), ("p1", "p2", "k"), ("p2", "p1", "2*k")]),
-    "one_wall": chain_toml("one_wall", {"m": 2.0, "k": 3.0}, {"p": "m"}, [("wall", "p", "k")]),
-    "one_free": chain_toml("one_free", {"m": 2.0}, {"p": "m"}, []),
+    "one_wall": masses_toml("one_wall", {"m": 2.0, "k": 3.0}, {"p": "m"}, [("wall", "p", "k")]),
+    "one_free": masses_toml("one_free", {"m": 2.0}, {"p": "m"}, []),
     # two identical free pairs: two rigid modes and a repeated ω² = 2k/m
-    "pairs": chain_toml("pairs", {"m": 1.0, "k": 1.0}, {"p1": "m", "p2": "m", "p3": "m", "p4": "m"},
+    "pairs": masses_toml("pairs", {"m": 1.0, "k": 1.0}, {"p1": "m", "p2": "m", "p3": "m", "p4": "m"},
                         [("p1", "p2", "k"), ("p3", "p4", "k")]),
     # hanging from a wall under gravity (a negative parameter: declared real, not positive)
-    "hanging": chain_toml("hanging", {"m": 1.0, "k": 10.0, "g": -9.81}, {"p": "m", "q": "2*m"},
+    "hanging": masses_toml("hanging", {"m": 1.0, "k": 10.0, "g": -9.81}, {"p": "m", "q": "2*m"},
                           [("wall", "p", "k"), ("p", "q", "k")], extra='[gravity]\ng = "g"'),
     # a cubic (hardening) spring: nonlinear acceleration and energy
-    "cubic": chain_toml("cubic", {"m": 1.0, "k": 1.0, "c": 0.5}, {"p": "m", "q": "m"},
+    "cubic": masses_toml("cubic", {"m": 1.0, "k": 1.0, "c": 0.5}, {"p": "m", "q": "m"},
                         [("wall", "p", "k"), ("p", "q", "k", "c")]),
 }
 

@@ -12,6 +12,8 @@ from fractions import Fraction
 import mpmath
 import numpy as np
 
+from helpers import scene_toml
+
 
 def scene_text(name: str, masses: list[tuple[str, float]], stiff: list[tuple[str, float]],
                mass_of: list[str], springs: list[tuple[str, str, str]], x0=None, v0=None,
@@ -29,21 +31,13 @@ def scene_text(name: str, masses: list[tuple[str, float]], stiff: list[tuple[str
         Initial state (default: all 0.1, at rest).
     dt, steps : the ``[simulation]`` values.
     """
-    lines = [f'name = "{name}"', 'description = "accuracy test"', "", "[parameters]"]
-    for p, v in masses + stiff:
-        lines.append(f"{p} = {float(v)!r}")
-    lines += ["", "[masses]"]
-    for i, m in enumerate(mass_of):
-        lines.append(f'x{i} = "{m}"')
-    for a, b, k in springs:
-        lines += ["", "[[springs]]", f'between = ["{a}", "{b}"]', f'k = "{k}"']
     n = len(mass_of)
-    x0 = [0.1] * n if x0 is None else x0
-    v0 = [0.0] * n if v0 is None else v0
-    lines += ["", "[initial]", f"x = [{', '.join(repr(float(c)) for c in x0)}]",
-              f"v = [{', '.join(repr(float(c)) for c in v0)}]",
-              "", "[simulation]", f"dt = {float(dt)!r}", f"steps = {int(steps)}"]
-    return "\n".join(lines) + "\n"
+    return scene_toml(name, dict(masses + stiff), description="accuracy test",
+                      masses={f"x{i}": m for i, m in enumerate(mass_of)},
+                      springs=[{"between": [a, b], "k": k} for a, b, k in springs],
+                      initial={"x": [float(c) for c in ([0.1] * n if x0 is None else x0)],
+                               "v": [float(c) for c in ([0.0] * n if v0 is None else v0)]},
+                      simulation={"dt": float(dt), "steps": int(steps)})
 
 
 def _mp(v):

@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 from PIL import Image
 
+from helpers import one_line_error, run_cli
 import springchain as sc
 from springchain.cli import main
 
@@ -71,11 +72,7 @@ def test_chain_mode_shape_against_closed_form():
     (["animate", "seed", "--mode", "1", "--method", "verlet"], "not allowed with"),
 ])
 def test_errors_one_line(tmp_path, capsys, argv, needle):
-    with pytest.raises(SystemExit) as exc:
-        raise SystemExit(main(argv + ["--out", str(tmp_path)]))
-    assert exc.value.code == 2
-    err = capsys.readouterr().err
-    assert err.count("\n") == 1 and err.startswith("springchain: error:") and needle in err
+    one_line_error(*run_cli(argv + ["--out", tmp_path], capsys), needle)
     assert not any(tmp_path.iterdir())
 
 

@@ -109,9 +109,13 @@ def test_simulate_memory_is_checked_with_the_effective_settings(seed_path):
 def test_plan_and_bench_through_the_api():
     plan = springchain.plan("seed", tol=1e-3)
     assert plan.recommended.predicted_error <= 1e-3
-    assert json.loads(json.dumps(plan.as_json()))
+    data = json.loads(json.dumps(plan.as_json()))  # plain JSON: the same object back
+    assert data == plan.as_json() and data["recommended"]["method"] == plan.recommended.name
+    assert data["recommended"] in data["candidates"] and len(data["candidates"]) == len(plan.candidates)
     result = springchain.bench("seed", quick=True, methods=["verlet"])
-    assert result.records and all(r.method in ("verlet", "modal") or r.method for r in result.records)
+    assert result.records and {r.method for r in result.records} == {"verlet"}  # only the method asked for
+    for r in result.records:  # each a Verlet run against the extended-precision reference
+        assert 0 < r.error < 1 and r.force_evals == r.steps + 1 and abs(r.dt * r.steps - 100.0) < 1e-9
 
 
 def _readme_python_example() -> str:
@@ -151,13 +155,15 @@ def test_import_is_light_and_sets_no_backend():
     assert out.stdout.strip() == "[] True False"
 
 
-def test_method_name_table_matches_the_registries():
-    from springchain.numeric.integrators import ADAPTIVE, INTEGRATORS
-    from springchain.numeric.methods import ADAPTIVE as ADAPTIVE_NAMES
-    from springchain.numeric.methods import EXACT, FIXED_STEP, METHOD_NAMES
+def test_method_name_table_matches_the_implementations():
+    from springchain.numeric.run import registry
+    from springchain.numeric.run.protocol import Kind
 
-    assert FIXED_STEP == tuple(INTEGRATORS) and ADAPTIVE_NAMES == tuple(ADAPTIVE)
-    assert METHOD_NAMES[0] == EXACT and springchain.method_names() == list(METHOD_NAMES)
+    names = registry.names()
+    assert names[0] == registry.EXACT and springchain.method_names() == list(names)
+    assert names == registry.names(Kind.EXACT) + registry.names(Kind.STEP) + registry.names(Kind.ADAPTIVE)
+    for kind in (Kind.STEP, Kind.ADAPTIVE):  # every implementation calls itself by its registered name
+        assert all(cls.name == name for name, cls in registry.classes(kind).items())
 
 
 def test_stability_limits_are_computed_on_first_use_not_at_import():
@@ -180,3 +186,17 @@ def test_library_errors_name_the_quantity_and_the_command_adds_the_flag(tmp_path
     with pytest.raises(springchain.RunRefused) as exc:
         springchain.simulate("duffing", methods=["modal"])
     assert exc.value.quantity == "method" and str(exc.value).startswith("method 'modal'")
+
+
+def test_generate_writes_and_checks_like_the_derive_command(tmp_path):
+    from springchain._modules import generated_dir
+
+    (checked,) = springchain.generate(["seed"], generated_dir(), check=True)  # the package's own module: fresh
+    assert checked.fresh is True and checked.path.name == "seed.py" and checked.lines is None
+    (written,) = springchain.generate(["seed"], out=tmp_path)
+    assert written.path == tmp_path / "seed.py" and written.fresh is None
+    assert written.lines == len(written.path.read_text(encoding="utf-8").splitlines())
+    assert written.path.read_text(encoding="utf-8") == checked.path.read_text(encoding="utf-8")
+    written.path.write_text("# stale\n", encoding="utf-8")
+    (stale,) = springchain.generate(["seed"], out=tmp_path, check=True)
+    assert stale.fresh is False and "stale" in stale.message

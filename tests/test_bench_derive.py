@@ -1,8 +1,10 @@
-"""springchain.bench_derive: the tables are built from real runs (correctness only, no timing assertions)."""
+"""benchmarks/derive.py: the tables are built from real runs (correctness only, no timing assertions)."""
 
 from __future__ import annotations
 
-from springchain import bench_derive
+from benchmark_scripts import load
+
+bench_derive = load("derive")
 
 
 def test_work_and_command_tables_on_a_small_chain():

@@ -15,49 +15,25 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from springchain.derive.chain import ChainModel, render_chain_module
-from springchain.derive.scene import load_scene
+from helpers import chain_toml, mp_dynamical_matrix
 
 OPEN_ENDS = [("free", "free"), ("wall", "free"), ("free", "wall"), ("wall", "wall")]
 
 
 def chain_text(left: str, right: str, n: int, spread: float, pm: float, pk: float) -> str:
-    return "\n".join([
-        'name = "graded"', "[parameters]", f"spread = {spread!r}", f"pm = {pm!r}", f"pk = {pk!r}",
-        "[chain]", f"n = {n}", 'mass = "exp(spread*sin(7.3*i + pm))"', 'k = "exp(spread*sin(3.1*i + pk))"',
-        f'left = "{left}"', f'right = "{right}"', "[initial]", 'x = "0.01*sin(i)"', 'v = "0"']) + "\n"
+    return chain_toml(n, left, right, name="graded", parameters={"spread": spread, "pm": pm, "pk": pk},
+                      mass="exp(spread*sin(7.3*i + pm))", k="exp(spread*sin(3.1*i + pk))",
+                      initial={"x": "0.01*sin(i)", "v": "0"})
 
 
 def reference_omega2(masses: np.ndarray, ends: np.ndarray, k: np.ndarray) -> np.ndarray:
     """Eigenvalues of D = M^-1/2 K M^-1/2 at 60 digits from the exact float64 inputs."""
     with mpmath.workdps(60):
-        n = masses.shape[0]
-        K = mpmath.zeros(n)
-        for (a, b), kk in zip(ends, k):
-            kk = mpmath.mpf(float(kk))
-            for i in (a, b):
-                if i >= 0:
-                    K[i, i] += kk
-            if a >= 0 and b >= 0:
-                K[a, b] -= kk
-                K[b, a] -= kk
-        r = [1 / mpmath.sqrt(mpmath.mpf(float(m))) for m in masses]
-        D = mpmath.matrix(n, n)
-        for i in range(n):
-            for j in range(n):
-                D[i, j] = K[i, j] * r[i] * r[j]
-        return np.array(sorted(float(x) for x in mpmath.eigsy(D, eigvals_only=True)))
+        return np.array(sorted(float(x) for x in mpmath.eigsy(mp_dynamical_matrix(masses, ends, k), eigvals_only=True)))
 
 
-_CACHE: dict = {}
-
-
-def module_for(import_source, left, right, n, spread, pm, pk):
-    key = (left, right, n, spread, pm, pk)
-    if key not in _CACHE:
-        scene = load_scene("graded.toml", chain_text(left, right, n, spread, pm, pk))
-        _CACHE[key] = import_source(render_chain_module(ChainModel(scene), bundled=False), "graded")
-    return _CACHE[key]
+def module_for(chain_module_of, left, right, n, spread, pm, pk):
+    return chain_module_of(chain_text(left, right, n, spread, pm, pk), "graded")
 
 
 def check(module, n: int) -> float:
@@ -72,14 +48,14 @@ def check(module, n: int) -> float:
 
 
 @pytest.mark.parametrize("ends", OPEN_ENDS, ids=lambda e: "-".join(e))
-def test_graded_chain_omega2_is_accurate(import_source, ends):
+def test_graded_chain_omega2_is_accurate(chain_module_of, ends):
     """Alternating-like contrast of 23 decades: every ω² to ≤ 1e-13 relative."""
-    worst = max(check(module_for(import_source, *ends, n, 26.0, 0.4, 1.1), n) for n in (1, 2, 5, 12))
+    worst = max(check(module_for(chain_module_of, *ends, n, 26.0, 0.4, 1.1), n) for n in (1, 2, 5, 12))
     assert worst <= 1e-13, worst
 
 
 @settings(max_examples=25, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
 @given(ends=st.sampled_from(OPEN_ENDS), n=st.integers(1, 14), spread=st.floats(0.0, 26.0),
        pm=st.floats(-3.0, 3.0), pk=st.floats(-3.0, 3.0))
-def test_random_graded_chains(import_source, ends, n, spread, pm, pk):
-    assert check(module_for(import_source, *ends, n, spread, pm, pk), n) <= 1e-13
+def test_random_graded_chains(chain_module_of, ends, n, spread, pm, pk):
+    assert check(module_for(chain_module_of, *ends, n, spread, pm, pk), n) <= 1e-13

@@ -8,46 +8,22 @@ index) and integrated by DOP853.
 from __future__ import annotations
 
 import json
-import tomllib
 from pathlib import Path
 
 import numpy as np
 import pytest
 import sympy
-from scipy.integrate import solve_ivp
 
-from springchain._modules import derive, load_module
+import helpers
+from helpers import TomlScene, chain_toml, refused_scene, stamp, write_scene
+from springchain._modules import derive
 from springchain.cli import main
-from springchain.derive.errors import SceneError
 from springchain.derive.scene import load_scene
 from springchain.numeric import system as system_mod
 from springchain.numeric.simulate import run_methods
-from springchain.numeric.system import System
 
 ROOT = Path(__file__).resolve().parent.parent
 
-CHAIN = """
-name = "chd"
-[parameters]
-m = 1.7
-k = 2.3
-c = 0.05
-a = 0.02
-b = 0.003
-[chain]
-n = 8
-mass = "m*(1 + 0.1*i)"
-k = "k*(1 + 0.05*i)"
-left = "wall"
-right = "free"
-{extra}
-[initial]
-x = "0.1*sin(pi*(i + 1)/(n + 1))"
-v = "0.01*i"
-[simulation]
-dt = 0.05
-steps = 400
-"""
 
 DAMPERS = """
 [[dampers]]
@@ -64,50 +40,39 @@ RAYLEIGH = '[damping]\nrayleigh = ["a", "b"]'
 FORCED = RAYLEIGH + '\n[[forces]]\non = 7\nf = "0.2*cos(1.1*t)"'
 
 
-def text_of(extra: str) -> str:
-    return CHAIN.replace("{extra}", extra)
+def text_of(extra: str, n: int = 8, v: str = "0.01*i", uniform: bool = False) -> str:
+    return chain_toml(n, "wall", "free", name="chd", parameters={"m": 1.7, "k": 2.3, "c": 0.05, "a": 0.02, "b": 0.003},
+                      mass="m" if uniform else "m*(1 + 0.1*i)", k="k" if uniform else "k*(1 + 0.05*i)",
+                      initial={"x": "0.1*sin(pi*(i + 1)/(n + 1))", "v": v}, simulation={"dt": 0.05, "steps": 400},
+                      extra=extra)
 
 
 def reference(text: str):
-    """M, K, C (dense, small n) and the force from the raw TOML."""
-    data = tomllib.loads(text)
-    params = {k: float(v) for k, v in data["parameters"].items()}
-    syms = {k: sympy.Symbol(k) for k in params}
-    i_, t_ = sympy.Symbol("i"), sympy.Symbol("t")
-
-    def at(expr, i):
-        return float(sympy.sympify(str(expr), locals={**syms, "i": i_}).subs(params).subs(i_, i))
-
+    """M, K, C (dense, small n) and the right-hand side from the raw TOML."""
+    toml = TomlScene(text)
+    data, at = toml.data, toml.value
     ch = data["chain"]
     n = ch["n"]
-    M = np.diag([at(ch["mass"], i) for i in range(n)])
-
-    def stamp(A, a, b, c):
-        for p, sp_ in ((a, 1), (b, -1)):
-            for q, sq in ((a, 1), (b, -1)):
-                if p >= 0 and q >= 0:
-                    A[p, q] += sp_ * sq * c
-
+    M = np.diag([at(ch["mass"], i=i) for i in range(n)])
     K = np.zeros((n, n))
-    stamp(K, 0, -1, at(ch["k"], -1))  # left wall spring (i = -1)
+    stamp(K, 0, -1, at(ch["k"], i=-1))  # left wall spring (i = -1)
     for i in range(n - 1):
-        stamp(K, i, i + 1, at(ch["k"], i))
+        stamp(K, i, i + 1, at(ch["k"], i=i))
     C = np.zeros((n, n))
     for d in data.get("dampers", []):
         if d["between"] == ["i", "i+1"]:
             for i in range(n - 1):
-                stamp(C, i, i + 1, at(d["c"], i))
+                stamp(C, i, i + 1, at(d["c"], i=i))
         elif d["between"] == ["i", "wall"]:
             for i in range(n):
-                stamp(C, i, -1, at(d["c"], i))
+                stamp(C, i, -1, at(d["c"], i=i))
         else:
             a, b = (-1 if e == "wall" else e for e in d["between"])
-            stamp(C, a, b, at(d["c"], 0))
+            stamp(C, a, b, at(d["c"], i=0))
     if "damping" in data:
-        al, be = (at(e, 0) for e in data["damping"]["rayleigh"])
+        al, be = (at(e, i=0) for e in data["damping"]["rayleigh"])
         C = C + al * M + be * K
-    forces = [(f["on"], sympy.lambdify(t_, sympy.sympify(f["f"], locals={**syms, "t": t_}).subs(params)))
-              for f in data.get("forces", [])]
+    forces = [(f["on"], toml.of_t(f["f"])) for f in data.get("forces", [])]
 
     def rhs(t, z):
         x, v = z[:n], z[n:]
@@ -121,17 +86,12 @@ def reference(text: str):
 
 def dop853(text, x0, v0, t):
     *_, rhs = reference(text)
-    n = x0.shape[0]
-    sol = solve_ivp(rhs, (t[0], t[-1]), np.concatenate([x0, v0]), method="DOP853", rtol=1e-12, atol=1e-14,
-                    t_eval=t)
-    assert sol.success
-    return sol.y[:n].T, sol.y[n:].T
+    return helpers.dop853(rhs, x0.shape[0], x0, v0, t)
 
 
 def system_of(text):
     scene = load_scene("chd.toml", text=text)
-    module, _ = load_module(scene)
-    return scene, module, System.from_module(module)
+    return (scene, *helpers.system_of(scene))
 
 
 @pytest.mark.parametrize("extra", [DAMPERS, RAYLEIGH, DAMPERS + RAYLEIGH])
@@ -178,7 +138,7 @@ def test_chain_verlet_is_second_order(sparse, monkeypatch):
 
 
 def test_long_damped_chain_runs_without_dense_matrices():
-    text = text_of(DAMPERS + RAYLEIGH).replace("n = 8", "n = 5000").replace("v = \"0.01*i\"", "v = \"0\"")
+    text = text_of(DAMPERS + RAYLEIGH, n=5000, v="0")
     scene, module, system = system_of(text)
     Ad = system.damping_rate_matrix()
     import scipy.sparse
@@ -203,7 +163,7 @@ def test_generated_chain_source_has_damping_only_when_declared():
 
 
 def test_uniform_chain_rayleigh_zeta_family(tmp_path, capsys):
-    text = text_of(RAYLEIGH).replace('"m*(1 + 0.1*i)"', '"m"').replace('"k*(1 + 0.05*i)"', '"k"')
+    text = text_of(RAYLEIGH, uniform=True)
     path = tmp_path / "chd.toml"
     path.write_text(text)
     assert main(["modes", str(path), "--json"]) == 0
@@ -224,10 +184,4 @@ def test_uniform_chain_rayleigh_zeta_family(tmp_path, capsys):
     ('[[dampers]]\nbetween = [0, "wall"]\nc = "c*i"', "dampers[0].c"),
 ])
 def test_bad_chain_dampers_are_refused(extra, expect, tmp_path, capsys):
-    path = tmp_path / "chd.toml"
-    path.write_text(text_of(extra))
-    with pytest.raises(SceneError):
-        load_scene(path)
-    assert main(["modes", str(path)]) == 2
-    out, err = capsys.readouterr()
-    assert out == "" and len(err.splitlines()) == 1 and expect in err, err
+    refused_scene(write_scene(tmp_path, "chd", text_of(extra)), capsys, expect)

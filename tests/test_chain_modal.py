@@ -18,8 +18,7 @@ import numpy as np
 import pytest
 import scipy.linalg
 
-from springchain.derive.chain import ChainModel, render_chain_module
-from springchain.derive.scene import load_scene
+from helpers import chain_toml
 from springchain.numeric.chain_modal import Basis, ChainModal
 from springchain.numeric.errors import RunRefused
 from springchain.numeric.modal import ModalSolution
@@ -31,27 +30,15 @@ TIMES = np.array([0.0, 0.3, 1.7, 12.5, 61.0])
 
 
 def scene_text(left, right, uniform=True, cubic=False):
-    mass = "m" if uniform else "m*(1 + 0.5*sin(i))"
-    k = "k" if uniform else "k*(1 + 0.25*(i % 3))"
-    lines = [f'name = "cm_{left}_{right}_{int(uniform)}"', "[parameters]", "m = 1.7", "k = 2.3", "c = 0.1",
-             "[chain]", "n = 10", f'mass = "{mass}"', f'k = "{k}"', f'left = "{left}"', f'right = "{right}"']
-    if cubic:
-        lines.append('k3 = "c"')
-    lines += ["[initial]", 'x = "0.01*sin(pi*(i + 1)/(n + 1))"', 'v = "0"']
-    return "\n".join(lines) + "\n"
-
-
-_MODULES: dict = {}
+    return chain_toml(10, left, right, name=f"cm_{left}_{right}_{int(uniform)}", parameters={"m": 1.7, "k": 2.3, "c": 0.1},
+                      mass="m" if uniform else "m*(1 + 0.5*sin(i))", k="k" if uniform else "k*(1 + 0.25*(i % 3))",
+                      k3="c" if cubic else None)
 
 
 @pytest.fixture(scope="module")
-def chain_module(import_source):
+def chain_module(chain_module_of):
     def get(left, right, uniform=True, cubic=False):
-        key = (left, right, uniform, cubic)
-        if key not in _MODULES:
-            scene = load_scene("chain_modal.toml", scene_text(left, right, uniform, cubic))
-            _MODULES[key] = import_source(render_chain_module(ChainModel(scene), bundled=False), "chainmodal")
-        return _MODULES[key]
+        return chain_module_of(scene_text(left, right, uniform, cubic), "chainmodal")
     return get
 
 

@@ -8,22 +8,19 @@ import numpy as np
 import pytest
 import sympy
 
+from helpers import scene_toml
 from springchain.derive.codegen import MAX_PRINTED_MATRIX
 from springchain._modules import derive
 from springchain.derive.scene import load_scene
 
 
 def scene_text(n: int, gravity: bool) -> str:
-    lines = [f'name = "c{n}"', "[parameters]", "m = 1.5", "k = 2.0", "g = 9.8", "[masses]"]
-    lines += [f'm{i} = "m*{1 + i % 3}"' for i in range(n)]
-    lines += ["[[springs]]", 'between = ["wall", "m0"]', 'k = "k"']
-    for i in range(n - 1):
-        lines += ["[[springs]]", f'between = ["m{i}", "m{i + 1}"]', f'k = "k*{1 + i % 2}"']
-    lines += ["[[springs]]", f'between = ["m0", "m{n - 1}"]', 'k = "k/2"']  # a long-range spring
-    if gravity:
-        lines += ["[gravity]", 'g = "g"']
-    lines += ["[initial]", f"x = {[0.0] * n}", f"v = {[0.0] * n}"]
-    return "\n".join(lines) + "\n"
+    springs = [{"between": ["wall", "m0"], "k": "k"}]
+    springs += [{"between": [f"m{i}", f"m{i + 1}"], "k": f"k*{1 + i % 2}"} for i in range(n - 1)]
+    springs.append({"between": ["m0", f"m{n - 1}"], "k": "k/2"})  # a long-range spring
+    return scene_toml(f"c{n}", {"m": 1.5, "k": 2.0, "g": 9.8}, masses={f"m{i}": f"m*{1 + i % 3}" for i in range(n)},
+                      springs=springs, tables={"gravity": {"g": "g"}} if gravity else None,
+                      initial={"x": [0.0] * n, "v": [0.0] * n})
 
 
 def load(source: str, name: str, tmp_path):

@@ -17,7 +17,9 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from springchain.numeric.integrators import INTEGRATORS, LinearChain
+from springchain.numeric.integrators import LinearChain
+from springchain.numeric.run import registry
+from springchain.numeric.run.protocol import Kind
 from springchain.numeric.integrators.blanes_moan4 import BLANES_MOAN4
 from springchain.numeric.integrators.blanes_moan6 import BLANES_MOAN6
 from springchain.numeric.integrators.chebyshev import ChebyshevCoefficients
@@ -26,6 +28,7 @@ from springchain.numeric.integrators.kahan_li import KAHAN_LI8
 from springchain.numeric.integrators.splitting import SplittingMethod
 from springchain.numeric.integrators.yoshida import YOSHIDA4
 
+INTEGRATORS = registry.classes(Kind.STEP)
 SPLITTING = {name: cls for name, cls in INTEGRATORS.items() if issubclass(cls, SplittingMethod)}
 COMPOSITIONS = [YOSHIDA4, KAHAN_LI8]
 

@@ -7,18 +7,17 @@ the modes of the modal reference) and integrated by solve_ivp DOP853 at rtol 1e-
 from __future__ import annotations
 
 import json
-import tomllib
 from pathlib import Path
 
 import numpy as np
 import pytest
 import scipy.linalg
 import sympy
-from scipy.integrate import solve_ivp
 
+import helpers
+from helpers import WALL_THREE, TomlScene, refused_scene, scene_toml, write_scene
 from springchain._modules import derive, load_module
 from springchain.cli import main
-from springchain.derive.errors import SceneError
 from springchain.derive.model import Model
 from springchain.derive.scene import load_scene
 from springchain.numeric.simulate import run_methods
@@ -26,35 +25,6 @@ from springchain.numeric.system import System
 
 ROOT = Path(__file__).resolve().parent.parent
 
-BASE = """
-name = "dm"
-[parameters]
-m = 2.0
-k = 3.0
-a = 0.05
-b = 0.01
-c = 0.3
-[masses]
-m1 = "m"
-m2 = "2*m"
-m3 = "m"
-[[springs]]
-between = ["wall", "m1"]
-k = "k"
-[[springs]]
-between = ["m1", "m2"]
-k = "k"
-[[springs]]
-between = ["m2", "m3"]
-k = "2*k"
-{extra}
-[initial]
-x = [0.1, 0.0, -0.1]
-v = [0.0, 0.2, 0.0]
-[simulation]
-dt = 0.05
-steps = 400
-"""
 
 RAYLEIGH = '[damping]\nrayleigh = ["a", "b"]'
 MODAL = '[damping]\nmodal = [0.02, "a", 0.1]'
@@ -65,38 +35,18 @@ FORCED_RAYLEIGH = RAYLEIGH + '\n[[forces]]\non = "m3"\nf = "0.4*cos(1.3*t) + 0.1
 
 
 def scene_text(extra: str) -> str:
-    return BASE.replace("{extra}", extra)
+    return scene_toml("dm", {"m": 2.0, "k": 3.0, "a": 0.05, "b": 0.01, "c": 0.3}, **WALL_THREE, extra=extra,
+                      initial={"x": [0.1, 0.0, -0.1], "v": [0.0, 0.2, 0.0]}, simulation={"dt": 0.05, "steps": 400})
 
 
 # -- an independent reference from the TOML text ------------------------------------------------
 def reference_matrices(text: str):
     """M, K, C and a force function from the raw TOML (no springchain code)."""
-    data = tomllib.loads(text)
-    params = {k: float(v) for k, v in data["parameters"].items()}
-    syms = {k: sympy.Symbol(k) for k in params}
-    t = sympy.Symbol("t")
-
-    def num(e):
-        return float(sympy.sympify(str(e), locals=syms).subs(params))
-
-    names = list(data["masses"])
-    idx = {n: i for i, n in enumerate(names)}
-    n = len(names)
-    M = np.diag([num(data["masses"][x]) for x in names])
-
-    def assemble(entries, key):
-        A = np.zeros((n, n))
-        for e in entries:
-            a, b = (idx.get(x, -1) for x in e["between"])
-            c = num(e[key])
-            for i, si in ((a, 1), (b, -1)):
-                for j, sj in ((a, 1), (b, -1)):
-                    if i >= 0 and j >= 0:
-                        A[i, j] += si * sj * c
-        return A
-
-    K = assemble(data.get("springs", []), "k")
-    C = assemble(data.get("dampers", []), "c")
+    toml = TomlScene(text)
+    data, num = toml.data, toml.value
+    idx = toml.mass_index()
+    _, M, K, C = toml.matrices()
+    n = M.shape[0]
     damping = data.get("damping", {})
     if "rayleigh" in damping:
         alpha, beta = (num(e) for e in damping["rayleigh"])
@@ -107,8 +57,7 @@ def reference_matrices(text: str):
         w2, Phi = scipy.linalg.eigh(K, M)  # independent of springchain's spectrum route
         MP = M @ Phi
         C = C + MP @ np.diag(2 * zeta * np.sqrt(np.maximum(w2, 0))) @ MP.T
-    forces = [(idx[f["on"]], sympy.lambdify(t, sympy.sympify(f["f"], locals={**syms, "t": t}).subs(params)))
-              for f in data.get("forces", [])]
+    forces = [(idx[f["on"]], toml.of_t(f["f"])) for f in data.get("forces", [])]
 
     def force(tt):
         out = np.zeros(n)
@@ -128,16 +77,12 @@ def dop853(text, x0, v0, t):
         x, v = z[:n], z[n:]
         return np.concatenate([v, minv * (force(tt) - K @ x - C @ v)])
 
-    sol = solve_ivp(rhs, (t[0], t[-1]), np.concatenate([x0, v0]), method="DOP853", rtol=1e-12,
-                    atol=1e-14, t_eval=t)
-    assert sol.success
-    return sol.y[:n].T, sol.y[n:].T
+    return helpers.dop853(rhs, n, x0, v0, t)
 
 
 def system_of_text(text: str):
     scene = load_scene("dm.toml", text=text)
-    module, _ = load_module(scene)
-    return scene, System.from_module(module)
+    return scene, helpers.system_of(scene)[1]
 
 
 # -- derivation ----------------------------------------------------------------------------------
@@ -324,15 +269,7 @@ def test_text_and_latex_show_zeta(tmp_path, capsys):
     ('[damping]\nrayleigh = "a"', "damping.rayleigh: 'a': not a list of two coefficients"),
 ])
 def test_bad_damping_is_refused_in_one_line(extra, expect, tmp_path, capsys):
-    path = tmp_path / "dm.toml"
-    path.write_text(scene_text(extra))
-    with pytest.raises(SceneError):
-        load_scene(path)
-    status = main(["modes", str(path)])
-    out, err = capsys.readouterr()
-    assert status == 2 and out == ""
-    assert len(err.splitlines()) == 1 and str(path) in err and expect in err, err
-    assert "accepted:" in err
+    assert "accepted:" in refused_scene(write_scene(tmp_path, "dm", scene_text(extra)), capsys, expect)
 
 
 def test_repeated_frequency_with_proportional_dashpots(tmp_path, capsys):

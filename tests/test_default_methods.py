@@ -32,9 +32,7 @@ steps = 50
 """
 
 
-@pytest.fixture(autouse=True)
-def _cache(tmp_path, monkeypatch):
-    monkeypatch.setenv("SPRINGCHAIN_CACHE", str(tmp_path / "cache"))
+pytestmark = pytest.mark.usefixtures("fresh_cache")
 
 
 def test_unstable_default_verlet_gives_way(tmp_path, capsys):

@@ -7,7 +7,6 @@ and evaluated with SymPy in the test), integrated by solve_ivp DOP853 at rtol 1e
 
 from __future__ import annotations
 
-import tomllib
 import tracemalloc
 from pathlib import Path
 
@@ -15,8 +14,9 @@ import numpy as np
 import pytest
 import scipy.linalg
 import sympy
-from scipy.integrate import solve_ivp
 
+import helpers
+from helpers import TomlScene, chain_toml
 from springchain._modules import derive, load_module
 from springchain.derive.scene import load_scene
 from springchain.numeric.simulate import run_methods, stream_methods
@@ -27,25 +27,17 @@ SCENES = ROOT / "scenes"
 
 
 # -- an independent reference, built from the TOML text only ------------------------------------
-def reference_rhs(path_or_text, text: str | None = None):
+def reference_rhs(path: Path):
     """RHS f(t, z) of z = (x, v) built from the raw scene: no springchain code involved."""
-    data = tomllib.loads(text if text is not None else Path(path_or_text).read_text())
-    params = {k: float(v) for k, v in data["parameters"].items()}
-    syms = {k: sympy.Symbol(k) for k in params}
-    t = sympy.Symbol("t")
-
-    def num(expr):
-        return float(sympy.sympify(str(expr), locals=syms).subs(params))
-
-    names = list(data["masses"])
-    idx = {n: i for i, n in enumerate(names)}
-    m = np.array([num(data["masses"][n]) for n in names])
-    n = len(names)
-    springs = [([idx.get(e, -1) for e in s["between"]], num(s["k"]), num(s.get("k3", 0)))
+    toml = TomlScene.read(path)
+    data, num = toml.data, toml.value
+    idx = toml.mass_index()
+    m = np.array([num(e) for e in data["masses"].values()])
+    n = len(m)
+    springs = [([idx[e] for e in s["between"]], num(s["k"]), num(s.get("k3", 0)))
                for s in data.get("springs", [])]
-    dampers = [([idx.get(e, -1) for e in d["between"]], num(d["c"])) for d in data.get("dampers", [])]
-    forces = [(idx[f["on"]], sympy.lambdify(t, sympy.sympify(f["f"], locals={**syms, "t": t}).subs(params)))
-              for f in data.get("forces", [])]
+    dampers = [([idx[e] for e in d["between"]], num(d["c"])) for d in data.get("dampers", [])]
+    forces = [(idx[f["on"]], toml.of_t(f["f"])) for f in data.get("forces", [])]
     g = num(data["gravity"]["g"]) if "gravity" in data else 0.0
 
     def rhs(tt, z):
@@ -72,16 +64,13 @@ def reference_rhs(path_or_text, text: str | None = None):
 
 
 def dop853(rhs, n, x0, v0, t):
-    sol = solve_ivp(rhs, (t[0], t[-1]), np.concatenate([x0, v0]), method="DOP853", rtol=1e-12,
-                    atol=1e-14 * max(1.0, np.max(np.abs(x0)), np.max(np.abs(v0))), t_eval=t)
-    assert sol.success
-    return sol.y[:n].T, sol.y[n:].T
+    """DOP853 at rtol 1e-12, atol 1e-14 relative to the initial state's size."""
+    return helpers.dop853(rhs, n, x0, v0, t, atol=1e-14 * max(1.0, np.max(np.abs(x0)), np.max(np.abs(v0))))
 
 
 def system_of(path: Path) -> tuple[object, System]:
     scene = load_scene(path)
-    module, _ = load_module(scene)
-    return scene, System.from_module(module)
+    return scene, helpers.system_of(scene)[1]
 
 
 EXACT_SCENES = ["building", "hanging", "ring4", "seed"]
@@ -280,25 +269,7 @@ def test_nonlinear_scene_refuses_modal():
 
 # -- chains -------------------------------------------------------------------------------------------
 def chain_scene(n, left, right, mass="m", k="k"):
-    return f"""
-name = "ch"
-[parameters]
-m = 1.7
-k = 2.3
-[chain]
-n = {n}
-mass = "{mass}"
-k = "{k}"
-left = "{left}"
-right = "{right}"
-[initial]
-x = "0.01*sin(pi*(i + 1)/(n + 1))"
-v = "0"
-[simulation]
-dt = 0.1
-steps = 1000
-record_every = 100
-"""
+    return chain_toml(n, left, right, mass=mass, k=k, simulation={"dt": 0.1, "steps": 1000, "record_every": 100})
 
 
 @pytest.mark.parametrize("n", [1, 2, 7, 50])
@@ -363,7 +334,7 @@ def test_chain_verlet_fused_kernel_equals_plain_verlet(ends):
     from springchain.numeric.driver import integrate
     from springchain.numeric.integrators import VelocityVerlet
     from springchain.numeric.integrators.base import Problem
-    from springchain.numeric.simulate import FusedChainVerlet
+    from springchain.numeric.run.step import FusedChainVerlet
 
     scene = load_scene("ch.toml", text=chain_scene(257, *ends, mass="m*(1 + i % 2)", k="k*(1 + 0.01*i)"))
     module, _ = load_module(scene)

@@ -18,8 +18,7 @@ import importlib
 import numpy as np
 import pytest
 
-from springchain.derive.chain import ChainModel, render_chain_module
-from springchain.derive.scene import load_scene
+from helpers import chain_toml
 from springchain.numeric import fast
 from springchain.numeric.errors import RunRefused
 
@@ -28,29 +27,17 @@ BACKENDS = [fast.Backend.NUMPY] + ([fast.Backend.NUMBA] if fast.available() else
 
 
 def chain_scene_text(left: str, right: str, uniform: bool, cubic: bool = False, n: int = 50) -> str:
-    mass = "m" if uniform else "m*(1 + 0.5*sin(i))"
-    k = "k" if uniform else "k*(1 + 0.25*(i % 3))"
-    lines = [f'name = "fast_{left}_{right}_{int(uniform)}_{int(cubic)}"', "[parameters]", "m = 1.3", "k = 0.7",
-             "c = 0.2", "[chain]", f"n = {n}", f'mass = "{mass}"', f'k = "{k}"', f'left = "{left}"',
-             f'right = "{right}"']
-    if cubic:
-        lines.append('k3 = "c"' if uniform else 'k3 = "c*(1 + cos(i))"')
-    lines += ["[initial]", 'x = "0.01*sin(pi*(i + 1)/(n + 1))"', 'v = "0"']
-    return "\n".join(lines) + "\n"
-
-
-_MODULES: dict = {}
+    k3 = None if not cubic else ("c" if uniform else "c*(1 + cos(i))")
+    return chain_toml(n, left, right, name=f"fast_{left}_{right}_{int(uniform)}_{int(cubic)}",
+                      parameters={"m": 1.3, "k": 0.7, "c": 0.2}, mass="m" if uniform else "m*(1 + 0.5*sin(i))",
+                      k="k" if uniform else "k*(1 + 0.25*(i % 3))", k3=k3)
 
 
 @pytest.fixture(scope="module")
-def chain_module(import_source):
+def chain_module(chain_module_of):
     """``chain_module(left, right, uniform, cubic)``: a freshly rendered [chain] module."""
     def get(left, right, uniform, cubic=False):
-        key = (left, right, uniform, cubic)
-        if key not in _MODULES:
-            scene = load_scene("fast.toml", chain_scene_text(left, right, uniform, cubic))
-            _MODULES[key] = import_source(render_chain_module(ChainModel(scene), bundled=False), "fastchain")
-        return _MODULES[key]
+        return chain_module_of(chain_scene_text(left, right, uniform, cubic), "fastchain")
     return get
 
 

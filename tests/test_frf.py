@@ -7,49 +7,21 @@ dampers assembled by hand) and solved with ``np.linalg.solve`` one frequency at 
 from __future__ import annotations
 
 import json
-import tomllib
 from pathlib import Path
 
 import numpy as np
 import pytest
 
+from helpers import TomlScene, chain_toml, one_line_error, run_cli, write_scene
 import springchain as sc
 from springchain.cli import main
 
 REL = 1e-10
 
 
-def _value(text, params):
-    """A scene expression that is a product of parameter names and numbers (the scenes used here)."""
-    if not isinstance(text, str):
-        return float(text)
-    out = 1.0
-    for part in text.split("*"):
-        part = part.strip()
-        out *= float(params[part]) if part in params else float(part)
-    return out
-
-
 def _matrices(path: Path):
     """M, K, C (dense) from a [masses] scene's TOML, assembled element by element."""
-    data = tomllib.loads(Path(path).read_text())
-    p = data["parameters"]
-    names = list(data["masses"])
-    n = len(names)
-    M = np.diag([_value(v, p) for v in data["masses"].values()])
-
-    def assemble(entries, key):
-        A = np.zeros((n, n))
-        for e in entries:
-            a, b = (names.index(x) if x != "wall" else -1 for x in e["between"])
-            c = _value(e[key], p)
-            for i, si in ((a, 1), (b, -1)):
-                for j, sj in ((a, 1), (b, -1)):
-                    if i >= 0 and j >= 0:
-                        A[i, j] += si * sj * c
-        return A
-
-    return names, M, assemble(data.get("springs", []), "k"), assemble(data.get("dampers", []), "c")
+    return TomlScene.read(path).matrices()
 
 
 def _reference(M, K, C, omega, i, o):
@@ -148,11 +120,9 @@ def test_transfer_function_closed_form_one_mass(tmp_path):
 
 
 def _chain_scene(tmp_path, n, left, right, name):
-    path = tmp_path / f"{name}.toml"
-    path.write_text(f'name = "{name}"\n[parameters]\nm = 1.5\nk = 3.0\n[chain]\nn = {n}\nmass = "m*(1 + i % 3)"\n'
-                    f'k = "k*(2 + i % 2)"\nleft = "{left}"\nright = "{right}"\n[initial]\nx = "0"\nv = "0"\n'
-                    '[simulation]\ndt = 0.01\nsteps = 10\n')
-    return path
+    text = chain_toml(n, left, right, name=name, parameters={"m": 1.5, "k": 3.0}, mass="m*(1 + i % 3)",
+                      k="k*(2 + i % 2)", initial={"x": "0", "v": "0"}, simulation={"dt": 0.01, "steps": 10})
+    return write_scene(tmp_path, name, text)
 
 
 @pytest.mark.parametrize("left,right", [("free", "free"), ("wall", "free"), ("wall", "wall"), ("ring", "ring")])
@@ -219,11 +189,7 @@ def test_cli_json_and_figure(tmp_path, capsys):
     (["frf", "seed", "--output", "m2"], "--input"),
 ])
 def test_cli_errors_one_line(tmp_path, capsys, argv, needle):
-    with pytest.raises(SystemExit) as exc:
-        raise SystemExit(main(argv + ["--out", str(tmp_path)]))
-    assert exc.value.code == 2
-    err = capsys.readouterr().err
-    assert err.count("\n") == 1 and err.startswith("springchain: error:") and needle in err
+    one_line_error(*run_cli(argv + ["--out", tmp_path], capsys), needle)
     assert not any(tmp_path.iterdir())
 
 

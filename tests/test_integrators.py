@@ -22,14 +22,18 @@ import pytest
 import scipy.linalg
 from scipy.integrate import solve_ivp
 
-from springchain.numeric.driver import integrate, record_indices, step_grid
+from springchain.numeric.driver import integrate
+from springchain.numeric.run.grid import record_indices, step_grid
 from springchain.numeric.errors import RunRefused
-from springchain.numeric.integrators import ADAPTIVE, INTEGRATORS, LinearChain, Problem
+from springchain.numeric.integrators import LinearChain, Problem
+from springchain.numeric.run import registry
+from springchain.numeric.run.protocol import Kind
 from springchain.numeric.integrators.chebyshev import ChebyshevCoefficients, ChebyshevPropagator
 from springchain.numeric.integrators.expm import step_matrix
 from springchain.numeric.modal import ModalSolution
 from springchain.numeric.spectrum import incidence, spectrum
 
+INTEGRATORS, ADAPTIVE = registry.classes(Kind.STEP), registry.classes(Kind.ADAPTIVE)
 FINITE_ORDER = [name for name, cls in INTEGRATORS.items() if math.isfinite(cls.order)]
 PROPAGATORS = ["expm", "chebyshev"]
 

@@ -6,6 +6,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from helpers import scene_toml
 from springchain import load
 from springchain._modules import load_module
 
@@ -13,16 +14,12 @@ N = 15
 
 
 def scene_text(rayleigh: bool) -> str:
-    lines = ['name = "big_damped"', "[parameters]", "m = 2.0", "k = 3.0", "c = 0.25", "al = 0.1", "be = 0.01",
-             "[masses]"] + [f'p{i} = "m*{i + 1}"' for i in range(N)]
-    for i in range(N - 1):
-        lines += ["[[springs]]", f'between = ["p{i}", "p{i + 1}"]', f'k = "k*{1 + i % 3}"']
-    lines += ["[[springs]]", 'between = ["wall", "p0"]', 'k = "k"']
-    lines += ["[[dampers]]", f'between = ["p{N - 1}", "wall"]', 'c = "c"']
-    lines += ["[[dampers]]", 'between = ["p3", "p4"]', 'c = "2*c"']
-    if rayleigh:
-        lines += ["[damping]", 'rayleigh = ["al", "be"]']
-    return "\n".join(lines) + "\n"
+    springs = [{"between": [f"p{i}", f"p{i + 1}"], "k": f"k*{1 + i % 3}"} for i in range(N - 1)]
+    springs.append({"between": ["wall", "p0"], "k": "k"})
+    dampers = [{"between": [f"p{N - 1}", "wall"], "c": "c"}, {"between": ["p3", "p4"], "c": "2*c"}]
+    return scene_toml("big_damped", {"m": 2.0, "k": 3.0, "c": 0.25, "al": 0.1, "be": 0.01},
+                      masses={f"p{i}": f"m*{i + 1}" for i in range(N)}, springs=springs, dampers=dampers,
+                      tables={"damping": {"rayleigh": ["al", "be"]}} if rayleigh else None)
 
 
 @pytest.mark.parametrize("rayleigh", [False, True])

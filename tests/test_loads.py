@@ -9,7 +9,6 @@ tables' rows (where the input has kinks).
 from __future__ import annotations
 
 import re
-import tomllib
 from pathlib import Path
 
 import numpy as np
@@ -17,8 +16,9 @@ import pytest
 import sympy
 from scipy.integrate import solve_ivp
 
+import helpers
 import springchain as sc
-from springchain._api import load_tables
+from helpers import WALL_THREE, TomlScene, assemble, chain_toml, scene_toml, write_scene
 from springchain._modules import derive, load_module
 from springchain.cli import main
 from springchain.derive.errors import SceneError
@@ -31,58 +31,7 @@ ROOT = Path(__file__).resolve().parent.parent
 
 
 # -- scenes ---------------------------------------------------------------------------------------
-BASE = """
-name = "{name}"
-[parameters]
-m = 1.5
-k = 4.0
-c = 0.3
-A = 0.5
-W = 1.3
-F0 = 0.7
-[masses]
-m1 = "m"
-m2 = "2*m"
-m3 = "m"
-[[springs]]
-between = ["wall", "m1"]
-k = "k"
-[[springs]]
-between = ["m1", "m2"]
-k = "k"
-[[springs]]
-between = ["m2", "m3"]
-k = "2*k"
-{extra}
-[initial]
-x = [0.0, 0.05, -0.02]
-v = [0.01, 0.0, 0.0]
-[simulation]
-dt = 0.01
-steps = 600
-"""
 
-CHAIN = """
-name = "{name}"
-[parameters]
-m = 1.0
-k = 4.0
-F0 = 0.3
-A = 0.4
-[chain]
-n = 7
-mass = "m*(1 + 0.1*i)"
-k = "k*(1 + 0.05*i)"
-left = "wall"
-right = "free"
-{extra}
-[initial]
-x = "0.01*sin(pi*(i + 1)/(n + 1))"
-v = "0"
-[simulation]
-dt = 0.01
-steps = 600
-"""
 
 FORCE_TABLE = "t,f\n0,0\n0.7,1.2\n1.9,-0.8\n3.1,0.4\n4.0,0\n"
 # a ground record that starts and ends at rest and jumps nowhere (order 2 of Verlet holds)
@@ -92,40 +41,32 @@ JUMP_TABLE = "t,f\n0.95,2.0\n2.45,1.0\n"
 
 
 def write(tmp_path: Path, text: str, tables: dict[str, str] | None = None, name: str = "load") -> Path:
-    for fname, body in (tables or {}).items():
-        (tmp_path / fname).write_text(body)
-    path = tmp_path / f"{name}.toml"
-    path.write_text(text)
-    return path
+    return write_scene(tmp_path, name, text, tables)
+
+
+def masses_text(name: str, extra: str) -> str:
+    return scene_toml(name, {"m": 1.5, "k": 4.0, "c": 0.3, "A": 0.5, "W": 1.3, "F0": 0.7}, **WALL_THREE, extra=extra,
+                      initial={"x": [0.0, 0.05, -0.02], "v": [0.01, 0.0, 0.0]}, simulation={"dt": 0.01, "steps": 600})
+
+
+def chain_text(name: str, extra: str, n: int = 7) -> str:
+    return chain_toml(n, "wall", "free", name=name, parameters={"m": 1.0, "k": 4.0, "F0": 0.3, "A": 0.4},
+                      mass="m*(1 + 0.1*i)", k="k*(1 + 0.05*i)", simulation={"dt": 0.01, "steps": 600}, extra=extra)
 
 
 def masses_scene(tmp_path, extra, tables=None, name="load"):
-    return write(tmp_path, BASE.format(name=name, extra=extra), tables, name)
+    return write(tmp_path, masses_text(name, extra), tables, name)
 
 
 def chain_scene(tmp_path, extra, tables=None, name="cload"):
-    return write(tmp_path, CHAIN.format(name=name, extra=extra), tables, name)
+    return write(tmp_path, chain_text(name, extra), tables, name)
 
 
 # -- an independent reference, built from the TOML text and CSV files only -------------------------
-def _table(path: Path):
-    data = np.loadtxt(path, delimiter=",", skiprows=1, ndmin=2)
-    return data[:, 0], data[:, 1]
-
-
 def reference(path: Path):
     """(rhs(t, z), n, knots, a_g(t), x_g(t) or None) of z = (x, v) relative to the ground."""
-    data = tomllib.loads(path.read_text())
-    params = {k: float(v) for k, v in data["parameters"].items()}
-    syms = {k: sympy.Symbol(k) for k in params}
-    t, i_sym = sympy.Symbol("t"), sympy.Symbol("i")
-
-    def num(expr, **extra):
-        return float(sympy.sympify(str(expr), locals={**syms, "i": i_sym}).subs({**params, **extra}))
-
-    def fun_t(expr):
-        return sympy.lambdify(t, sympy.sympify(expr, locals={**syms, "t": t}).subs(params), "numpy")
-
+    toml = TomlScene.read(path)
+    data, num, fun_t, t = toml.data, toml.value, toml.of_t, toml.t
     if "chain" in data:
         ch = data["chain"]
         n = int(ch["n"])
@@ -137,31 +78,20 @@ def reference(path: Path):
             springs.append(((n - 1, -1), num(ch["k"], i=n - 1)))
         idx = None
     else:
-        names = list(data["masses"])
-        idx = {nm: j for j, nm in enumerate(names)}
-        n = len(names)
-        m = np.array([num(data["masses"][nm]) for nm in names])
-        springs = [(tuple(idx.get(e, -1) for e in s["between"]), num(s["k"])) for s in data["springs"]]
-    dampers = [(tuple(idx.get(e, -1) for e in d["between"]), num(d["c"])) for d in data.get("dampers", [])]
-    K = np.zeros((n, n))
-    for (a, b), k in springs:
-        for p, sp_ in ((a, 1), (b, -1)):
-            for q, sq in ((a, 1), (b, -1)):
-                if p >= 0 and q >= 0:
-                    K[p, q] += sp_ * sq * k
-    C = np.zeros((n, n))
-    for (a, b), c in dampers:
-        for p, sp_ in ((a, 1), (b, -1)):
-            for q, sq in ((a, 1), (b, -1)):
-                if p >= 0 and q >= 0:
-                    C[p, q] += sp_ * sq * c
+        idx = toml.mass_index()
+        m = np.array([num(e) for e in data["masses"].values()])
+        n = len(m)
+        springs = [(tuple(idx[e] for e in s["between"]), num(s["k"])) for s in data["springs"]]
+    dampers = [(tuple(idx[e] for e in d["between"]), num(d["c"])) for d in data.get("dampers", [])]
+    K = assemble(n, springs)
+    C = assemble(n, dampers)
     loads, knots = [], [np.zeros(0)]
     for f in data.get("forces", []):
         on = f["on"] if idx is None else idx[f["on"]]
         if "f" in f:
             loads.append((on, fun_t(f["f"])))
         else:
-            tt, ff = _table(path.parent / f["table"])
+            tt, ff = toml.csv(f["table"])
             knots.append(tt)
             loads.append((on, lambda s, tt=tt, ff=ff: np.interp(s, tt, ff, left=0.0, right=0.0)))
     a_g, x_g = (lambda s: 0.0), None
@@ -169,12 +99,12 @@ def reference(path: Path):
         g = data["ground"]
         if "acceleration" in g:
             a_g = fun_t(g["acceleration"])
-            expr = sympy.sympify(g["acceleration"], locals={**syms, "t": t}).subs(params)
+            expr = toml.expr(g["acceleration"])
             s_ = sympy.Symbol("s")
             vg = sympy.integrate(expr.subs(t, s_), (s_, 0, t))
             x_g = sympy.lambdify(t, sympy.integrate(vg.subs(t, s_), (s_, 0, t)), "numpy")
         else:
-            tt, aa = _table(path.parent / g["table"])
+            tt, aa = toml.csv(g["table"])
             knots.append(tt)
             a_g = lambda s, tt=tt, aa=aa: np.interp(s, tt, aa, left=0.0, right=0.0)  # noqa: E731
 
@@ -214,8 +144,7 @@ def dop853(rhs, n, x0, v0, t, knots):
 
 def system_of(path: Path):
     scene = load_scene(path)
-    module, _ = load_module(scene)
-    return scene, System.from_module(module, **load_tables(scene))
+    return scene, helpers.system_of(scene)[1]
 
 
 # -- the scene language ---------------------------------------------------------------------------
@@ -472,9 +401,8 @@ def test_long_loaded_chain_needs_no_n_by_n_memory(tmp_path):
     through the forcing splitting in memory proportional to n."""
     import tracemalloc
 
-    text = CHAIN.format(name="longload", extra='[[forces]]\non = 39999\ntable = "f.csv"\n'
-                        '[[forces]]\non = 0\nf = "F0*sin(0.3*t)"\n[ground]\nacceleration = "A*cos(0.5*t)"\n')
-    text = text.replace("n = 7", "n = 40000")
+    text = chain_text("longload", '[[forces]]\non = 39999\ntable = "f.csv"\n'
+                      '[[forces]]\non = 0\nf = "F0*sin(0.3*t)"\n[ground]\nacceleration = "A*cos(0.5*t)"\n', n=40000)
     path = write(tmp_path, text, {"f.csv": FORCE_TABLE}, "longload")
     scene, system = system_of(path)
     assert not system.exact_available

@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from springchain.numeric.modal import ModalSolution, tsinc
-from springchain.numeric.simulate import system_spectrum
+from springchain.numeric.run.exact import spectrum_of as system_spectrum
 from springchain.numeric.spectrum import spectrum
 from springchain.numeric.system import System
 
@@ -197,7 +197,7 @@ def test_one_product_trajectory_equals_the_general_route(seed_system):
     """ModalSolution.at on a 1-D grid (one exp and one matrix product) equals the per-mode route
     to rounding, and keeps the rigid drift exact at t = 1e6."""
     from springchain.numeric.modal import ModalSolution
-    from springchain.numeric.simulate import system_spectrum
+    from springchain.numeric.run.exact import spectrum_of as system_spectrum
 
     spec = system_spectrum(seed_system)
     x0, v0 = np.array([0.1, -0.02, 0.03]), np.array([0.01, 0.0, -0.005])

@@ -15,6 +15,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from helpers import free_pieces
 from modes_reference import reference, rel_err, scene_text, shape_err
 
 RTOL = 1e-13
@@ -55,25 +56,8 @@ def _check(tmp_path, monkeypatch, mass_params, stiff_params, mass_of, springs, *
 
 
 def _free_pieces(n, ends):
-    parent = list(range(n))
-
-    def find(i):
-        while parent[i] != i:
-            parent[i] = parent[parent[i]]
-            i = parent[i]
-        return i
-
-    walled = set()
-    for a, b, _ in ends:
-        if a >= 0 and b >= 0:
-            parent[find(a)] = find(b)
-    for a, b, _ in ends:
-        for i in (a, b):
-            if i >= 0 and (a < 0 or b < 0):
-                walled.add(i)
-    roots = {find(i) for i in range(n)}
-    walled_roots = {find(i) for i in walled}
-    return len(roots - walled_roots)
+    """How many free pieces (rigid-body modes): an independent union-find over the springs."""
+    return len(free_pieces(n, ends))
 
 
 def _assert_ok(errs):

@@ -17,6 +17,7 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
+from helpers import scene_toml
 from springchain import _api
 from springchain.cli import main
 from springchain.derive.scene import RESERVED, load_scene
@@ -35,22 +36,15 @@ MASS_POOL = sorted(set(ONCE_REFUSED) | {"a", "x", "v", "t", "i", "n", "pi", "sqr
 
 def scene_text(masses, params, *, damper: bool, force: bool, gravity: bool) -> str:
     m, k, c, g = params[:4]
-    lines = ['name = "names"', "[parameters]", f"{m} = 1.5", f"{k} = 2.0", f"{c} = 0.1", f"{g} = 0.3"]
-    lines += [f"{p} = 1.0" for p in params[4:]]
-    lines += ["[masses]"] + [f'{name} = "{m}*{j + 1}"' for j, name in enumerate(masses)]
     ends = [[masses[0], "wall"]] + [[a, b] for a, b in zip(masses, masses[1:])]
-    for a, b in ends:
-        lines += ["[[springs]]", f'between = ["{a}", "{b}"]', f'k = "{k}"']
-    if damper:
-        lines += ["[[dampers]]", f'between = ["{masses[-1]}", "wall"]', f'c = "{c}"']
-    if force:
-        lines += ["[[forces]]", f'on = "{masses[0]}"', f'f = "{g}*cos(t)"']
-    if gravity:
-        lines += ["[gravity]", f'g = "{g}"']
     n = len(masses)
-    lines += ["[initial]", f"x = {[0.1] + [0.0] * (n - 1)}", f"v = {[0.0] * n}",
-              "[simulation]", "dt = 0.01", "steps = 40"]
-    return "\n".join(lines) + "\n"
+    return scene_toml("names", {m: 1.5, k: 2.0, c: 0.1, g: 0.3, **{p: 1.0 for p in params[4:]}},
+                      masses={name: f"{m}*{j + 1}" for j, name in enumerate(masses)},
+                      springs=[{"between": e, "k": k} for e in ends],
+                      dampers=[{"between": [masses[-1], "wall"], "c": c}] if damper else (),
+                      forces=[{"on": masses[0], "f": f"{g}*cos(t)"}] if force else (),
+                      tables={"gravity": {"g": g}} if gravity else None,
+                      initial={"x": [0.1] + [0.0] * (n - 1), "v": [0.0] * n}, simulation={"dt": 0.01, "steps": 40})
 
 
 @settings(max_examples=25, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture,

@@ -19,12 +19,16 @@ import pytest
 from scipy.integrate import solve_ivp
 
 from springchain.numeric.errors import RunRefused
-from springchain.numeric.integrators import ADAPTIVE, Problem
+from springchain.numeric.integrators import Problem
 from springchain.numeric.integrators.dprkn6 import DPRKN6_TABLE
 from springchain.numeric.integrators.dprkn8 import DPRKN8_TABLE
 from springchain.numeric.integrators.dprkn12 import DPRKN12_TABLE
 from springchain.numeric.integrators.nystrom import rkn_step
 from springchain.numeric.integrators.nystrom_tables import NystromTable, q
+from springchain.numeric.run import registry
+from springchain.numeric.run.protocol import Kind
+
+ADAPTIVE = registry.classes(Kind.ADAPTIVE)
 
 TABLES = {"dprkn6": DPRKN6_TABLE, "dprkn8": DPRKN8_TABLE, "dprkn12": DPRKN12_TABLE}
 SCENES = Path(__file__).resolve().parents[1] / "scenes"
@@ -246,12 +250,15 @@ def test_plan_covers_the_pairs():
     names = {c.name for c in (*plan.candidates, *plan.unreachable)}
     assert {"dprkn6", "dprkn8", "dprkn12", "dop853"} <= names
     for name in ("dprkn8", "dprkn12"):
-        law = planner.adaptive[name]
+        law = planner.adaptive[registry.method(name)]
         assert law.error(1e-8, 20.0) < law.error(1e-5, 20.0)  # calibrated: tighter rtol, smaller error
 
 
 def test_bench_duffing_interpolates_costs_on_the_lower_envelope():
-    from springchain.bench_duffing import TARGET, cost_at, ratio_table
+    from benchmark_scripts import load
+
+    duffing = load("duffing")
+    TARGET, cost_at, ratio_table = duffing.TARGET, duffing.cost_at, duffing.ratio_table
 
     runs = [{"error": 1e-3, "evals": 100, "seconds": 1.0}, {"error": 2e-3, "evals": 150, "seconds": 1.5},
             {"error": 1e-5, "evals": 400, "seconds": 4.0}]

@@ -20,14 +20,18 @@ import pytest
 
 import springchain.generated.seed as seed_module
 from springchain.numeric.bench import ExtendedModalReference
-from springchain.numeric.driver import integrate, step_grid
+from springchain.numeric.driver import integrate
+from springchain.numeric.run.grid import step_grid
 from springchain.numeric.error_models import LinearChainModel, OscillatorResponse, PowerLaw
-from springchain.numeric.integrators import INTEGRATORS
+from springchain.numeric.run import registry
+from springchain.numeric.run.protocol import Kind
 from springchain.numeric.integrators.base import Problem
 from springchain.numeric.integrators.verlet import VelocityVerlet
 from springchain.numeric.plan import Planner
 from springchain.numeric.spectrum import spectrum
 from springchain.numeric.system import System
+
+INTEGRATORS = registry.classes(Kind.STEP)
 
 ROOT = Path(__file__).resolve().parent.parent
 SEED = ROOT / "scenes" / "seed.toml"
@@ -102,14 +106,15 @@ def test_planned_steps_meet_tol_without_waste(seed, planner, tol):
     assert {c.name for c in fixed} == set(INTEGRATORS), "every fixed-step method is planned at these tolerances"
     for cand in fixed:
         assert cand.reachable, f"{cand.name} unreachable at {tol:g}"
-        integ = cand.method
-        exact = not math.isfinite(integ.order)
-        assert cand.dt * planner.model.omega_max < integ.stability_limit
+        method = cand.method
+        integ = method.integrator_class()
+        exact = not math.isfinite(method.traits.order)
+        assert cand.dt * planner.model.omega_max < method.traits.stability_limit
         t_end, dt = T_END, cand.dt
         for shorter in (20.0, 5.0, 1.0):  # the same contract on a shorter horizon when too costly here
             if integ.force_evals(problem, dt, round(t_end / dt)) <= EVAL_BUDGET:
                 break
-            cand = replace(planner, t_end=shorter).plan_step(integ, tol)
+            cand = replace(planner, t_end=shorter).plan_step(method, tol)
             t_end, dt = shorter, cand.dt
         err = measured_error(problem, reference, integ, t_end, dt)
         assert err <= tol, f"{cand.name} at dt={dt:.4g} over t={t_end:g}: error {err:.3g} > tol {tol:g}"
@@ -123,7 +128,7 @@ def test_recommendation_is_cheapest_and_stable(planner):
     loose = planner.plan(1.0)  # accuracy is no constraint: stability bounds the step
     for c in loose.candidates:
         if c.dt is not None and c.name in INTEGRATORS:
-            assert c.dt * planner.model.omega_max < c.method.stability_limit
+            assert c.dt * planner.model.omega_max < c.method.traits.stability_limit
 
 
 def test_below_rounding_floor_is_unreachable(planner):
@@ -140,7 +145,7 @@ def test_below_rounding_floor_is_unreachable(planner):
 def test_error_models_match_measured(seed, planner, name, dt):
     _, problem, reference = seed
     integ = INTEGRATORS[name]()
-    resp = planner.responses[name]
+    resp = planner.responses[registry.method(name)]
     h, n = step_grid(T_END, dt)
     err = measured_error(problem, reference, integ, T_END, dt)
     exact = planner.model.error(resp, h, n)

@@ -15,13 +15,12 @@ import numpy as np
 import pytest
 from scipy.integrate import solve_ivp
 
+import helpers
 import springchain as sc
-from springchain._modules import load_module
 from springchain.cli import main
 from springchain.derive.scene import load_scene
 from springchain.numeric.linear_exact import AugmentedLinear
 from springchain.numeric.simulate import run_methods
-from springchain.numeric.system import System
 
 ROOT = Path(__file__).resolve().parent.parent
 #: Largest force evaluations of one contract run (costlier candidates are skipped: not a timing test).
@@ -48,8 +47,7 @@ steps = 100
 
 
 def system_of(scene):
-    module, _ = load_module(scene)
-    return System.from_module(module)
+    return helpers.system_of(scene)[1]
 
 
 def dense_exact(system, x0, v0, t):
@@ -72,7 +70,7 @@ def check_candidates(plan, system, x0, v0, exact):
     """Every reachable step candidate meets TOL when run (within the evaluation budget)."""
     checked = 0
     for c in plan.candidates:
-        if c.steps is None or c.steps * max(c.method.evals_per_step, 1) > EVAL_BUDGET:
+        if c.steps is None or c.steps * max(c.method.traits.evals_per_step, 1) > EVAL_BUDGET:
             continue
         run = run_methods(system, x0, v0, c.dt, c.steps, [c.name])[c.name]
         err = float(np.max(np.abs(run.x - exact(run.t))))
@@ -137,7 +135,7 @@ def test_quick_bench_runs_against_the_exact_solution(name, tmp_path, capsys):
     methods = {r["method"] for r in data["records"]}
     assert {"verlet", "dop853"} <= methods
     for r in data["records"]:
-        assert np.isfinite(r["error"]) and r["error"] >= 0
+        assert np.isfinite(r["error"]) and r["error"] > 0
         if r["predicted_error"] is not None and r["error"] > 1e-12:
             # the pilot law is conservative: measured never far above predicted
             assert r["error"] <= 3 * r["predicted_error"], r

@@ -17,6 +17,7 @@ from hypothesis import assume, example, given, settings
 from hypothesis import strategies as st
 
 from springchain.numeric.driver import integrate
+from helpers import free_pieces
 from springchain.numeric.integrators import VelocityVerlet
 from springchain.numeric.integrators.base import Problem
 from springchain.numeric.modal import ModalSolution
@@ -53,22 +54,7 @@ def states(n: int, seed: int):
 
 def free_piece_list(n, ends):
     """Free connected pieces by an independent union-find."""
-    parent = list(range(n))
-
-    def root(i):
-        while parent[i] != i:
-            parent[i] = parent[parent[i]]
-            i = parent[i]
-        return i
-
-    for a, b in ends:
-        if a >= 0 and b >= 0:
-            parent[root(a)] = root(b)
-    walled = {root(max(a, b)) for a, b in ends if (a < 0) != (b < 0)}
-    groups: dict[int, list[int]] = {}
-    for i in range(n):
-        groups.setdefault(root(i), []).append(i)
-    return [np.array(g) for r, g in groups.items() if r not in walled]
+    return [np.array(g) for g in free_pieces(n, ends)]
 
 
 def spring_forces(ends, k, x):
@@ -91,6 +77,7 @@ def energy(masses, ends, k, x, v):
 
 # -- the operator and its modes ------------------------------------------------------------------------------------
 @given(scenes())
+@example((np.ones(9), np.array([[7, 8], [0, 1], [0, 1], [1, 0]]), np.array([1.0, 1.0, 1.07460783, 0.1])))
 def test_stiffness_is_symmetric_positive_semidefinite(scene):
     masses, ends, k = scene
     K = stiffness_matrix(masses.size, ends, k)

@@ -19,8 +19,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from helpers import assemble, chain_toml, one_line_error, system_of, write_scene
+from helpers import run_cli as run
 from springchain import _api
-from springchain.cli import main
 from springchain.derive.scene import load_scene
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -28,32 +29,34 @@ TOP_KEYS = {"scene", "parameters", "masses", "modes", "closed_form", "notes"}
 MODE_KEYS = {"omega2", "omega2_value", "multiplicity", "shape"}
 
 
-def run(argv, capsys):
-    status = main([str(a) for a in argv])
-    out, err = capsys.readouterr()
-    return status, out, err
-
-
-def one_line_error(status, err, *parts):
-    assert status == 2, err
-    lines = err.strip().splitlines()
-    assert len(lines) == 1 and lines[0].startswith("springchain: error: "), err
-    for p in parts:
-        assert p in lines[0], (p, lines[0])
-    return lines[0]
-
-
 def chain_scene(tmp_path: Path, n: int, left="free", right="free", steps=100, dt=0.01, name="c") -> Path:
-    path = tmp_path / f"{name}.toml"
-    path.write_text(f'name = "{name}"\n[parameters]\nm = 1.0\nk = 2.0\n[chain]\nn = {n}\nmass = "m"\n'
-                    f'k = "k"\nleft = "{left}"\nright = "{right}"\n[initial]\nx = "0.1*cos(i)"\nv = "0"\n'
-                    f"[simulation]\ndt = {dt}\nsteps = {steps}\n")
-    return path
+    text = chain_toml(n, left, right, name=name, parameters={"m": 1.0, "k": 2.0}, initial={"x": "0.1*cos(i)", "v": "0"},
+                      simulation={"dt": dt, "steps": steps})
+    return write_scene(tmp_path, name, text)
 
 
-@pytest.fixture(autouse=True)
-def _cache(tmp_path, monkeypatch):
-    monkeypatch.setenv("SPRINGCHAIN_CACHE", str(tmp_path / "cache"))
+pytestmark = pytest.mark.usefixtures("fresh_cache")
+
+
+# -- a chain without parameters -------------------------------------------------------------------
+def test_chain_without_parameters_renders_valid_code(tmp_path, capsys):
+    """Every expression a number (empty [parameters]): the stencil module's signatures hold only n
+    (was ``def masses(, n=N)``, a SyntaxError); checked against the matrices written from the TOML."""
+    extra = ('[[dampers]]\nbetween = ["i", "i+1"]\nc = "0.1"\n[damping]\nrayleigh = [0.01, 0.001]\n'
+             '[[forces]]\non = 2\nf = "cos(t)"\n[gravity]\ng = "1"\n[ground]\nacceleration = "sin(t)"')
+    path = write_scene(tmp_path, "bare", chain_toml(6, "wall", "free", name="bare", parameters={}, mass="1 + 0.1*i",
+                                                    k="2", extra=extra))
+    module, _ = system_of(load_scene(path))
+    m = 1 + 0.1 * np.arange(6)
+    K = assemble(6, [((-1, 0), 2.0)] + [((i, i + 1), 2.0) for i in range(5)])
+    C = assemble(6, [((i, i + 1), 0.1) for i in range(5)]) + 0.01 * np.diag(m) + 0.001 * K
+    x = np.random.default_rng(3).normal(size=(6, 4))
+    np.testing.assert_allclose(module.acceleration(x), -(K @ x) / m[:, None] + 1.0, rtol=1e-13, atol=1e-13)
+    np.testing.assert_allclose(module.damping_matrix(), C, rtol=1e-13, atol=1e-15)
+    want = np.zeros(6)
+    want[2] = 1.0 / m[2]  # cos(0) on mass 2
+    np.testing.assert_allclose(module.external_acceleration(0.0), want, rtol=1e-15)
+    assert run(["simulate", path, "--out", tmp_path / "o", "--no-figures"], capsys)[0] == 0
 
 
 # -- one-mass chains ------------------------------------------------------------------------------
@@ -81,7 +84,7 @@ def test_derive_with_nothing_to_do_says_so(monkeypatch, tmp_path, capsys):
     monkeypatch.setattr(scenes, "bundled_scenes", lambda: [])
     for argv in (["derive", "--out", tmp_path / "g"], ["derive", "--check"]):
         status, out, err = run(argv, capsys)
-        one_line_error(status, err, "nothing to derive")
+        one_line_error(status, out, err, "nothing to derive")
         assert out == ""
 
 
@@ -107,8 +110,8 @@ def test_fifo_is_refused_before_reading(tmp_path):
 
 
 def test_folder_is_refused_as_not_regular(tmp_path, capsys):
-    status, _, err = run(["modes", tmp_path], capsys)
-    one_line_error(status, err, "cannot read", "folder")
+    status, out, err = run(["modes", tmp_path], capsys)
+    one_line_error(status, out, err, "cannot read", "folder")
 
 
 # -- Ctrl-C ---------------------------------------------------------------------------------------
@@ -243,12 +246,14 @@ def test_progress_is_silent_for_short_phases_and_reports_long_ones(monkeypatch):
     assert "springchain: slow ... " in text and "springchain: slow: done in" in text
 
 
-def test_the_three_reporters_share_one_module():
-    from springchain.numeric import bench, driver, progress, scaling
+def test_the_reporters_share_one_module():
+    from springchain.numeric import bench_runs, chunked, driver, scaling, sweep_driver
+    from springchain.numeric.progress import Reporter
 
-    assert issubclass(driver.Progress, progress.Reporter)
-    src = Path(bench.__file__).read_text() + Path(scaling.__file__).read_text()
-    assert "sys.stderr.write" not in src and src.count("progress.line(") >= 3
+    assert issubclass(sweep_driver.Progress, Reporter) and not hasattr(driver, "Progress")
+    for mod in (bench_runs, scaling, sweep_driver, chunked, driver):
+        src = Path(mod.__file__).read_text()
+        assert "sys.stderr" not in src and "print(" not in src, mod.__name__  # only through the reporter
 
 
 def test_numba_compile_note(monkeypatch, capsys):
@@ -274,8 +279,8 @@ def test_long_steps_apply_only_where_they_are_used(tmp_path, capsys):
     path.write_text(text)
     assert run(["modes", path], capsys)[0] == 0
     assert run(["derive", path, "--out", tmp_path / "g"], capsys)[0] == 0
-    status, _, err = run(["simulate", path, "--out", tmp_path / "o"], capsys)
-    one_line_error(status, err, "GiB")
+    status, out, err = run(["simulate", path, "--out", tmp_path / "o"], capsys)
+    one_line_error(status, out, err, "GiB")
     assert run(["simulate", path, "--steps", "100", "--out", tmp_path / "o", "--no-figures"], capsys)[0] == 0
 
 

@@ -242,7 +242,7 @@ def test_chain_end_error_shows_the_word_not_the_enum(tmp_path, capsys):
     err = capsys.readouterr().err
     assert "<End." not in err and "chain.right: 'free': a ring closes both ends" in err
     from springchain.derive.errors import show
-    from springchain.ends import End
+    from springchain.generated.contract import End
 
     assert show(End.WALL) == "'wall'"
 

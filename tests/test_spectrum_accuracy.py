@@ -23,6 +23,7 @@ import scipy.linalg
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from helpers import free_pieces, mp_dynamical_matrix
 from springchain.numeric.modal import ModalSolution
 from springchain.numeric.spectrum import rigid_basis, spectrum, stiffness_matrix
 
@@ -33,22 +34,7 @@ OMEGA_RTOL = 1e-12
 # -- references ---------------------------------------------------------------------------------------------
 def mp_D(masses, ends, k):
     """``D = M^-1/2 K M^-1/2`` in mpmath at the working precision, from the springs (inputs exact)."""
-    n = len(masses)
-    K = mp.zeros(n, n)
-    for (a, b), kk in zip(np.asarray(ends).reshape(-1, 2), k):
-        kk = mp.mpf(float(kk))
-        for i in (a, b):
-            if i >= 0:
-                K[i, i] += kk
-        if a >= 0 and b >= 0:
-            K[a, b] -= kk
-            K[b, a] -= kk
-    s = [1 / mp.sqrt(mp.mpf(float(m))) for m in masses]
-    D = mp.matrix(n, n)
-    for i in range(n):
-        for j in range(n):
-            D[i, j] = K[i, j] * s[i] * s[j]
-    return D
+    return mp_dynamical_matrix(masses, ends, k)
 
 
 def mp_omega(masses, ends, k, dps):
@@ -60,25 +46,7 @@ def mp_omega(masses, ends, k, dps):
 
 def pieces_without_wall(n, ends):
     """Free connected pieces by a union-find independent of numeric.spectrum."""
-    parent = list(range(n))
-
-    def root(i):
-        while parent[i] != i:
-            parent[i] = parent[parent[i]]
-            i = parent[i]
-        return i
-
-    walled = set()
-    for a, b in np.asarray(ends).reshape(-1, 2):
-        if a >= 0 and b >= 0:
-            parent[root(a)] = root(b)
-    for a, b in np.asarray(ends).reshape(-1, 2):
-        if (a < 0) != (b < 0):
-            walled.add(root(max(a, b)))
-    groups = {}
-    for i in range(n):
-        groups.setdefault(root(i), []).append(i)
-    return [sorted(g) for r, g in groups.items() if r not in walled]
+    return free_pieces(n, np.asarray(ends).reshape(-1, 2))
 
 
 def worst_relative_error(omega, ref, rigid):

@@ -20,34 +20,17 @@ from springchain.numeric.distributions import Dist, parse, parse_assignment
 from springchain.numeric.errors import RunRefused
 from springchain.numeric.realisations import SweepSpec, compute_batch
 
+from helpers import chain_toml, one_line_error, run_cli, write_scene  # noqa: E402
+
 pytest.importorskip("dask.distributed")
 from dask.distributed import Client, LocalCluster  # noqa: E402
 
-CHAIN = """
-name = "{name}"
-description = "a short free-free chain for sweep tests"
-[parameters]
-m = 1.0
-k = 1.0
-[chain]
-n = {n}
-mass = "m"
-k = "k"
-left = "free"
-right = "free"
-[initial]
-x = "0"
-v = "0"
-[simulation]
-dt = 0.1
-steps = 10
-"""
 
 
 def chain_scene(tmp_path, n, name="dchain"):
-    path = tmp_path / f"{name}{n}.toml"
-    path.write_text(CHAIN.format(name=f"{name}{n}", n=n), encoding="utf-8")
-    return path
+    text = chain_toml(n, name=f"{name}{n}", parameters={"m": 1.0, "k": 1.0}, initial={"x": "0", "v": "0"},
+                      simulation={"dt": 0.1, "steps": 10})
+    return write_scene(tmp_path, f"{name}{n}", text)
 
 
 def _cluster(workers):
@@ -300,14 +283,7 @@ def test_sweep_localisation_matches_transfer_matrix(tmp_path, client2):
     (["seed", "--samples", "3", "--scheduler", "nowhere"], "--scheduler 'nowhere': accepted: an address"),
 ])
 def test_cli_errors_are_one_line(argv, needle, capsys, tmp_path):
-    try:
-        code = main(["sweep", *argv, "--out", str(tmp_path / "o")])
-    except SystemExit as exc:  # argparse's own checks
-        code = exc.code
-    err = capsys.readouterr().err
-    assert code == 2
-    lines = err.strip().splitlines()
-    assert len(lines) == 1 and lines[0].startswith("springchain: error:") and needle in lines[0], err
+    one_line_error(*run_cli(["sweep", *argv, "--out", tmp_path / "o"], capsys), needle)
 
 
 def test_cli_json(tmp_path, capsys):

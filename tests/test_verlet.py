@@ -13,11 +13,18 @@ import numpy as np
 import pytest
 
 from springchain.numeric.driver import integrate
-from springchain.numeric.integrators import INTEGRATORS, Problem, VelocityVerlet
+from springchain.numeric.integrators import Problem, VelocityVerlet
+from springchain.numeric.run import registry
+from springchain.numeric.run.protocol import Kind
 from springchain.numeric.modal import ModalSolution
 from springchain.numeric.spectrum import incidence
-from springchain.numeric.simulate import check_stable, compare, run_methods, system_spectrum
+from springchain.numeric.compare import compare
+from springchain.numeric.run.exact import spectrum_of as system_spectrum
+from springchain.numeric.run.step import stability_refusal
+from springchain.numeric.simulate import run_methods
 from springchain.numeric.errors import RunRefused
+
+INTEGRATORS = registry.classes(Kind.STEP)
 
 
 @pytest.fixture(scope="module")
@@ -206,8 +213,8 @@ def test_run_methods_time_grid(reference_runs, reference):
 # -- stability edge ------------------------------------------------------------------------------------
 def test_stability_limit_refused(seed_system, reference):
     w_max = np.sqrt(5 / 3)
-    check_stable(w_max, 1.99 / w_max, "verlet")
-    with pytest.raises(RunRefused):
-        check_stable(w_max, 2.0 / w_max, "verlet")
+    assert seed_system.omega_max == pytest.approx(w_max, rel=1e-14)
+    assert stability_refusal(seed_system, 1.99 / w_max, "verlet", 2.0) is None
+    assert "stability limit" in stability_refusal(seed_system, 2.0 / w_max, "verlet", 2.0)
     with pytest.raises(RunRefused):
         run_methods(seed_system, reference["x0"], reference["v0"], 5.0, 10, ["verlet"])

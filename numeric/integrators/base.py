@@ -153,11 +153,18 @@ class Integrator(abc.ABC):
     #: Whether the method integrates ``damping`` (otherwise it refuses a problem with dampers).
     supports_damping: ClassVar[bool] = False
 
+    def refusal(self, problem: Problem) -> str | None:
+        """Why this method cannot integrate ``problem`` (None when it can)."""
+        if problem.damping is not None and not self.supports_damping:
+            return (f"method {self.name!r} integrates conservative and external forces only; "
+                    f"this scene has dampers: use rk4 or an adaptive method (rk45, dop853, lsoda)")
+        return None
+
     def check(self, problem: Problem) -> None:
         """Refuse a problem this method cannot integrate (raises :class:`~numeric.errors.RunRefused`)."""
-        if problem.damping is not None and not self.supports_damping:
-            raise RunRefused(f"method {self.name!r} integrates conservative and external forces only; "
-                             f"this scene has dampers: use rk4 or an adaptive method (rk45, dop853, lsoda)", quantity="method")
+        why = self.refusal(problem)
+        if why:
+            raise RunRefused(why, quantity="method")
 
     def init(self, problem: Problem, x0: np.ndarray, v0: np.ndarray) -> State:
         """The state at ``i = 0``. x0, v0 : array_like, shape (N, B)."""

@@ -29,7 +29,6 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy.special import jv
 
-from ..errors import RunRefused
 from .base import Problem, StepKernel, finite_positive
 from .propagator import LinearPropagator
 
@@ -125,10 +124,11 @@ class ChebyshevPropagator(LinearPropagator):
     name = "chebyshev"
     evals_per_step = math.nan  # depends on h·ω_max: see evals_for
 
-    def check(self, problem: Problem) -> None:
-        super().check(problem)
-        if np.any(problem.linear.stiffness < 0):
-            raise RunRefused(f"method {self.name!r} needs non-negative spring constants", quantity="method")
+    def refusal(self, problem: Problem) -> str | None:
+        why = super().refusal(problem)
+        if why is None and np.any(problem.linear.stiffness < 0):
+            return f"method {self.name!r} needs non-negative spring constants"
+        return why
 
     def coefficients(self, problem: Problem, h: float) -> ChebyshevCoefficients:
         return ChebyshevCoefficients.from_bessel(h, problem.linear.omega2_bound())

@@ -161,9 +161,5 @@ DPRKN12_TABLE = NystromTable(
 )
 
 
-class DPRKN12(EmbeddedNystrom):
-    """Dormand–El-Mikkawy–Prince RKN 12(10) (:data:`DPRKN12_TABLE`)."""
-
-    name = "dprkn12"
-    table = DPRKN12_TABLE
-    order = 12
+#: Dormand–El-Mikkawy–Prince RKN 12(10) as an adaptive method (its name, and the table that declares its order).
+DPRKN12 = EmbeddedNystrom.of("dprkn12", DPRKN12_TABLE)

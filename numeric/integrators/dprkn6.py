@@ -55,9 +55,5 @@ DPRKN6_TABLE = NystromTable(
 )
 
 
-class DPRKN6(EmbeddedNystrom):
-    """Dormand–Prince RKN 6(4) (:data:`DPRKN6_TABLE`)."""
-
-    name = "dprkn6"
-    table = DPRKN6_TABLE
-    order = 6
+#: Dormand–Prince RKN 6(4) as an adaptive method (its name, and the table that declares its order).
+DPRKN6 = EmbeddedNystrom.of("dprkn6", DPRKN6_TABLE)

@@ -44,9 +44,5 @@ DPRKN8_TABLE = NystromTable(
 )
 
 
-class DPRKN8(EmbeddedNystrom):
-    """Dormand–Prince RKN 8(6) (:data:`DPRKN8_TABLE`)."""
-
-    name = "dprkn8"
-    table = DPRKN8_TABLE
-    order = 8
+#: Dormand–Prince RKN 8(6) as an adaptive method (its name, and the table that declares its order).
+DPRKN8 = EmbeddedNystrom.of("dprkn8", DPRKN8_TABLE)

@@ -44,6 +44,8 @@ class AdaptiveMethod:
     supports_damping: ClassVar[bool] = True
     #: Not a constant: counted per run.
     evals_per_step: ClassVar[float] = math.nan
+    #: Whether the method keeps a dense N × N Jacobian (refused above the dense limit).
+    dense_jacobian: ClassVar[bool] = False
 
     def solve(self, problem: Problem, x0: np.ndarray, v0: np.ndarray, t_eval: np.ndarray,
               rtol: float, atol: float) -> AdaptiveResult:
@@ -119,3 +121,4 @@ class LSODA(AdaptiveMethod):
     name = "lsoda"
     scipy_method = "LSODA"
     order = 12  # Adams up to order 12 (variable)
+    dense_jacobian = True

@@ -143,12 +143,8 @@ class StructuralOperator:
 
     @classmethod
     def from_system(cls, system) -> "StructuralOperator":
-        mod = system.module
-        cubic = None
-        if not system.linear and hasattr(mod, "cubic_constants"):
-            cubic = np.asarray(mod.cubic_constants(**system.params, **({"n": system.n} if system.chain else {})),
-                               dtype=float) * np.ones(system.spring_ends.shape[0])
-        return cls(system.masses, system.spring_ends, system.stiffness, cubic, system.damping_rate_matrix(),
+        return cls(system.masses, system.spring_ends, system.stiffness, system.cubic_stiffness,
+                   system.damping_rate_matrix(),
                    system.external_fn, bool(system.chain or system.n > DENSE_MAX))
 
     @classmethod
@@ -260,6 +256,12 @@ class ProbedOperator:
         return StructuralOperator.system_matrix(self, A, c1, c2)
 
 
+def _traits(p: NewmarkParameters) -> tuple[int, float, float]:
+    """Order, stability limit and force evaluations per step of a parameter set (HHT keeps the
+    previous step's force: two evaluations on nonlinear springs, one extra on linear)."""
+    return p.order, p.stability_limit, 2.0 if p.alpha != 0.0 else 1.0
+
+
 class NewmarkFamily(Integrator):
     """HHT-α / Newmark-β step (see the module docstring). Subclasses set :attr:`parameters`.
 
@@ -272,17 +274,19 @@ class NewmarkFamily(Integrator):
     symplectic = False
     supports_damping = True
     evals_per_step = 1.0
-    #: An implicit method: its per-mode propagator is rational in ωh (see :meth:`mode_propagator`).
-    implicit: ClassVar[bool] = True
+
+    def __init_subclass__(cls, **kw):
+        """A subclass's declared traits (order, stability limit, evaluations per step) are those of
+        its :attr:`parameters` (read by :meth:`numeric.run.protocol.Traits.of`)."""
+        super().__init_subclass__(**kw)
+        if "parameters" in cls.__dict__:
+            cls.order, cls.stability_limit, cls.evals_per_step = _traits(cls.parameters)
 
     def __init__(self, operator: StructuralOperator | None = None, parameters: NewmarkParameters | None = None):
         self.operator = operator
         if parameters is not None:
             self.parameters = parameters
-        p = self.parameters
-        self.stability_limit = p.stability_limit
-        self.order = p.order
-        self.evals_per_step = 2.0 if p.alpha != 0.0 else 1.0
+        self.order, self.stability_limit, self.evals_per_step = _traits(self.parameters)
 
     @classmethod
     def for_system(cls, system, **kw) -> "NewmarkFamily":

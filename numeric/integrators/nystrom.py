@@ -85,6 +85,13 @@ class EmbeddedNystrom(AdaptiveMethod):
     scipy_method = ""
     supports_damping: ClassVar[bool] = False
 
+    @classmethod
+    def of(cls, name: str, table: NystromTable) -> type["EmbeddedNystrom"]:
+        """The pair ``table`` as a method class called ``name`` (its order is the table's: declared
+        once, where the table checks it)."""
+        return type(name.upper(), (cls,), {"name": name, "table": table, "order": table.order,
+                                           "__doc__": f"{table.source} (``{name}``)", "__module__": cls.__module__})
+
     @property
     def evals_per_accepted_step(self) -> int:
         return self.table.evals_per_step

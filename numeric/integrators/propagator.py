@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import math
 
-from ..errors import RunRefused
 from .base import Integrator, Problem
 
 
@@ -19,11 +18,12 @@ class LinearPropagator(Integrator):
     init_evals = 0
     stability_limit = math.inf
 
-    def check(self, problem: Problem) -> None:
+    def refusal(self, problem: Problem) -> str | None:
         if problem.linear is None:
-            raise RunRefused(f"method {self.name!r} needs a linear chain of springs only (no cubic springs, "
-                             f"dampers, gravity or external forces); use the exact method 'modal' for the exact solution "
-                             f"of a linear scene with effects, or a step method such as blanes-moan6", quantity="method")
+            return (f"method {self.name!r} needs a linear chain of springs only (no cubic springs, "
+                    f"dampers, gravity or external forces); use the exact method 'modal' for the exact solution "
+                    f"of a linear scene with effects, or a step method such as blanes-moan6")
         if problem.damping is not None or problem.external is not None:
-            raise RunRefused(f"method {self.name!r} propagates free oscillations only; this scene has "
-                             f"dampers or external forces: use rk4 or dop853", quantity="method")
+            return (f"method {self.name!r} propagates free oscillations only; this scene has "
+                    f"dampers or external forces: use rk4 or dop853")
+        return None

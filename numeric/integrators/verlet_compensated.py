@@ -29,7 +29,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from .base import Integrator, Problem, StepKernel, finite_positive
+from .base import Problem, StepKernel, finite_positive
+from .verlet import VelocityVerlet
 
 
 def _kahan_add(s: np.ndarray, ds: np.ndarray, carry: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -39,18 +40,14 @@ def _kahan_add(s: np.ndarray, ds: np.ndarray, carry: np.ndarray) -> tuple[np.nda
     return total, (total - s) - y
 
 
-class CompensatedVerlet(Integrator):
+class CompensatedVerlet(VelocityVerlet):
     """Velocity Verlet (``verlet-kahan``): same trajectory as ``verlet`` up to roundoff, less of it.
 
     Second order, symplectic, one force evaluation per step; an external force
     ``a_ext(t)`` is added to the force at ``t = (i + 1)·h`` as in ``verlet``.
     """
 
-    name = "verlet-kahan"
-    order = 2
-    symplectic = True
-    evals_per_step = 1.0
-    stability_limit = 2.0
+    name = "verlet-kahan"  # order, symplecticity, evaluations and stability limit: Verlet's
 
     def kernel(self, problem: Problem, h: float) -> StepKernel:
         h = finite_positive(h)

@@ -1,6 +1,6 @@
 """The cost of stable mode evaluation: generated ``omega2()`` against the naive float64 closed form.
 
-Run ``python -m springchain.bench_modes [--json]``. For the reference scene (``seed``: closed
+Run ``python benchmarks/modes.py [--json]``. For the reference scene (``seed``: closed
 forms free of cancellation, kept in the generated module) and issue 9's hardest named case
 (six equal masses between walls, springs alternating k and 1e8·k: Viète cubic roots that
 cancel in float64, so the generated module runs the spring-factor SVD), it times, interleaved,
@@ -53,9 +53,9 @@ steps = 10
 
 
 def _case(scene, rounds: int, number: int) -> dict:
-    from . import _api
-    from ._modules import load_module
-    from .derive.accurate import float64_closed_form
+    from springchain import _api
+    from springchain._modules import load_module
+    from springchain.derive.accurate import float64_closed_form
 
     m = _api.modes(scene)
     mod, _ = load_module(m.scene)
@@ -91,7 +91,7 @@ def measure(rounds: int = 7, number: int = 2000) -> list[dict]:
 
 
 def main(argv: list[str] | None = None) -> int:
-    p = argparse.ArgumentParser(prog="python -m springchain.bench_modes", description=__doc__.split("\n\n")[0])
+    p = argparse.ArgumentParser(prog="python benchmarks/modes.py", description=__doc__.split("\n\n")[0])
     p.add_argument("--json", action="store_true", help="print JSON")
     args = p.parse_args(argv)
     rows = measure()

@@ -1,6 +1,6 @@
 """Work–precision on the Duffing chain over a long horizon: every nonlinear-capable method against DOP853.
 
-Run ``python -m springchain.bench_duffing [--t-end 1000] [--frames 10] [--json]``. In one
+Run ``python benchmarks/duffing.py [--t-end 1000] [--frames 10] [--json]``. In one
 process, with BLAS pinned to one thread, it integrates the bundled ``duffing`` scene (three
 masses, cubic springs) from its initial state over ``[0, T]`` with
 
@@ -45,25 +45,24 @@ EVAL_CAP = 400_000
 
 
 def _setup(t_end: float, frames: int):
-    from . import _api
-    from .numeric.integrators.base import Problem
+    from springchain import _api
+    from springchain._modules import system_of
+    from springchain.numeric.run.grid import Grid
 
     scene = _api.load("duffing")
-    system, _ = _api._system(scene)
-    problem = Problem.from_system(system)
-    t = np.linspace(0.0, t_end, frames + 1)
-    return system, problem, np.asarray(scene.x0, float), np.asarray(scene.v0, float), t
+    system, _ = system_of(scene)
+    return system, np.asarray(scene.x0, float), np.asarray(scene.v0, float), Grid(t_end / frames, frames)
 
 
-def reference(problem, x0, v0, t_end: float, frames: int, h: float, progress=print):
+def reference(system, x0, v0, t_end: float, frames: int, h: float, progress=print):
     """Kahan–Li 8 at step ``h`` (and ``2h`` for its error estimate) on the frames; also its difference
     from DOP853 at rtol 1e-13."""
-    from .numeric.bench_reference import GridReference
+    from springchain.numeric.bench_reference import GridReference
 
     spacing = t_end / frames
     m_fine = max(2, int(math.ceil(spacing / h)))
     m_fine += m_fine % 2
-    ref = GridReference.kahan_li(problem, x0, v0, t_end, spacing, m_fine, m_fine // 2, progress)
+    ref = GridReference.kahan_li(system, x0, v0, t_end, spacing, m_fine, m_fine // 2, progress)
     return ref
 
 
@@ -110,49 +109,41 @@ def ratio_table(runs: dict[str, list[dict]]) -> list[dict]:
     return rows
 
 
-def _settings(name: str, spacing: float):
-    """The sweep of one method: ``(label, run(problem, x0, v0, t) -> (x (S, N), evals))`` per index k = 0, 1, …"""
-    from .numeric.driver import integrate
-    from .numeric.integrators import ADAPTIVE, INTEGRATORS
-    from .numeric.plan import adaptive_atol
+def _settings(name: str, frames):
+    """The sweep of one method: ``(label, method, grid)`` per index k = 0, 1, … (tightening)."""
+    from springchain.numeric.plan import with_tolerance
+    from springchain.numeric.run import registry
+    from springchain.numeric.run.grid import Grid
+    from springchain.numeric.run.protocol import Kind, Options
 
-    if name in ADAPTIVE:
-        method = ADAPTIVE[name]()
+    method = registry.method(name, Options(progress=False))
+    if method.kind is Kind.ADAPTIVE:
         for k in range(6, 31):
             rtol = 10.0 ** (-k / 2)
-            if name == "dop853" and rtol < 2.3e-14:  # SciPy's floor (it would raise rtol itself)
+            if name == registry.REFERENCE_ADAPTIVE and rtol < 2.3e-14:  # SciPy's floor (it would raise rtol)
                 return
-
-            def go(problem, x0, v0, t, rtol=rtol):
-                res = method.solve(problem, x0, v0, t, rtol, adaptive_atol(x0, v0, rtol))
-                return res.x[..., 0], res.force_evals
-
-            yield f"rtol={rtol:.2g}", go
+            yield f"rtol={rtol:.2g}", (lambda x0, v0, rtol=rtol: with_tolerance(method, x0, v0, rtol)), frames
         return
-    integ = INTEGRATORS[name]()
+    spacing = frames.h
     for k in range(0, 40):
         m = int(math.ceil(spacing / (2.0 * 2.0 ** (-k / 2))))  # h ≈ 2·2^(−k/2), a whole number per frame
-
-        def go(problem, x0, v0, t, m=m):
-            tr = integrate(integ, problem, x0, v0, spacing / m, (t.shape[0] - 1) * m, record_every=m)
-            return tr.x[..., 0], tr.force_evals
-
-        yield f"h={spacing / m:.4g}", go
+        yield f"h={spacing / m:.4g}", (lambda x0, v0: method), Grid(spacing / m, frames.steps * m, m)
 
 
 def run(t_end: float = 1000.0, frames: int = 10, budget: float = 0.5, ref_h: float = 0.025,
         progress=print) -> dict:
     """The sweeps, interleaved: at each sweep index every still-running method runs once (so a
     change in machine load between runs hits all methods alike)."""
-    from .numeric.timing import measure, single_threaded_blas
+    from springchain.numeric.run.protocol import record
+    from springchain.numeric.timing import measure, single_threaded_blas
 
     names = ("dop853", *ADAPTIVE_METHODS, *STEP_METHODS)
     with single_threaded_blas():
-        system, problem, x0, v0, t = _setup(t_end, frames)
-        ref = reference(problem, x0, v0, t_end, frames, ref_h, progress)
+        system, x0, v0, out = _setup(t_end, frames)
+        ref = reference(system, x0, v0, t_end, frames, ref_h, progress)
         xr = ref.x
         runs: dict[str, list[dict]] = {n: [] for n in names}
-        sweeps = {n: _settings(n, t_end / frames) for n in names}
+        sweeps = {n: _settings(n, out) for n in names}
         best = {n: math.inf for n in names}
         while sweeps:
             for name in list(sweeps):
@@ -160,10 +151,12 @@ def run(t_end: float = 1000.0, frames: int = 10, budget: float = 0.5, ref_h: flo
                 if item is None:
                     del sweeps[name]
                     continue
-                label, go = item
+                label, make, grid = item
+                method = make(x0, v0)
                 with np.errstate(all="ignore"):  # a fixed step beyond the stability limit overflows
-                    timing = measure(lambda: go(problem, x0, v0, t), budget=budget, min_repeats=2, max_repeats=3)
-                x, evals = timing.result
+                    timing = measure(lambda: record(method, system, x0, v0, grid), budget=budget, min_repeats=2,
+                                     max_repeats=3)
+                x, evals = timing.result.x, timing.result.force_evals
                 err = float(np.max(np.abs(x - xr)))
                 err = err if math.isfinite(err) else math.inf
                 runs[name].append({"setting": label, "error": err, "evals": int(evals), "seconds": timing.seconds})
@@ -199,7 +192,7 @@ def markdown(result: dict) -> str:
 
 
 def main(argv: list[str] | None = None) -> int:
-    ap = argparse.ArgumentParser(prog="python -m springchain.bench_duffing", description=__doc__.splitlines()[0])
+    ap = argparse.ArgumentParser(prog="python benchmarks/duffing.py", description=__doc__.splitlines()[0])
     ap.add_argument("--t-end", type=float, default=1000.0, help="horizon T (default 1000)")
     ap.add_argument("--frames", type=int, default=10, help="error measured at frames+1 equally spaced times")
     ap.add_argument("--budget", type=float, default=0.5, help="seconds of timed repeats per run")

@@ -1,6 +1,6 @@
 """What ``springchain simulate`` costs per step on a long ``[chain]`` scene, beside the memory floor.
 
-Run ``python -m springchain.bench_simulate [--n N] [--rounds R] [--json]``. In one process, in
+Run ``python benchmarks/simulate.py [--n N] [--rounds R] [--json]``. In one process, in
 interleaved rounds, it times
 
 * ``springchain.simulate(scene, methods=["verlet"], steps=S)`` — the very call behind the
@@ -28,7 +28,7 @@ TARGETS = {"uniform": 1.5, "index-dependent": 2.5}
 
 
 def _scenes(n: int, folder: Path) -> dict[str, Path]:
-    from ._scenes import bundled_scene_dir
+    from springchain._scenes import bundled_scene_dir
 
     text = (bundled_scene_dir() / "chain100k.toml").read_text(encoding="utf-8")
     lines = []
@@ -40,7 +40,7 @@ def _scenes(n: int, folder: Path) -> dict[str, Path]:
         lines.append(line)
     uniform = folder / "bench_uniform.toml"
     uniform.write_text("\n".join(lines) + "\n", encoding="utf-8")
-    from .symbolic_cost import RANDOM_K, RANDOM_MASS, chain_scene_text
+    from springchain.symbolic_cost import RANDOM_K, RANDOM_MASS, chain_scene_text
 
     dependent = folder / "bench_dependent.toml"
     dependent.write_text(chain_scene_text(n, mass=RANDOM_MASS, k=RANDOM_K, name="bench_dependent"),
@@ -50,9 +50,9 @@ def _scenes(n: int, folder: Path) -> dict[str, Path]:
 
 def measure(n: int = 1_000_000, rounds: int = 5, short: int = 200, long: int = 2200) -> dict:
     """Per-step seconds of ``simulate`` and the floor, median and minimum over interleaved rounds."""
-    from . import _api
-    from .numeric import fast
-    from .numeric.timing import single_threaded_blas
+    from springchain import _api
+    from springchain.numeric import fast
+    from springchain.numeric.timing import single_threaded_blas
 
     out: dict = {"n": n, "rounds": rounds, "steps": [short, long], "numba": fast.available()}
     with tempfile.TemporaryDirectory() as tmp, single_threaded_blas():
@@ -111,7 +111,7 @@ def markdown(result: dict) -> str:
 
 
 def main(argv: list[str] | None = None) -> int:
-    p = argparse.ArgumentParser(prog="python -m springchain.bench_simulate", description=__doc__.split("\n\n")[0])
+    p = argparse.ArgumentParser(prog="python benchmarks/simulate.py", description=__doc__.split("\n\n")[0])
     p.add_argument("--n", type=int, default=1_000_000, help="masses (default: %(default)s)")
     p.add_argument("--rounds", type=int, default=5, help="interleaved rounds (default: %(default)s)")
     p.add_argument("--json", action="store_true", help="print JSON instead of a Markdown table")

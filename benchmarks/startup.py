@@ -1,6 +1,6 @@
 """Start-up benchmark: how long a command takes before it does any work, against bare imports.
 
-Run ``python -m springchain.bench_startup [--repeats R] [--json]``. Each round runs every
+Run ``python benchmarks/startup.py [--repeats R] [--json]``. Each round runs every
 command once, in a fresh process, in an interleaved order, so background load hits all of
 them alike; the report gives the minimum and the median over rounds and the ratios that the
 targets are stated in:
@@ -74,7 +74,7 @@ def markdown(result: dict) -> str:
 
 
 def main(argv: list[str] | None = None) -> int:
-    p = argparse.ArgumentParser(prog="python -m springchain.bench_startup", description=__doc__.split("\n\n")[0])
+    p = argparse.ArgumentParser(prog="python benchmarks/startup.py", description=__doc__.split("\n\n")[0])
     p.add_argument("--repeats", type=int, default=7, help="interleaved rounds (default: %(default)s)")
     p.add_argument("--json", action="store_true", help="print JSON instead of a Markdown table")
     args = p.parse_args(argv)

@@ -9,7 +9,7 @@ worker processes' for Dask) and the cores kept busy are reported too: on a share
 Dask's own overhead and the parallelism obtained, whatever the wall clock says. Targets: 2 workers >= 1.7x one worker, one worker within 10 % of the
 plain loop.
 
-    python -m springchain.bench_sweep [--samples 400] [--n 2000] [--batch 10] [--json out.json]
+    python benchmarks/sweep.py [--samples 400] [--n 2000] [--batch 10] [--json out.json]
 
 Not a test: wall-clock numbers on a shared machine are noisy; run it on an idle one.
 """

@@ -1,6 +1,6 @@
 """Derivation benchmark: explicit ``[[springs]]`` chains against SymPy's ``LagrangesMethod``, and whole commands.
 
-Run ``python -m springchain.bench_derive [--sizes 10 40 80] [--command-sizes 40 80 200] [--repeats 3] [--json]``.
+Run ``python benchmarks/derive.py [--sizes 10 40 80] [--command-sizes 40 80 200] [--repeats 3] [--json]``.
 
 Two tables, all measured in one run:
 
@@ -32,8 +32,8 @@ import tempfile
 import time
 from pathlib import Path
 
-from . import symbolic_cost
-from .symbolic_cost import Route
+from springchain import symbolic_cost
+from springchain.symbolic_cost import Route
 
 #: Work ratio LagrangesMethod / [[springs]] required at N = 40 and 80.
 WORK_TARGET = 10.0
@@ -133,7 +133,7 @@ def markdown(work: list[dict], commands: list[dict]) -> str:
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(prog="python -m springchain.bench_derive", description=__doc__.split("\n")[0])
+    parser = argparse.ArgumentParser(prog="python benchmarks/derive.py", description=__doc__.split("\n")[0])
     parser.add_argument("--sizes", type=int, nargs="*", default=list(DEFAULT_SIZES))
     parser.add_argument("--command-sizes", type=int, nargs="*", default=list(DEFAULT_COMMAND_SIZES))
     parser.add_argument("--repeats", type=int, default=3)

@@ -1,6 +1,6 @@
 """The exact modal solution's cost beside the trigonometry it cannot avoid.
 
-Run ``python -m springchain.bench_exact [--json]``. On the reference scene (S = 1001 output
+Run ``python benchmarks/exact.py [--json]``. On the reference scene (S = 1001 output
 times, N = 3) it times, interleaved, the exact solution as ``simulate`` computes it (modal
 coordinates from the initial state, then positions and velocities at every output time) and
 NumPy evaluating the S × N cosine/sine pairs alone (``np.cos`` and ``np.sin`` of the phase
@@ -20,16 +20,15 @@ TARGET = 3.0
 
 
 def measure(scene: str = "seed", rounds: int = 7, number: int = 200) -> dict:
-    from . import _api
-    from ._modules import load_module
-    from .numeric.modal import ModalSolution
-    from .numeric.simulate import system_spectrum
-    from .numeric.system import System
+    from springchain import _api
+    from springchain._modules import system_of
+    from springchain.numeric.modal import ModalSolution
+    from springchain.numeric.run.grid import Grid
 
     sc = _api.load(scene)
-    system = System.from_module(load_module(sc)[0])
-    spec = system_spectrum(system)
-    t = np.arange(sc.steps // sc.record_every + 1) * sc.dt * sc.record_every
+    system, _ = system_of(sc)
+    spec = system.spectrum
+    t = Grid(sc.dt * sc.record_every, sc.steps // sc.record_every).t
     phase = np.multiply.outer(t, spec.omega)
 
     def exact():
@@ -38,7 +37,7 @@ def measure(scene: str = "seed", rounds: int = 7, number: int = 200) -> dict:
     def trig():
         return np.cos(phase), np.sin(phase)
 
-    from .numeric.timing import single_threaded_blas
+    from springchain.numeric.timing import single_threaded_blas
 
     samples = {"exact": [], "trig": []}
     with single_threaded_blas():  # one BLAS thread, as every benchmark here
@@ -53,7 +52,7 @@ def measure(scene: str = "seed", rounds: int = 7, number: int = 200) -> dict:
 
 
 def main(argv: list[str] | None = None) -> int:
-    p = argparse.ArgumentParser(prog="python -m springchain.bench_exact", description=__doc__.split("\n\n")[0])
+    p = argparse.ArgumentParser(prog="python benchmarks/exact.py", description=__doc__.split("\n\n")[0])
     p.add_argument("--json", action="store_true", help="print JSON")
     args = p.parse_args(argv)
     r = measure()

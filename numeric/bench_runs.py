@@ -1,0 +1,76 @@
+"""The benchmark's runs: one timed run through the method protocol, the tolerance sweep of an
+adaptive method, the progress lines, and the energy norm of an error (shared by
+:mod:`numeric.bench` and :mod:`numeric.bench_pilot`)."""
+
+from __future__ import annotations
+
+import math
+from typing import Callable
+
+import numpy as np
+
+from .bench_records import BenchConfig, BenchRecord
+from .progress import Reporter
+from .run import registry
+from .run.grid import Grid
+from .run.protocol import Kind, Method, Options
+from .run.protocol import record
+from .system import System
+from .timing import measure
+
+
+def energy_norm(system: System, dx: np.ndarray, dv: np.ndarray) -> float:
+    """``√(δvᵀMδv + δxᵀKδx)`` for one state difference (N,), K of the linear springs."""
+    a, b = system.spring_ends[:, 0], system.spring_ends[:, 1]
+    da = np.where(a >= 0, dx[np.maximum(a, 0)], 0.0)
+    db = np.where(b >= 0, dx[np.maximum(b, 0)], 0.0)
+    pot = float(np.sum(system.stiffness * (da - db) ** 2))
+    return math.sqrt(max(float(np.sum(system.masses * dv**2)) + pot, 0.0))
+
+
+def progress_reporter(enabled: bool) -> Reporter:
+    """The benchmark's progress: one line per run and per phase on stderr (``bench: ...``)."""
+    return Reporter("bench", 0, enabled=enabled, prefix="bench")
+
+
+def report_run(bar: Reporter, rec: BenchRecord) -> None:
+    """One progress line for a finished run: its number, error, seconds and evaluations."""
+    bar.count(f"{rec.method} {rec.setting:<18} error {rec.error:9.2e}  {rec.seconds * 1e3:9.2f} ms  "
+              f"{rec.force_evals:>9} evals")
+
+
+def timed_run(method: Method, system: System, x0: np.ndarray, v0: np.ndarray, grid: Grid, budget: float):
+    """:func:`~numeric.timing.measure` of one run through the protocol (its result: the recorded run)."""
+    return measure(lambda: record(method, system, x0, v0, grid), budget=budget)
+
+
+def selected_in_order(selected: set, kind: Kind) -> list[Method]:
+    """The selected methods of one kind, in the registry's order."""
+    return [m for m in registry.methods(kind, Options(progress=False)) if m in selected]
+
+
+def adaptive_rtols(method: Method, config: BenchConfig) -> tuple[float, ...]:
+    """The tolerances an adaptive method sweeps: the reference method (DOP853) gets the finer list."""
+    return config.dop853_rtols if method == registry.method(registry.REFERENCE_ADAPTIVE) else config.rtols
+
+
+def adaptive_sweep(method: Method, rtols, cap: int, run: Callable[[float], BenchRecord], notes: list[str],
+                   prog: Reporter) -> list[BenchRecord]:
+    """Records of ``run(rtol)`` for tightening tolerances, stopping after the first run over ``cap``
+    force evaluations (a note says which tolerances were not run)."""
+    out = []
+    for rtol in rtols:
+        rec = run(rtol)
+        out.append(rec)
+        if rec.force_evals > cap:
+            skipped = [r for r in rtols if r < rtol]
+            if skipped:
+                notes.append(f"{method.name}: stopped at rtol={rtol:.0e} ({rec.force_evals} evaluations > cap "
+                             f"{cap}); not run: rtol " + ", ".join(f"{r:.0e}" for r in skipped))
+                prog.total -= len(skipped)
+            break
+    return out
+
+
+__all__ = ["energy_norm", "progress_reporter", "report_run", "timed_run", "selected_in_order", "adaptive_rtols",
+           "adaptive_sweep"]
