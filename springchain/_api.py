@@ -255,23 +255,23 @@ class Simulation:
         save_npz(path, self.t, self.x, self.v, self.extra)
         return path
 
+    def _spring_series(self, method: str):
+        """(drift, spring force, base shear) of ``method``'s trajectory (:func:`numeric.storeys.spring_series`)."""
+        from .numeric.storeys import spring_series
+
+        return spring_series(_system(self.scene)[0], self.x[method])
+
     def drifts(self, method: str):
         """Drift ``x_b − x_a`` of every spring ``between = [a, b]`` (a wall is 0), ndarray, shape (S, springs) [m]."""
-        from ._structural import spring_series
-
-        return spring_series(self.scene, self.x[method])[0]
+        return self._spring_series(method)[0]
 
     def spring_forces(self, method: str):
         """Tension ``k·d + k3·d³`` (d the drift) of every spring: storey shears, shape (S, springs) [N]."""
-        from ._structural import spring_series
-
-        return spring_series(self.scene, self.x[method])[1]
+        return self._spring_series(method)[1]
 
     def base_shear(self, method: str):
         """Force of the wall springs on the ground (positive in +x), ndarray, shape (S,) [N]."""
-        from ._structural import spring_series
-
-        return spring_series(self.scene, self.x[method])[2]
+        return self._spring_series(method)[2]
 
     def plot(self, quantity: str = "x"):
         """A matplotlib Figure of every mass's position (``"x"``) or velocity (``"v"``), all methods
@@ -411,10 +411,10 @@ def _kept(sc: Scene, system, names, dt, steps, record_every, options, out, figur
     x, v = {m: r.x for m, r in runs.items()}, {m: r.v for m, r in runs.items()}
     extra = absolute_npz_arrays(system, t, x, v)
     if springs:
-        from ._structural import spring_series
+        from .numeric.storeys import spring_series
 
         for m in names:
-            extra[f"drift_{m}"], extra[f"spring_force_{m}"], extra[f"base_shear_{m}"] = spring_series(sc, x[m])
+            extra[f"drift_{m}"], extra[f"spring_force_{m}"], extra[f"base_shear_{m}"] = spring_series(system, x[m])
     npz, figs = None, ()
     if out is not None:
         from .numeric.npz import save_npz

@@ -370,7 +370,8 @@ def rsa(scene, spectrum, combine: str = "cqc") -> RSA:
     """
     import numpy as np
 
-    from ._api import _system, load
+    from ._modules import system_of as _system
+    from ._scenes import load
     from .numeric.errors import RunRefused
     from .numeric.response_spectrum import Record, design_spectrum_sa, spectral_displacement
     from .numeric.rsa import Combination, ModalProperties, analyse
@@ -413,39 +414,12 @@ def rsa(scene, spectrum, combine: str = "cqc") -> RSA:
 
 # -- time-history outputs -------------------------------------------------------------------------
 def spring_series(scene: Scene, x):
-    """Drifts, spring forces and base shear of a trajectory.
+    """Drifts, spring forces and base shear of a trajectory ``x`` (S, N) of ``scene``
+    (:func:`numeric.storeys.spring_series`)."""
+    from ._modules import system_of
+    from .numeric.storeys import spring_series as series
 
-    Parameters
-    ----------
-    scene : Scene
-    x : ndarray, shape (S, N)
-        Positions (relative to the ground).
-
-    Returns
-    -------
-    drift : ndarray, shape (S, springs)
-        ``x_b − x_a`` of each spring ``between = [a, b]`` (a wall is 0): the inter-storey drift.
-    force : ndarray, shape (S, springs)
-        Spring tension ``k·d + k3·d³`` with d the drift (the storey shear of a shear building) [N].
-    base_shear : ndarray, shape (S,)
-        Force of the wall springs on the ground, positive in +x [N].
-    """
-    import numpy as np
-
-    from ._api import _system
-
-    system, _ = _system(scene)
-    ends = system.spring_ends
-    x = np.asarray(x, dtype=float)
-    xa = np.where(ends[:, 0] >= 0, x[:, np.maximum(ends[:, 0], 0)], 0.0)
-    xb = np.where(ends[:, 1] >= 0, x[:, np.maximum(ends[:, 1], 0)], 0.0)
-    drift = xb - xa
-    force = drift * system.stiffness[None, :]
-    if not system.linear and hasattr(system.module, "cubic_constants"):
-        k3 = np.asarray(system.module.cubic_constants(**system.params), dtype=float)
-        force = force + k3[None, :] * drift**3
-    sign = np.where(ends[:, 0] < 0, 1.0, 0.0) - np.where(ends[:, 1] < 0, 1.0, 0.0)
-    return drift, force, force @ sign
+    return series(system_of(scene)[0], x)
 
 
 __all__ = ["rayleigh_coefficients", "response_spectrum", "SpectrumResult", "rsa", "RSA", "read_record",

@@ -13,9 +13,11 @@ from scipy.integrate import solve_ivp
 
 import springchain as sc
 from springchain.numeric.driver import integrate
-from springchain.numeric.integrators import INTEGRATORS
 from springchain.numeric.integrators.base import LinearChain, Problem
 from springchain.numeric.integrators.newmark import HHTAlpha, NewmarkAverage, NewmarkLinear, NewmarkParameters
+from springchain.numeric.run import registry
+from springchain.numeric.run.implicit import ImplicitStep
+from springchain.numeric.run.protocol import Kind
 
 
 def _sdof(omega: float):
@@ -100,7 +102,18 @@ def test_parameter_table_checks_itself():
     with pytest.raises(sc.RunRefused, match="alpha"):
         HHTAlpha(alpha=-0.5)
     assert NewmarkParameters.hht(-0.05).order == 2 and NewmarkParameters(0.25, 0.6).order == 1
-    assert {"newmark", "newmark-linear", "hht"} <= set(INTEGRATORS) <= set(sc.method_names())
+    assert {"newmark", "newmark-linear", "hht"} <= set(registry.names(Kind.STEP)) <= set(sc.method_names())
+
+
+def test_registered_through_the_run_layer():
+    """Registry entries run by ImplicitStep (built on the system); traits declared by the classes."""
+    for name, cls in (("newmark", NewmarkAverage), ("newmark-linear", NewmarkLinear), ("hht", HHTAlpha)):
+        m = registry.method(name)
+        assert isinstance(m, ImplicitStep) and m.kind is Kind.STEP and m.implementation is cls
+        assert m.traits.order == 2 and m.traits.supports_damping and not m.traits.symplectic
+    assert math.isinf(registry.method("newmark").traits.stability_limit)
+    assert registry.method("newmark-linear").traits.stability_limit == pytest.approx(2 * math.sqrt(3), rel=1e-15)
+    assert registry.method("hht").traits.evals_per_step == 2.0
 
 
 def _slope(errors, steps):
