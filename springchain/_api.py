@@ -360,6 +360,19 @@ def _check_disk(scene: Scene, steps: int, record_every: int, methods: int, out: 
                          f"choose another --out")
 
 
+def _check_settings(chosen, options) -> None:
+    """Refuse a setting (``alpha``) that none of the chosen methods takes, naming those that do."""
+    from .numeric.errors import RunRefused
+    from .numeric.run import registry
+
+    for key, value in options.settings:
+        if not any(key in m.takes for m in chosen):
+            takers = [m.name for m in registry.methods(options=options) if key in m.takes]
+            raise RunRefused(f"{key} {value!r}: a setting of {' and '.join(takers)}, not of "
+                             f"{', '.join(m.name for m in chosen)}; accepted: with the method {' or '.join(takers)}",
+                             quantity=key)
+
+
 def _grid_settings(sc: Scene, dt, steps, record_every) -> tuple[float, int, int]:
     """The run's step, steps and recording stride: the arguments, else the scene's; refused when not
     a finite dt > 0 and whole numbers > 0."""
@@ -378,7 +391,7 @@ def _grid_settings(sc: Scene, dt, steps, record_every) -> tuple[float, int, int]
     return dt, steps, record_every
 
 
-def _streamed(sc: Scene, system, names, dt, steps, record_every, out, figures, progress):
+def _streamed(sc: Scene, system, names, dt, steps, record_every, out, figures, options):
     """A ``[chain]`` run streamed into ``out`` (bounded memory), read back from its NPZ."""
     import numpy as np
 
@@ -388,7 +401,7 @@ def _streamed(sc: Scene, system, names, dt, steps, record_every, out, figures, p
     _check_disk(sc, steps, record_every, len(names), out, "steps")
     out.mkdir(parents=True, exist_ok=True)
     summary = stream_methods(system, sc.x0, sc.v0, dt, steps, names, record_every, out, sc.name,
-                             figures=figures, progress=progress)
+                             figures=figures, progress=options.progress, settings=options.settings)
     npz = Path(summary["npz"])
     data = np.load(npz)
     extra = {k: data[k] for k in data.files if k.startswith(("aabs_", "xabs_"))}
@@ -406,7 +419,7 @@ def _kept(sc: Scene, system, names, dt, steps, record_every, options, out, figur
 
     _check_memory(sc, steps, record_every, len(names), "steps")
     runs = run_methods(system, sc.x0, sc.v0, dt, steps, names, record_every, spectrum_source=options.spectrum,
-                       rtol=options.rtol, atol=options.atol, progress=options.progress)
+                       rtol=options.rtol, atol=options.atol, progress=options.progress, settings=options.settings)
     t = next(iter(runs.values())).t
     x, v = {m: r.x for m, r in runs.items()}, {m: r.v for m, r in runs.items()}
     extra = absolute_npz_arrays(system, t, x, v)
@@ -435,7 +448,8 @@ def _kept(sc: Scene, system, names, dt, steps, record_every, options, out, figur
 def simulate(scene: str | Path | Scene, methods: list[str] | None = None, dt: float | None = None,
              steps: int | None = None, record_every: int | None = None, *, spectrum: str = "svd",
              rtol: float = DEFAULT_RTOL, atol: float = DEFAULT_ATOL, out: str | Path | None = None,
-             figures: bool = False, progress: bool | None = None, springs: bool = False) -> Simulation:
+             figures: bool = False, progress: bool | None = None, springs: bool = False,
+             alpha: float | None = None) -> Simulation:
     """Simulate a scene from its initial state with exact and numerical methods.
 
     Parameters
@@ -462,6 +476,8 @@ def simulate(scene: str | Path | Scene, methods: list[str] | None = None, dt: fl
     springs : bool
         Add ``drift_<method>``, ``spring_force_<method>`` (S × springs) and ``base_shear_<method>``
         (S,) to ``extra`` and the NPZ (``[masses]`` scenes).
+    alpha : float, optional
+        HHT-α's α in [−1/3, 0] (default −0.05) for ``hht``; refused when no chosen method takes it.
 
     Returns
     -------
@@ -484,6 +500,10 @@ def simulate(scene: str | Path | Scene, methods: list[str] | None = None, dt: fl
                          "(streamed runs); accepted: a [masses] scene", quantity="springs")
     if sc.chain is None:  # refuse before any derivation when even one method would not fit
         _check_memory(sc, steps, record_every, len(methods) if methods else 1, "steps")
+    # refuses an unknown spectrum source, and settings out of range (the methods check them when made)
+    options = Options(rtol, atol, spectrum, progress, {} if alpha is None else {"alpha": alpha})
+    for name in methods or ():
+        registry.method(name, options)  # before any derivation
     with phase("loading the generated module (deriving it if not cached)", enabled=progress):
         system, origin = _system(sc)
     names, notes = methods, []
@@ -491,11 +511,11 @@ def simulate(scene: str | Path | Scene, methods: list[str] | None = None, dt: fl
         names, notes = sim.unstable_defaults(system, sim.default_methods(system), dt)
     for name in names:
         registry.entry(name)  # unknown names: one line naming the accepted ones
-    options = Options(rtol, atol, spectrum, progress)  # refuses an unknown spectrum source
+    _check_settings([registry.method(name, options) for name in names], options)
     t0 = time.perf_counter()
     if system.chain:
         summary, t, x, v, extra, npz, figs = _streamed(sc, system, names, dt, steps, record_every, out, figures,
-                                                       progress)
+                                                       options)
     else:
         summary, t, x, v, extra, npz, figs = _kept(sc, system, names, dt, steps, record_every, options, out, figures,
                                                    springs)

@@ -151,7 +151,7 @@ def cmd_simulate(args) -> int:
     try:
         result = simulate(args.scene, methods=args.method, dt=args.dt, steps=args.steps, record_every=args.record_every,
                           spectrum=args.spectrum, rtol=args.rtol, atol=args.atol, out=args.out,
-                          figures=not args.no_figures, springs=args.springs)
+                          figures=not args.no_figures, springs=args.springs, alpha=args.alpha)
     except SceneError as exc:  # name the flag that set the value, when one did
         flag = {"steps": "--steps" if args.steps is not None else "simulation.steps"}.get(exc.key)
         if flag and flag != exc.key:
@@ -423,6 +423,9 @@ def _add_simulate(sub) -> None:
     s.add_argument("--json", action="store_true", help="print a JSON summary instead of text")
     s.add_argument("--springs", action="store_true",
                    help="add drift_<method>, spring_force_<method> (S x springs) and base_shear_<method> (S) to the NPZ")
+    s.add_argument("--alpha", type=_number("--alpha", float, math.isfinite, "a finite number"), metavar="A",
+                   help="HHT-alpha's alpha for --method hht, -1/3 <= A <= 0: more numerical damping of high "
+                        "modes the more negative (default: -0.05)")
     s.set_defaults(func=cmd_simulate)
 
 
@@ -592,7 +595,7 @@ FLAGS = {"dt": "--dt", "steps": "--steps", "record_every": "--record-every", "me
          "input": "--input", "output": "--output", "omega_min": "--omega-min", "omega_max": "--omega-max",
          "points": "--points", "mode": "--mode", "frames": "--frames", "fps": "--fps", "max_n": "--max-n",
          "symbolic_max_n": "--symbolic-max-n", "zeta": "--zeta", "periods": "--periods", "combine": "--combine",
-         "springs": "--springs"}
+         "springs": "--springs", "alpha": "--alpha"}
 
 
 def _flag_for(args, quantity: str | None) -> str | None:

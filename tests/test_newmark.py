@@ -210,3 +210,52 @@ def test_energy_on_a_linear_chain(seed_system):
     assert err[:101].max() > 1e-6 and err.max() < 1.5 * err[:101].max()
     e = energy(integrate(HHTAlpha(), prob, x0, v0, 0.3, steps, record_every=10))
     assert np.all(np.diff(e[::100]) < 0) and e[-1] < e[0]
+
+
+@pytest.mark.parametrize("name", ["newmark", "hht"])
+def test_newton_force_evaluations_counted(name):
+    """Cubic springs: the reported force evaluations are the calls the step made (Newton iterations
+    included), counted here by wrapping the acceleration; linear springs: the declared count."""
+    from springchain._api import _system
+    from springchain.numeric.run.implicit import ImplicitStep
+
+    for scene, extra in (("duffing", True), ("seed", False)):
+        system, _ = _system(sc.load(scene))
+        calls = [0]
+        acc = system.acceleration_fn
+
+        def counting(x):
+            calls[0] += 1
+            return acc(x)
+
+        method = registry.method(name)
+        assert isinstance(method, ImplicitStep)
+        integ = method.integrator(system)
+        steps = 200
+        tr = integrate(integ, Problem(counting), system.masses * 0 + 0.1, system.masses * 0, 0.01, steps)
+        declared = 1 + int(integ.evals_per_step) * steps
+        if extra:  # Newton: every call counted, at least one more per step than declared
+            assert tr.force_evals == calls[0] and tr.force_evals >= declared + steps
+        else:  # HHT's force at the new step is a tangent product on linear springs (counted, not a call)
+            assert tr.force_evals == declared
+
+
+def test_hht_alpha_setting(capsys):
+    """alpha reaches the step (more negative: more numerical damping of the response), is checked
+    against [-1/3, 0] in one line before any derivation, and is refused for methods without it."""
+    drift, errs = {}, {}
+    for alpha in (0.0, -0.05, -1 / 3):  # the undamped seed chain: HHT only loses energy, more as alpha falls
+        run = sc.simulate("seed", methods=["modal", "hht"], dt=0.05, steps=2000, alpha=alpha, progress=False)
+        drift[alpha] = run.summary["methods"]["hht"]["energy_drift_relative"]
+        errs[alpha] = run.summary["methods"]["hht"]["max_position_difference"]
+    assert drift[0.0] < 1e-12 and 1e-5 < drift[-0.05] < drift[-1 / 3] / 2
+    newmark = sc.simulate("seed", methods=["modal", "newmark"], dt=0.05, steps=2000, progress=False)
+    assert errs[0.0] == pytest.approx(newmark.summary["methods"]["newmark"]["max_position_difference"], rel=1e-9)
+    with pytest.raises(sc.RunRefused, match=r"alpha -0.5: accepted: -1/3 <= alpha <= 0"):
+        sc.simulate("seed", methods=["hht"], alpha=-0.5)
+    with pytest.raises(sc.RunRefused, match=r"a setting of hht, not of newmark"):
+        sc.simulate("seed", methods=["newmark"], alpha=-0.1)
+    from helpers import one_line_error, run_cli
+
+    one_line_error(*run_cli(["simulate", "seed", "--method", "hht", "--alpha", "0.2"], capsys), "--alpha",
+                   "-1/3 <= alpha <= 0")

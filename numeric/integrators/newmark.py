@@ -274,6 +274,8 @@ class NewmarkFamily(Integrator):
     symplectic = False
     supports_damping = True
     evals_per_step = 1.0
+    #: Keyword settings the class takes (from a run's ``Options.settings``).
+    settings: ClassVar[tuple[str, ...]] = ()
 
     def __init_subclass__(cls, **kw):
         """A subclass's declared traits (order, stability limit, evaluations per step) are those of
@@ -287,6 +289,7 @@ class NewmarkFamily(Integrator):
         if parameters is not None:
             self.parameters = parameters
         self.order, self.stability_limit, self.evals_per_step = _traits(self.parameters)
+        self._counted: list[int] | None = None  # force evaluations of the last kernel's steps
 
     @classmethod
     def for_system(cls, system, **kw) -> "NewmarkFamily":
@@ -342,6 +345,7 @@ class NewmarkFamily(Integrator):
         bh2, gh = b * h * h, g * h
         linear = op.cubic is None
         probed = isinstance(op, ProbedOperator)
+        counted = self._counted = [0]  # force evaluations made (Newton iterations included)
 
         def e_at(t):
             return np.reshape(ext(t), (-1, 1)) if ext is not None else 0.0
@@ -357,9 +361,11 @@ class NewmarkFamily(Integrator):
             rhs = (1 + al) * (gt + op.damping_apply(vt)) + const
             a1 = solve(rhs)
             if not linear:
-                a1 = self._newton(op, acc, xt, vt, a1, const, al, bh2, gh, c1, c2, i, None if not probed else solve)
+                a1 = self._newton(op, acc, xt, vt, a1, const, al, bh2, gh, c1, c2, i, None if not probed else solve,
+                                  counted)
             x1 = xt + bh2 * a1
             v1 = vt + gh * a1
+            counted[0] += 1 if al == 0.0 else 2  # HHT's force at x1: a tangent product on linear springs
             if al == 0.0:
                 return x1, v1, a1
             g1 = (gt + bh2 * (A @ a1)) if linear else acc(x1)
@@ -368,14 +374,17 @@ class NewmarkFamily(Integrator):
         return step
 
     @staticmethod
-    def _newton(op, acc, xt, vt, a1, const, al, bh2, gh, c1, c2, i, fixed=None):
+    def _newton(op, acc, xt, vt, a1, const, al, bh2, gh, c1, c2, i, fixed=None, counted=None):
         """Newton's method on R(a) = a − (1+α)(g(x̃ + βh²a) + D(ṽ + γh a)) − const (cubic springs);
-        ``fixed``: one factorisation for every iteration (a probed tangent: a chord method)."""
+        ``fixed``: one factorisation for every iteration (a probed tangent: a chord method);
+        ``counted[0]`` grows by the force evaluations made (one per iteration)."""
         scale = max(float(np.max(np.abs(a1))), 1e-300)
         prev = math.inf
         for _ in range(MAX_NEWTON):
             x1, v1 = xt + bh2 * a1, vt + gh * a1
             R = a1 - (1 + al) * (acc(x1) + op.damping_apply(v1)) - const
+            if counted is not None:
+                counted[0] += 1
             solve = fixed if fixed is not None else op.system_matrix(op.tangent(x1), c1, c2)
             da = solve(R)
             a1 = a1 - da
@@ -390,6 +399,13 @@ class NewmarkFamily(Integrator):
 
     def evals_for(self, problem: Problem, h: float) -> float:
         return self.evals_per_step
+
+    def force_evals(self, problem: Problem, h: float, steps: int) -> int:
+        """The force evaluations the last kernel made (Newton iterations of cubic springs counted
+        one by one), the initial one included; the declared count before any kernel ran."""
+        if self._counted is None:
+            return super().force_evals(problem, h, steps)
+        return self.init_evals + self._counted[0]
 
     def response(self) -> NewmarkResponse:
         """The closed-form per-mode response the planner uses (see :class:`NewmarkResponse`)."""
@@ -544,15 +560,12 @@ class HHTAlpha(NewmarkFamily):
     """The Hilber–Hughes–Taylor α method, α ∈ [−⅓, 0] (default −0.05)."""
 
     name = "hht"
+    settings = ("alpha",)
     DEFAULT_ALPHA: ClassVar[float] = -0.05
     parameters = NewmarkParameters.hht(DEFAULT_ALPHA)
 
     def __init__(self, operator: StructuralOperator | None = None, alpha: float | None = None):
         super().__init__(operator, None if alpha is None else NewmarkParameters.hht(alpha))
-
-    @classmethod
-    def for_system(cls, system, alpha: float | None = None) -> "HHTAlpha":
-        return cls(StructuralOperator.from_system(system), alpha)
 
 
 __all__ = ["NewmarkParameters", "NewmarkResponse", "StructuralOperator", "NewmarkFamily", "NewmarkAverage", "NewmarkLinear", "HHTAlpha"]

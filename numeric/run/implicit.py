@@ -4,7 +4,9 @@ An implicit step (Newmark-β, HHT-α: :mod:`numeric.integrators.newmark`) solves
 stiffness, damping and loads, so it is built on the :class:`~numeric.system.System` (the
 integrator class's ``for_system(system, **settings)``) and integrates damping, forces and ground
 motion in its step instead of inside a splitting. Its per-mode propagator is rational in ``z = ωh``,
-known in closed form: the integrator's ``response()`` gives plan's error models.
+known in closed form: the integrator's ``response()`` gives plan's error models. Settings it takes
+(its class's ``settings``, e.g. HHT's ``alpha``) come from the run's
+:attr:`~.protocol.Options.settings` and are checked when the method is made.
 
 A registry entry names :class:`ImplicitStep` as the runner of such an integrator; nothing else
 in the run layer knows about it.
@@ -12,7 +14,7 @@ in the run layer knows about it.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass
 
 from ..integrators.base import Integrator
 from ..system import System
@@ -21,27 +23,25 @@ from .step import StepMethod
 
 @dataclass(frozen=True)
 class ImplicitStep(StepMethod):
-    """A fixed-step implicit integrator run on the system's operators.
+    """A fixed-step implicit integrator run on the system's operators (see the module docstring)."""
 
-    Attributes
-    ----------
-    settings : tuple of (str, float)
-        Keyword settings of the integrator (HHT's ``alpha``), passed to ``for_system``.
-    """
+    def __post_init__(self):
+        self.integrator_class(**self._settings())  # refuses settings out of range, naming them
 
-    settings: tuple = field(default=(), compare=False)
+    @property
+    def takes(self) -> tuple[str, ...]:
+        return tuple(self.integrator_class.settings)
 
-    def with_settings(self, **settings) -> "ImplicitStep":
-        """The same method with other settings (validated by the integrator when it is built)."""
-        return replace(self, settings=tuple(sorted(settings.items())))
+    def _settings(self) -> dict:
+        return {k: v for k, v in self.options.settings if k in self.takes}
 
     def integrator(self, system: System) -> Integrator:
         """The integrator on ``system``'s stiffness, damping and loads (no splitting around it)."""
-        return self.integrator_class.for_system(system, **dict(self.settings))
+        return self.integrator_class.for_system(system, **self._settings())
 
     def response(self):
         """The closed-form per-mode response of the step (rational in ``z = ωh``)."""
-        return self.integrator_class(**dict(self.settings)).response()
+        return self.integrator_class(**self._settings()).response()
 
 
 __all__ = ["ImplicitStep"]

@@ -80,6 +80,13 @@ class StepMethod(Method):
             integ = EffectSplitting(integ, system.damping_rate_matrix(), system.external_fn)
         return integ
 
+    def splits(self, system: System) -> bool:
+        """Whether the integrator runs inside the damping/forcing splitting on ``system`` (an
+        implicit step integrates damping and loads in its step instead)."""
+        from ..effects import EffectSplitting
+
+        return isinstance(self.integrator(system), EffectSplitting)
+
     def response(self):
         """The one-step response on a mode ``q̈ = −ω²q`` that plan's error models read (amplitude,
         phase defect, shape distortion per ``z = ωh``): an :class:`~numeric.error_models.OscillatorResponse`
