@@ -100,6 +100,16 @@ def applies(model) -> bool:
         WALL in (d.a, d.b) for d in sc.dampers)
 
 
+def chain_note(model) -> list[str]:
+    """For a ``[chain]`` scene whose supports move (a wall end or ``[ground]``): one line saying that
+    ``modes`` does not report participation for chains yet and where it is (``rsa``); else nothing."""
+    sc = model.scene
+    if sc.chain is None or not (sc.ground is not None or "wall" in (sc.chain.left, sc.chain.right)):
+        return []
+    return ["Modal participation: not reported by modes for [chain] scenes yet; `springchain rsa SCENE --spectrum "
+            "FILE` prints Gamma and the effective mass of every mode (spring-factor SVD; chains up to 2000 masses)"]
+
+
 # -- values -------------------------------------------------------------------------------------
 def _clusters(w2: list, tol) -> list[range]:
     out, j, n = [], 0, len(w2)

@@ -409,6 +409,17 @@ def _streamed(sc: Scene, system, names, dt, steps, record_every, out, figures, o
             npz, tuple(Path(p) for p in summary["figures"]))
 
 
+def _spring_arrays(system, x: dict) -> dict:
+    """NPZ arrays ``drift_<method>``, ``spring_force_<method>`` (S × springs) and ``base_shear_<method>``
+    (S,) of every method's frames ``x[method]`` (S, N) (:func:`numeric.storeys.spring_series`)."""
+    from .numeric.storeys import spring_series
+
+    out = {}
+    for m, xm in x.items():
+        out[f"drift_{m}"], out[f"spring_force_{m}"], out[f"base_shear_{m}"] = spring_series(system, xm)
+    return out
+
+
 def _kept(sc: Scene, system, names, dt, steps, record_every, options, out, figures, springs=False):
     """An in-memory run; the NPZ (and figures) written into ``out`` when given; with ``springs`` the
     drift, spring-force and base-shear arrays of every method among its NPZ arrays."""
@@ -424,10 +435,7 @@ def _kept(sc: Scene, system, names, dt, steps, record_every, options, out, figur
     x, v = {m: r.x for m, r in runs.items()}, {m: r.v for m, r in runs.items()}
     extra = absolute_npz_arrays(system, t, x, v)
     if springs:
-        from .numeric.storeys import spring_series
-
-        for m in names:
-            extra[f"drift_{m}"], extra[f"spring_force_{m}"], extra[f"base_shear_{m}"] = spring_series(system, x[m])
+        extra.update(_spring_arrays(system, x))
     npz, figs = None, ()
     if out is not None:
         from .numeric.npz import save_npz
@@ -475,7 +483,7 @@ def simulate(scene: str | Path | Scene, methods: list[str] | None = None, dt: fl
         terminal, a plain line every few seconds otherwise). ``False`` silences it.
     springs : bool
         Add ``drift_<method>``, ``spring_force_<method>`` (S × springs) and ``base_shear_<method>``
-        (S,) to ``extra`` and the NPZ (``[masses]`` scenes).
+        (S,) to ``extra`` and the NPZ.
     alpha : float, optional
         HHT-α's α in [−1/3, 0] (default −0.05) for ``hht``; refused when no chosen method takes it.
 
@@ -493,11 +501,6 @@ def simulate(scene: str | Path | Scene, methods: list[str] | None = None, dt: fl
     sc = load(scene)
     _check_motion(sc, "simulate")
     dt, steps, record_every = _grid_settings(sc, dt, steps, record_every)
-    if springs and sc.chain is not None:
-        from .numeric.errors import RunRefused
-
-        raise RunRefused("springs: the drift and spring-force arrays of a [chain] scene are not written yet "
-                         "(streamed runs); accepted: a [masses] scene", quantity="springs")
     if sc.chain is None:  # refuse before any derivation when even one method would not fit
         _check_memory(sc, steps, record_every, len(methods) if methods else 1, "steps")
     # refuses an unknown spectrum source, and settings out of range (the methods check them when made)
@@ -516,6 +519,11 @@ def simulate(scene: str | Path | Scene, methods: list[str] | None = None, dt: fl
     if system.chain:
         summary, t, x, v, extra, npz, figs = _streamed(sc, system, names, dt, steps, record_every, out, figures,
                                                        options)
+        if springs:  # from the frames read back; the NPZ rewritten with them (temp file + rename)
+            from .numeric.npz import save_npz
+
+            extra.update(_spring_arrays(system, x))
+            save_npz(npz, t, x, v, extra)
     else:
         summary, t, x, v, extra, npz, figs = _kept(sc, system, names, dt, steps, record_every, options, out, figures,
                                                    springs)

@@ -137,3 +137,16 @@ def test_random_shear_buildings(tmp_path_factory, n, mexp, kexp, top_wall):
     path.write_text(text)
     data = sc.modes(str(path)).to_json()
     _check(data, *_elements(text))
+
+
+def test_chain_scenes_say_where_participation_is(tmp_path):
+    """modes of a [chain] with a wall: no participation table yet, one note (text and JSON) naming rsa;
+    a free-free chain gets no note."""
+    path = tmp_path / "cw.toml"
+    path.write_text('name = "cw"\n[parameters]\nm = 1.0\nk = 1.0\n[chain]\nn = 30\nmass = "m"\nk = "k"\n'
+                    'left = "wall"\nright = "free"\n')
+    m = sc.modes(str(path))
+    note = [n for n in m.to_json()["notes"] if n.startswith("Modal participation")]
+    assert len(note) == 1 and "springchain rsa" in note[0] and note[0] in m.to_text()
+    free = sc.modes("chain100k")
+    assert not any(n.startswith("Modal participation") for n in free.to_json()["notes"])

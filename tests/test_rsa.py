@@ -195,6 +195,22 @@ def test_time_history_outputs(tmp_path):
     assert np.allclose(total, newton, rtol=1e-9, atol=1e-9 * np.abs(newton).max())
 
 
-def test_springs_on_chain_refused():
-    with pytest.raises(sc.RunRefused, match="springs"):
-        sc.simulate("chain100k", steps=2, springs=True)
+def test_springs_on_a_chain(tmp_path):
+    """--springs on a streamed [chain] run (exact and Newmark): drifts from the frames, the NPZ rewritten
+    with them, and the base shear (the wall spring) equal to -sum m aabs_i (Newton; no dashpots)."""
+    _files(tmp_path)  # writes rec.csv
+    m, k, n = 1000.0, 4.0e6, 40
+    path = tmp_path / "cq.toml"
+    path.write_text(f'name = "cq"\n[parameters]\nm = {m!r}\nk = {k!r}\n[chain]\nn = {n}\nmass = "m"\nk = "k"\n'
+                    'left = "wall"\nright = "free"\n[ground]\ntable = "rec.csv"\n[simulation]\ndt = 0.005\nsteps = 300\n')
+    run = sc.simulate(str(path), methods=["modal", "newmark"], out=tmp_path / "out", springs=True, progress=False)
+    data = np.load(run.npz)
+    for method in ("modal", "newmark"):
+        x = run.x[method]
+        wall_first = np.diff(np.concatenate([np.zeros((x.shape[0], 1)), x], axis=1), axis=1)
+        drift = data[f"drift_{method}"]
+        assert drift.shape == (x.shape[0], n) and np.array_equal(np.abs(drift), np.abs(wall_first))
+        assert np.allclose(data[f"spring_force_{method}"], k * drift, rtol=1e-15, atol=0)
+        newton = -m * run.extra[f"aabs_{method}"].sum(axis=1)
+        assert np.allclose(data[f"base_shear_{method}"], newton, rtol=1e-9, atol=1e-9 * np.abs(newton).max())
+        assert np.array_equal(run.base_shear(method), data[f"base_shear_{method}"])
