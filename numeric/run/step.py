@@ -7,8 +7,9 @@ the fused single-pass kernel (:mod:`numeric.fast`, numba when installed), everyt
 NumPy driver (:func:`numeric.driver.integrate`). :func:`stability_refusal` is the one stability
 check (``ω_max·h`` below the method's limit, ``ω_max`` from :attr:`System.omega_max`).
 
-Extension point: a compiled whole-loop driver for small scenes, or an implicit method that
-takes the damping itself (``supports_damping``), is chosen in :meth:`StepMethod.integrator`.
+Extension points: a compiled whole-loop driver for small scenes is chosen in
+:meth:`StepMethod.integrator`; an implicit method that takes the damping and loads into its step
+is a subclass that overrides it (:class:`.implicit.ImplicitStep`, named by its registry entry).
 """
 
 from __future__ import annotations
