@@ -23,7 +23,9 @@ from dataclasses import dataclass
 import sympy as sp
 
 from ..generated.contract import End
+from .errors import SceneError
 from .model import parameter_symbols
+from .potential import D, SpringLaw
 from .printing import sstr
 from .scene import Scene
 
@@ -54,7 +56,11 @@ class ChainModel:
         self.n = sp.Symbol("n", integer=True, positive=True)
         sym = {**self.params, "i": self.i}
         self.mass = self.chain.mass.to_sympy(sym)
-        self.k = self.chain.k.to_sympy(sym)
+        #: The spring law V(d) of a potential chain (in i and the parameters), else None.
+        self.law = None if self.chain.potential is None else \
+            SpringLaw("chain", self.chain.potential.to_sympy({**sym, "d": D}))
+        #: Spring stiffness k(i): as written, or V''(0) of a potential (x_eq = 0, see chain_equilibrium).
+        self.k = self.chain.k.to_sympy(sym) if self.law is None else sp.factor(self.law.stiffness.subs(D, 0))
         self.k3 = None if self.chain.k3 is None else self.chain.k3.to_sympy(sym)
         # template coordinates x_{i-1}, x_i, x_{i+1}
         # no assumptions: parameters are declared real or positive, so a parameter named x_i
@@ -72,6 +78,19 @@ class ChainModel:
         self.dampers = tuple((d.kind, d.a, d.b, d.c.to_sympy(sym), d.key) for d in scene.chain_dampers)
         self.rayleigh = None if scene.damping is None or scene.damping.rayleigh is None else \
             tuple(e.to_sympy(self.params) for e in scene.damping.rayleigh)
+        #: The tension V'(0) at rest (0 unless the potential pre-stresses the springs); None without a law.
+        self.tension = None if self.law is None else chain_equilibrium(self)
+
+    @property
+    def linear(self) -> bool:
+        """Linear equations: k springs, or a potential quadratic in d with V'(0) = 0."""
+        if self.k3 is not None:
+            return False
+        if self.law is None:
+            return True
+        deg = self.law.polynomial_degree()
+        return deg is not None and deg <= 2 and self.tension == 0
+
 
     def mass_at(self, index: int) -> sp.Expr:
         """The mass of chain element ``index``."""
@@ -87,6 +106,8 @@ class ChainModel:
     def element_potential(self, xa, xb, idx) -> sp.Expr:
         """V of the spring between masses idx and idx+1 (extension xb − xa)."""
         d = xb - xa
+        if self.law is not None:
+            return self.law.energy.subs(self.i, idx).subs(D, d)
         v = self.k.subs(self.i, idx) * d**2 / 2
         if self.k3 is not None:
             v += self.k3.subs(self.i, idx) * d**4 / 4
@@ -100,6 +121,7 @@ class ChainModel:
     @property
     def effects(self) -> tuple[str, ...]:
         return tuple(sorted({"spring", *(["cubic"] if self.k3 is not None else []),
+                             *(["potential"] if self.law is not None else []),
                              *(["force"] if self.forces else []), *(["table"] if self.table_forces else []),
                              *(["ground"] if self.scene.ground is not None else []),
                              *(["gravity"] if self.g is not None else []),
@@ -109,6 +131,66 @@ class ChainModel:
     @property
     def rigid_modes(self) -> int:
         return 1 if (self.chain.left is not End.WALL and self.chain.right is not End.WALL) else 0
+
+
+def chain_equilibrium(model: ChainModel) -> sp.Expr:
+    """The tension V'(0) of a potential chain at rest, after checking x_eq = 0 is a stable equilibrium.
+
+    x = 0 is the equilibrium when V'(0) = 0 for every spring (no pre-stress), or when the springs
+    are all alike and the chain closes on walls at both ends or is a ring: each mass then feels
+    V'(0) − V'(0) = 0. Constant loads (gravity, forces free of t) move the equilibrium: such
+    scenes, and pre-stressed chains with a free end or an index-dependent V'(0), are refused in one
+    line (their equilibrium needs the tension structure along the chain, not done yet). Every
+    spring's V, V', V'' must be finite at d = 0 and V''(0) > 0 (the stiffness of the modes).
+    """
+    from .accurate import exact_values
+    from .equilibrium import check_law
+
+    ch, law, file = model.chain, model.law, model.scene.file
+    key = "chain.potential"
+    tension = sp.simplify(law.force.subs(D, 0))
+    loads = [k for k, present in (("gravity", model.g is not None),
+                                  ("forces", any(not f.has(model.t) for _, f, _ in model.forces))) if present]
+    if loads:
+        raise SceneError(file, loads[0], "a constant load on a chain with a potential moves its equilibrium away "
+                         "from x = 0, which is not supported yet for [chain] scenes; accepted: the same "
+                         "scene as [masses] with [[springs]] (solved by Newton), or loads that vary with t")
+    closed = ch.left is End.RING or (ch.left is End.WALL and ch.right is End.WALL)
+    if tension != 0 and not (closed and not tension.has(model.i)):
+        raise SceneError(file, key, f"V'(0) = {sp.sstr(tension)} is not 0: the springs are pre-stressed at rest, "
+                         "and a pre-stressed chain is in equilibrium at x = 0 only between two walls or as a ring "
+                         "with the same V'(0) for every spring; accepted: a potential with V'(0) = 0 (d = 0 its "
+                         "rest length), or left = right = \"wall\" / \"ring\"")
+    subs = exact_values(model.params, model.scene.parameters)
+    first = -1 if ch.left is End.WALL else 0
+    last = ch.n - 1 if ch.right.has_spring else ch.n - 2
+    if not ch.uniform and law.energy.has(model.i):
+        _check_chain_stiffness(model, range(first, last + 1), subs)
+    else:
+        check_law(file, law, sp.Integer(0), subs)
+    return tension
+
+
+def _check_chain_stiffness(model: ChainModel, springs: range, subs: dict) -> None:
+    """V, V', V'' finite and V'' > 0 at d = 0 for every spring index (float64, in chunks)."""
+    import numpy as np
+
+    law = model.law
+    values = [float(subs[p]) for p in model.params.values()]
+    syms = [model.i] + list(model.params.values())
+    for name, expr in (("V", law.energy), ("V'", law.force), ("V''", law.stiffness)):
+        f = sp.lambdify(syms, expr.subs(D, 0), "numpy")
+        for s in range(springs.start, springs.stop, 1 << 16):
+            i = np.arange(s, min(s + (1 << 16), springs.stop), dtype=float)
+            with np.errstate(all="ignore"):
+                v = np.broadcast_to(np.asarray(f(i, *values), dtype=float), i.shape)
+            bad = ~np.isfinite(v) if name != "V''" else ~(v > 0)
+            if bad.any():
+                j = int(i[np.argmax(bad)])
+                why = (f"{name}(0) = {v[np.argmax(bad)]:g} is not finite" if name != "V''"
+                       else f"stiffness V''(0) = {v[np.argmax(bad)]:g} is not positive")
+                raise SceneError(model.scene.file, "chain.potential", f"{why} for the spring i = {j}; accepted: a "
+                                 "potential finite, twice differentiable and with V''(0) > 0 for every spring i")
 
 
 def chain_modes(model: ChainModel) -> ChainModes:
@@ -205,12 +287,54 @@ def chain_mode_records(model: ChainModel, modes: ChainModes, omega2_values=None)
     return records, note
 
 
-def chain_report(model: ChainModel, modes: ChainModes, omega2_values=None) -> tuple[str, dict]:
+def _damping_ratios(model: ChainModel, records: list[dict], damped) -> str:
+    """Add ``damping_ratio``, ``omega_damped``, ``damping_ratio_expr`` to each listed mode of a damped
+    chain (in place, the fields of non-chain scenes) and return a note (empty when every ζ is given).
+
+    ``damped`` holds ``(ω_n, ζ, ω_d)`` of every mode ascending (the dense route of
+    ``numeric.chain_damped``, given by the caller) or None: then Rayleigh-only damping takes its
+    closed form ζ_j = α/(2ω_j) + βω_j/2 at the listed ω (a sum of positive terms), and dashpots on a
+    chain too long for the dense route leave ζ None, said in the note."""
+    import math
+
+    n = model.chain.n
+    e = MODES_LISTED_EACH_END
+    positions = list(range(n)) if len(records) == n else list(range(e)) + list(range(n - e, n))
+    alpha = beta = None
+    unresolved = 0
+    if damped is None and not model.dampers and model.rayleigh is not None:
+        sub = {model.params[p]: sp.Rational(v) for p, v in model.scene.parameters.items()}
+        alpha, beta = (float(sp.N(c.subs(sub), 30)) for c in model.rayleigh)
+    for rec, pos in zip(records, positions):
+        zeta = wd = None
+        if damped is not None:
+            _, zeta, wd = damped[pos]
+            if zeta is not None and zeta != zeta:  # NaN: below float64's resolution of the damping
+                zeta = None
+                unresolved += 1
+        elif alpha is not None:
+            w = math.sqrt(max(rec["omega2_value"], 0.0))
+            if w > 0:
+                zeta = alpha / (2 * w) + beta * w / 2
+                wd = w * math.sqrt((1 - zeta) * (1 + zeta)) if zeta < 1 else 0.0
+        rec.update(damping_ratio=zeta, omega_damped=wd, damping_ratio_expr=None)
+    if damped is None and alpha is None:
+        return (f"damping ratios not computed: dashpots on a chain of {n} masses (the dense modal "
+                "state matrix is used up to 60 masses)")
+    if unresolved:
+        return (f"damping ratios of {unresolved} modes not given: their decay rate is below 1e-10 of what "
+                "float64 resolves in the modal damping (modes all but confined away from every dashpot)")
+    return ""
+
+
+def chain_report(model: ChainModel, modes: ChainModes, omega2_values=None, damped=None) -> tuple[str, dict]:
     """Text and JSON description of a chain's derivation and spectrum.
 
     The JSON has the top-level shape of non-chain scenes (``scene, parameters, masses, modes,
     closed_form, notes``; ``masses`` is empty: chain masses are indices 0 … n−1) plus the
     chain's ``n, left, right, uniform, j_range`` and its symbolic ``family`` (omega2, shape).
+    A damped chain's listed modes carry ``damping_ratio`` and ``omega_damped`` (``damped``: the
+    ``(ω_n, ζ, ω_d)`` rows of ``numeric.chain_damped.damped_rows``, see :func:`_damping_ratios`).
     """
     sc, ch = model.scene, model.chain
     force = sp.factor_terms(model.interior_equation())
@@ -235,18 +359,25 @@ def chain_report(model: ChainModel, modes: ChainModes, omega2_values=None) -> tu
         lines += ["", f"Normal modes ({modes.boundary}, closed form), j = {lo} ... {hi}:",
                   f"    ω_j² = {sstr(modes.omega2)}",
                   f"    shape_j(i) = {sstr(modes.shape)}"]
-    lines += [f"    note: {note}" for note in modes.notes]
-    if model.k3 is not None:
-        lines.append("    note: cubic springs: modes of the linearization; no exact solution")
+    law_lines, law_notes, law_data = _law_report(model)
+    lines += law_lines
     notes = list(modes.notes) + (["cubic springs: modes of the linearization; no exact solution"]
-                                 if model.k3 is not None else [])
+                                 if model.k3 is not None else []) + law_notes
+    lines += [f"    note: {note}" for note in notes]
     records, listed_note = chain_mode_records(model, modes, omega2_values)
+    zeta_note = _damping_ratios(model, records, damped) if damping_data is not None and records else ""
+    if zeta_note:
+        notes.append(zeta_note)
     if records:  # the numbers, for every chain (a closed form or not): as --json lists them
         how = "closed form at the scene's values" if modes.omega2 is not None else \
             "numeric, the generated module's omega2()"
         lines += ["", f"Normal modes ({how}), ascending:"]
         lines += [f"    {'j = ' + str(r['j']) + ':  ' if 'j' in r else ''}ω² = {r['omega2_value']:.10g}"
-                  + (f"  (multiplicity {r['multiplicity']})" if r["multiplicity"] > 1 else "") for r in records]
+                  + (f"  (multiplicity {r['multiplicity']})" if r["multiplicity"] > 1 else "")
+                  + (f"   zeta = {r['damping_ratio']:.10g}   omega_d = {r['omega_damped']:.10g}"
+                     if r.get("damping_ratio") is not None else "") for r in records]
+        if zeta_note:
+            lines.append(f"    note: {zeta_note}")
         if listed_note:
             lines.append(f"    note: {listed_note}")
     elif listed_note:
@@ -264,7 +395,30 @@ def chain_report(model: ChainModel, modes: ChainModes, omega2_values=None) -> tu
                        "shape": None if modes.shape is None else sp.sstr(modes.shape)}}
     if damping_data is not None:
         data["damping"] = damping_data
+    if law_data is not None:
+        data["equilibrium"] = law_data
     return "\n".join(lines) + "\n", data
+
+
+def _law_report(model: ChainModel) -> tuple[list[str], list[str], dict | None]:
+    """Text lines, notes and the JSON ``equilibrium`` of a potential chain (nothing otherwise)."""
+    law = model.law
+    if law is None:
+        return [], [], None
+    tension = model.tension
+    how = ("x = 0: V'(0) = 0, every spring at rest" if tension == 0 else
+           f"x = 0: the pre-tension V'(0) = {sstr(tension)} is the same in every spring and balances "
+           "at every mass (walls at both ends, or a ring)")
+    lines = ["", f"Spring law: V(d) = {sstr(law.energy)}   (d = x_(i+1) - x_i)",
+             f"    tension V'(d) = {sstr(law.force)}",
+             f"Static equilibrium: {how}",
+             f"    stiffness about it k(i) = V''(0) = {sstr(model.k)}   (K = Hessian of V at x_eq)"]
+    notes = ["spring potential: modes are those of the linearisation about x_eq = 0 (k = V''(0)); "
+             "the exact modal solution does not apply (integrators only)" if not model.linear else
+             "spring potential: quadratic in d with V'(0) = 0, i.e. linear springs k = V''(0)"]
+    data = {"x": "0", "closed_form": True, "how": how, "potential": sstr(law.energy),
+            "tension": sstr(tension), "stiffness": sstr(model.k)}
+    return lines, notes, data
 
 
 __all__ = ["ChainModel", "ChainModes", "chain_modes", "chain_mode_records", "chain_report",

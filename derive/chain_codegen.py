@@ -27,6 +27,7 @@ from .chain_damping_code import chain_damping_code
 from .codeprint import p
 from .loadgen import chain_load_code
 from .module_text import function, module_head, render
+from .potential_code import chain_law_lines, chain_tension_code
 from .spring_factor import helper_source
 
 
@@ -85,7 +86,7 @@ def _constants(c: _Context) -> list[str]:
     """The chain's shape: length, ends, uniformity, effects, rigid modes, the dense limit."""
     ch, model = c.chain, c.model
     return [f"N = {ch.n}", "CHAIN = True", f"LEFT = {ch.left.value!r}", f"RIGHT = {ch.right.value!r}",
-            f"UNIFORM = {ch.uniform!r}", f"EFFECTS = {model.effects!r}", f"LINEAR = {model.k3 is None!r}",
+            f"UNIFORM = {ch.uniform!r}", f"EFFECTS = {model.effects!r}", f"LINEAR = {model.linear!r}",
             f"RIGID_MODES = {model.rigid_modes}", f"MAX_DENSE = {MAX_DENSE}"]
 
 
@@ -165,6 +166,8 @@ def _stencil_coefficients(c: _Context) -> list[str]:
 def _stencil_body(c: _Context) -> list[str]:
     """The closure's body: element forces s_i, their differences, the ends, 1/m and gravity."""
     ch, cubic = c.chain, c.cubic
+    if c.model.law is not None:
+        return _law_stencil_body(c)
 
     def cube(k3: str, d: str) -> str:
         return f" + {k3} * {d}**3" if cubic else ""
@@ -189,6 +192,29 @@ def _stencil_body(c: _Context) -> list[str]:
     return out + ["        return _f"]
 
 
+def _law_stencil_body(c: _Context) -> list[str]:
+    """The closure's body for a spring potential: tensions from spring_force() (:mod:`derive.potential_code`);
+    the wall springs have d = x_0 (left) and d = -x_{n-1} (right), the ring's closing spring x_0 - x_{n-1}."""
+    ch = c.chain
+
+    def tension(d: str, index: str) -> str:
+        return chain_tension_code(c.model, c.kw, d, index)
+
+    out = ["        _f = numpy.empty(numpy.shape(_y))", "        _d = _y[1:] - _y[:-1]",
+           "        _s = " + tension("_d", "i.reshape((-1,) + (1,) * (numpy.ndim(_y) - 1))"),
+           "        _f[:-1] = _s", "        _f[-1] = 0.0", "        _f[1:] -= _s"]
+    if ch.left is End.WALL:
+        out.append("        _f[0] -= " + tension("_y[0]", "-1.0"))
+    if ch.right is End.WALL:
+        out.append("        _f[-1] += " + tension("-_y[-1]", "n - 1.0"))
+    if ch.left is End.RING:
+        out += ["        _dr = _y[0] - _y[-1]", "        _sr = " + tension("_dr", "n - 1.0"),
+                "        _f[-1] += _sr", "        _f[0] -= _sr"]
+    out.append("        _f *= _inv_m" if ch.uniform else "        _f *= _inv_m1.reshape((-1,) + (1,) * (numpy.ndim(_y) - 1))")
+    out += ["        _f += _g_acc"] if c.model.g is not None else []
+    return out + ["        return _f"]
+
+
 def _acceleration(c: _Context) -> list[str]:
     """acceleration(x): the stencil for x's length."""
     return function(f"acceleration(_x, {c.sig})", "Acceleration of the chain; x shape (n, ...) (n taken from x).",
@@ -205,8 +231,16 @@ def _energy(c: _Context) -> list[str]:
             "    _ends = spring_ends(n)",
             "    _xa = numpy.where((_ends[:, 0] >= 0).reshape((-1,) + _extra), _x[_ends[:, 0]], 0.0)",
             "    _xb = numpy.where((_ends[:, 1] >= 0).reshape((-1,) + _extra), _x[_ends[:, 1]], 0.0)",
-            "    _d = _xb - _xa",
-            "    _e = 0.5 * numpy.sum(_m * _v**2, axis=0) + 0.5 * numpy.sum(_kk.reshape((-1,) + _extra) * _d**2, axis=0)"]
+            "    _d = _xb - _xa"]
+    if c.model.law is not None:  # V(d) - V(0) per spring; the spring index i of each spring_ends() row
+        body += [f"    i = (numpy.arange(_kk.shape[0], dtype=float) - (1.0 if _LEFT == {End.WALL.value!r} else 0.0))"
+                 ".reshape((-1,) + _extra)",
+                 "    _e = 0.5 * numpy.sum(_m * _v**2, axis=0) + numpy.sum("
+                 + chain_tension_code(c.model, kw, "_d", "i").replace("spring_force(", "spring_energy(", 1)
+                 + ", axis=0)"]
+    else:
+        body.append("    _e = 0.5 * numpy.sum(_m * _v**2, axis=0) + 0.5 * numpy.sum(_kk.reshape((-1,) + _extra) * _d**2, "
+                    "axis=0)")
     if c.cubic:
         body += [f"    i = numpy.arange(_kk.shape[0], dtype=float) - (1.0 if _LEFT == {End.WALL.value!r} else 0.0)",
                  f"    _k3s = numpy.broadcast_to(_spring_k3(i, {kw}), _kk.shape)",
@@ -214,6 +248,12 @@ def _energy(c: _Context) -> list[str]:
     if c.model.g is not None:
         body.append(f"    _e = _e - ({p(c.model.g)}) * numpy.sum(_m * _x, axis=0)")
     return function(f"energy(_x, _v, {c.sig})", "Total energy; x, v shape (n, ...) -> (...).", body + ["    return _e"])
+
+
+def _spring_law(c: _Context) -> list[str]:
+    """A spring potential's spring_force(), spring_energy(), spring_stiffness() and equilibrium()
+    (:mod:`derive.potential_code`)."""
+    return chain_law_lines(c.model, c.sig) if c.model.law is not None else []
 
 
 def _loads(c: _Context) -> list[str]:
@@ -336,7 +376,7 @@ def _bidiagonal_omega2(c: _Context) -> list[str]:
 
 #: The section writers of a chain module, in the order they appear in it.
 SECTIONS = (_constants, _masses, _spring_coefficients, _spring_lists, _stencil, _acceleration, _energy,
-            _loads, _damping, _matrices, _spectrum)
+            _spring_law, _loads, _damping, _matrices, _spectrum)
 
 
 def render_chain_module(model: ChainModel, *, bundled: bool = True) -> str:

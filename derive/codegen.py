@@ -33,6 +33,8 @@ from .loadgen import ground_lines, table_force_lines
 from .model import Effect, Model
 from .module_text import function, module_head, pasted, render
 from .modes import ModeSet
+from .potential_code import (dense_acceleration_lines, dense_energy_lines, dense_law_lines,
+                             dense_spring_constant_lines)
 from .spring_factor import helper_source
 from .stable_forms import stable_closed_forms
 
@@ -82,6 +84,11 @@ class _Context:
         return any(k3 is not None for *_, k3, _ in self.model.springs)
 
     @cached_property
+    def laws(self) -> bool:
+        """Spring potentials (then the equilibrium is solved: :mod:`derive.equilibrium`)."""
+        return self.model.equilibrium is not None
+
+    @cached_property
     def accurate_helper(self) -> bool:
         """Whether the module carries ``_accurate_modes()`` (and so imports scipy.linalg)."""
         return self.stable is None or self.model.modal_zeta is not None
@@ -124,7 +131,7 @@ def _constants(c: _Context) -> list[str]:
     return [f"MASS_NAMES = {tuple(sc.mass_names)!r}",
             f"N = {sc.n}",
             f"EFFECTS = {tuple(sorted(e.value for e in model.effects))!r}",
-            f"LINEAR = {sc.linear!r}",
+            f"LINEAR = {model.linear!r}",
             "#: Spring ends as mass indices; -1 is a wall.",
             f"SPRING_ENDS = {tuple((a, b) for a, b, *_ in model.springs)!r}",
             *dampers,
@@ -138,8 +145,10 @@ def _element_constants(c: _Context) -> list[str]:
     """masses(), spring_constants() and, when declared, cubic_constants() and damper_constants()."""
     model = c.model
     out = function(f"masses({c.sig})", "Masses, shape (N,).", [f"    return {array([c.p(m) for m in model.masses])}"])
-    out += function(f"spring_constants({c.sig})", "Linear stiffness of each spring in SPRING_ENDS order, shape (S,).",
-                    [f"    return {array([c.p(k) for _, _, k, _, _ in model.springs])}"])
+    numeric_k = dense_spring_constant_lines(model, c.sig, c.kwcall) if c.laws else None
+    out += function(f"spring_constants({c.sig})", "Linear stiffness of each spring in SPRING_ENDS order, shape (S,)"
+                    + (" (potentials: V''(d) at the equilibrium)." if c.laws else "."),
+                    numeric_k or [f"    return {array([c.p(k) for _, _, k, _, _ in model.springs])}"])
     if c.cubic:
         k3s = [c.p(k3 if k3 is not None else 0) for *_, k3, _ in model.springs]
         out += function(f"cubic_constants({c.sig})", "Cubic coefficient k3 of each spring (0 where linear), shape (S,).",
@@ -235,7 +244,9 @@ def _acceleration(c: _Context) -> list[str]:
     """acceleration(x): springs (linear and cubic) and gravity, per mass or by the spring list."""
     model = c.model
     doc = "Acceleration from springs" + (" and gravity" if model.g is not None else "") + _ACCELERATION_DOC
-    if c.dense:
+    if c.laws:  # spring potentials: their tensions summed on the masses (derive.potential_code)
+        body = dense_acceleration_lines(model, c.kwcall)
+    elif c.dense:
         cons = model.force_expressions(Effect.SPRING, Effect.CUBIC, Effect.GRAVITY)
         body = [f"    {c.unpack(model.x)} = _x", "    _out = numpy.empty(numpy.shape(_x))",
                 *c.per_mass(cons), "    return _out"]
@@ -245,6 +256,51 @@ def _acceleration(c: _Context) -> list[str]:
             body.append(f"    _f += gravity_forces({c.kwcall}).reshape(_col)")
         body.append(f"    return _f / masses({c.kwcall}).reshape(_col)")
     return function(f"acceleration(_x{c.kw})", doc, body)
+
+
+#: Effects whose forces the scalar writer emits, one ``+=`` line per mass and effect (a new force
+#: term -- a potential -- is one more entry here). Springs, cubic terms and gravity form the first line.
+_SCALAR_EFFECTS = ((Effect.SPRING, Effect.CUBIC, Effect.GRAVITY), (Effect.FORCE,), (Effect.GROUND,))
+
+_SCALAR_DOC = """a(x) + a_ext(t) as straight-line scalar code (springs, cubic terms, gravity, expression forces,
+ground acceleration), written into ``_out``: compiled by numeric (numba) for the small-scene loops.
+
+Parameters
+----------
+_x : ndarray, shape (N,)
+t : float
+_out : ndarray, shape (N,)
+    Overwritten with the acceleration.
+_p : ndarray, shape (P,)
+    The parameter values in PARAMETERS order.
+"""
+
+
+def _scalar_force(c: _Context) -> list[str]:
+    """scalar_force(x, t, out, p): the per-mass forces over scalars (no NumPy calls on arrays), for
+    scenes printed per mass. Damping is not in it: the loops take -M⁻¹C as a matrix (Strang splitting)."""
+    model = c.model
+    if not c.dense or c.laws:  # spring potentials: their series tensions stay on the NumPy path for now
+        return []
+    call = ", ".join(["_x", "t", "_out"] + [f"_p[{j}]" for j in range(len(c.params))])
+    outer = [f"    _scalar_force_terms({call})  # the parameters in PARAMETERS order"]
+    body = [f"    _{s} = _x[{i}]" for i, s in enumerate(model.x)]
+    first = True
+    for group in _SCALAR_EFFECTS:
+        if group == (Effect.GROUND,) and model.ground is None:  # a ground table: data at run time
+            continue
+        exprs = model.force_expressions(*group)
+        if model.ground is not None:  # the ground term's a_g(t) stands for the scene's expression
+            exprs = [e.xreplace({sp.Function("a_g")(model.t): model.ground}) for e in exprs]
+        if not first and all(e == 0 for e in exprs):
+            continue
+        op = "=" if first else "+="
+        body += [f"    _out[{i}] {op} {c.p(e / m)}" for i, (e, m) in enumerate(zip(exprs, model.masses))
+                 if first or e != 0]
+        first = False
+    return (function("scalar_force(_x, t, _out, _p)", _SCALAR_DOC, outer)
+            + function(f"_scalar_force_terms(_x, t, _out{c.kw})",
+                       "scalar_force() with the parameters as arguments (the body numba compiles).", body))
 
 
 def _incidence_lines(c: _Context, arg: str, ends: str, constants: str, *, cubic: bool,
@@ -271,7 +327,7 @@ def _incidence_lines(c: _Context, arg: str, ends: str, constants: str, *, cubic:
 
 def _bound_acceleration(c: _Context) -> list[str]:
     """make_acceleration(): acceleration() with the parameters bound (linear: -M⁻¹K formed once)."""
-    if not c.model.scene.linear:
+    if not c.model.linear:
         call = f"acceleration(_y{', ' + c.kwcall if c.kwcall else ''})"
         return function(f"make_acceleration({c.sig})",
                         "acceleration() with the parameters bound (nonlinear springs: the expressions above).",
@@ -403,7 +459,10 @@ def _energy(c: _Context) -> list[str]:
     """energy(x, v) = T + V (gravity's potential included): one expression, or sums over element lists."""
     model = c.model
     doc = "Total energy T + V" + (" (V includes gravity's potential)" if model.g is not None else "") + \
+        (" (each spring potential counted from its value at rest, V(d) - V(0))" if c.laws else "") + \
         "; x, v shape (N, ...), result shape (...)."
+    if c.laws:
+        return function(f"energy(_x, _v{c.kw})", doc, dense_energy_lines(model, c.kwcall))
     if c.dense:
         body = [f"    {c.unpack(model.x)} = _x", f"    {c.unpack(model.v)} = _v", f"    return {c.p(model.energy)}"]
         return function(f"energy(_x, _v{c.kw})", doc, body)
@@ -418,10 +477,16 @@ def _energy(c: _Context) -> list[str]:
     return function(f"energy(_x, _v{c.kw})", doc, body + ["    return _e"])
 
 
+def _spring_laws(c: _Context) -> list[str]:
+    """Spring potentials: spring_tensions(), spring_stiffnesses(), the energies, equilibrium() and the
+    series helpers they call (:mod:`derive.potential_code`)."""
+    return dense_law_lines(c.model, c.sig, c.kwcall) if c.laws else []
+
+
 #: The section writers of a ``[masses]`` module, in the order they appear in it.
 SECTIONS = (_constants, _element_constants, _mass_and_stiffness, _damping_matrix, _dynamical_matrix,
-            _spectrum, _spectrum_helper, _acceleration, _bound_acceleration, _damping_acceleration,
-            _external_acceleration, _gravity, _forcing_harmonics, _tables_and_ground, _energy)
+            _spectrum, _spectrum_helper, _acceleration, _scalar_force, _bound_acceleration, _damping_acceleration,
+            _external_acceleration, _gravity, _forcing_harmonics, _tables_and_ground, _energy, _spring_laws)
 
 
 def render_module(model: Model, modes: ModeSet, *, bundled: bool = True) -> str:

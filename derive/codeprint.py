@@ -23,6 +23,12 @@ class _Printer(NumPyPrinter):
     def _print_Abs(self, expr):
         return f"numpy.abs({self._print(expr.args[0])})"
 
+    def _print_expm1mx(self, expr):  # derive.stable_laws: exp(z) - 1 - z, a private helper of the module
+        return f"_expm1mx({self._print(expr.args[0])})"
+
+    def _print_log1pmx(self, expr):  # log(1 + z) - z
+        return f"_log1pmx({self._print(expr.args[0])})"
+
 
 def _printer() -> NumPyPrinter:
     return _Printer({"fully_qualified_modules": True, "allow_unknown_functions": False})

@@ -28,12 +28,20 @@ import sympy as sp
 from .printing import latex, sstr
 from .accurate import MAX_MPMATH_MODES, NotAccurate, _eig_dynamical, _mp, exact_values, value
 from .model import Model
-from .modes import BudgetExceeded, ModeSet, time_budget
+from .modes import ModeSet
+from .work import WorkCapExceeded, check, ops
 
 #: Two successive precisions agreeing to this relative difference settle a float64 value.
 _SETTLED = 4e-16
-#: Seconds allowed to simplify closed-form damping ratios of dashpots.
-ZETA_BUDGET = 5.0
+#: Largest dashpot damping ratio ``φᵀCφ / φᵀMφ`` (SymPy operations, before simplifying it) whose
+#: closed form is sought (a size, never a time: the same scene gives the same report under any load).
+MAX_ZETA_OPS = 400
+#: First working precision of the damped modes (digits); each retry doubles it.
+FIRST_DIGITS = 40
+#: The absolute floor near ζ = 0: a ratio that is noise at FIRST_DIGITS and below this at twice
+#: that (10^(−1.8·40)) is printed as exactly 0 (see :func:`_zero_noise`). A true ζ under it — a
+#: mode all but confined to a 1e-12 kg mass far from the only dashpot, ζ = 5e-91 — reads as 0.
+ZETA_FLOOR = 10.0 ** (-1.8 * FIRST_DIGITS)
 
 
 @dataclass(frozen=True)
@@ -173,10 +181,12 @@ def _rows_at(model: Model, dps: int) -> tuple[list[tuple], bool]:
             diag = _cluster_diagonal(w2, G, dps)
             rows = []
             for j in range(n):
-                w = mpmath.sqrt(w2[j])
-                if w2[j] == 0:
+                # an ω² that is noise below zero at this precision (stiffness contrast beyond the
+                # digits) reads as rigid here; the next precision settles it
+                if w2[j] <= 0:
                     rows.append((0.0, None, 0.0, None))
                     continue
+                w = mpmath.sqrt(w2[j])
                 g = diag[j]
                 wd2 = w2[j] - g * g / 4
                 rows.append((float(w), float(g / (2 * w)), float(mpmath.sqrt(wd2)) if wd2 > 0 else 0.0, None))
@@ -379,29 +389,29 @@ def _closed_forms(model: Model, modes: ModeSet) -> list[sp.Expr | None]:
     if model.dampers:
         C_d = model._assemble([(a, b, c) for a, b, c, _ in model.dampers], model.v)
     try:
-        with time_budget(ZETA_BUDGET):
-            for mode, shape in records:
-                if mode.rigid:
-                    out.append(None)
-                    j += 1
-                    continue
-                w = sp.sqrt(mode.omega2)
-                zeta = sp.Integer(0)
-                if model.rayleigh is not None:
-                    alpha, beta = model.rayleigh
-                    zeta += alpha / (2 * w) + beta * w / 2
-                if model.modal_zeta is not None:
-                    zeta += model.modal_zeta[j]
-                if C_d is not None:
-                    if not (mode.exact and modes.closed_form):
-                        raise BudgetExceeded
-                    phi = sp.Matrix(shape)
-                    ratio = (phi.T * C_d * phi)[0, 0] / (phi.T * model.M * phi)[0, 0]
-                    ratio = sp.factor(sp.radsimp(sp.cancel(sp.expand(ratio))))
-                    zeta += ratio / (2 * w)
-                out.append(zeta)
+        for mode, shape in records:
+            if mode.rigid:
+                out.append(None)
                 j += 1
-    except BudgetExceeded:
+                continue
+            w = sp.sqrt(mode.omega2)
+            zeta = sp.Integer(0)
+            if model.rayleigh is not None:
+                alpha, beta = model.rayleigh
+                zeta += alpha / (2 * w) + beta * w / 2
+            if model.modal_zeta is not None:
+                zeta += model.modal_zeta[j]
+            if C_d is not None:
+                if not (mode.exact and modes.closed_form):
+                    raise WorkCapExceeded("no closed-form mode shape")
+                phi = sp.Matrix(shape)
+                ratio = (phi.T * C_d * phi)[0, 0] / (phi.T * model.M * phi)[0, 0]
+                check(ops(ratio), MAX_ZETA_OPS)
+                ratio = sp.factor(sp.radsimp(sp.cancel(sp.expand(ratio))))
+                zeta += ratio / (2 * w)
+            out.append(zeta)
+            j += 1
+    except WorkCapExceeded:
         return [None] * len(records)
     return out
 
@@ -422,7 +432,7 @@ def damped_modes(model: Model, modes: ModeSet | None) -> DampedModes:
 def _settled_rows(model: Model) -> tuple[list[tuple], bool]:
     """:func:`_rows_at` at 40, 80, … digits until two successive precisions agree (float64 settled)."""
     prev = None
-    dps = 40
+    dps = FIRST_DIGITS
     while dps <= 640:
         rows, prop = _rows_at(model, dps)
         if prev is not None and prev[1] == prop and _settled(prev[0], rows, dps // 2):

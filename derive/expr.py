@@ -33,7 +33,11 @@ from fractions import Fraction
 
 
 from .errors import SceneError, show
-from .expr_tree import CONSTANTS, FUNCTIONS, ARITHMETIC, BinOp, Call, Expr, Name, Neg, Num
+from .expr_tree import CONSTANTS, FUNCTIONS, RESERVED_FUNCTIONS, ARITHMETIC, BinOp, Call, Expr, Name, Neg, Num
+
+#: Functions only springchain's own printed closed forms call (read back by derive.readback): a
+#: parameter of that name and the function coexist there, as before.
+READBACK_ONLY = ("acos",)
 
 MAX_LENGTH = 500
 MAX_NODES = 200
@@ -306,6 +310,10 @@ class _Walker:
         if node.func.id not in functions:
             raise fail(f"calls to {node.func.id!r} are not accepted",
                        f"the functions {', '.join(functions) or '(none)'}")
+        if node.func.id in self.allowed and node.func.id not in RESERVED_FUNCTIONS + READBACK_ONLY:
+            # a parameter named log (tanh, cosh, sinh): the name is taken in this scene
+            raise fail(f"{node.func.id!r} is a parameter of this scene, so {node.func.id}() cannot be "
+                       "called", f"another name for the parameter {node.func.id!r}")
         if node.keywords or len(node.args) != 1 or isinstance(node.args[0], ast.Starred):
             raise fail(f"{node.func.id}() takes exactly one argument",
                        f"{node.func.id}(x) with one plain argument")

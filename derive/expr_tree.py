@@ -17,7 +17,11 @@ from typing import Mapping
 import numpy as np
 
 #: Functions a scene expression may call, each with exactly one argument.
-FUNCTIONS = ("cos", "exp", "sin", "sqrt")
+FUNCTIONS = ("cos", "cosh", "exp", "log", "sin", "sinh", "sqrt", "tanh")
+#: The functions every scene could call before potentials came (reserved as parameter names); the
+#: later ones (log, tanh, cosh, sinh) are not reserved: a scene may still have a parameter ``log``,
+#: it just cannot call log() then (see :func:`~springchain.derive.expr.parse_expression`).
+RESERVED_FUNCTIONS = ("cos", "exp", "sin", "sqrt")
 #: Named constants a scene expression may use.
 CONSTANTS = ("pi",)
 
@@ -210,10 +214,14 @@ class Call(Expr):
         with np.errstate(all="ignore"):
             a = np.asarray(a, dtype=float)
             v = getattr(np, self.func)(a)
-            if self.func in ("sin", "cos"):  # Lipschitz 1, plus libm's rounding
+            if self.func in ("sin", "cos", "tanh"):  # Lipschitz 1, plus libm's rounding
                 e = ea + _U * (1.0 + _abs(v)) + _ETA
             elif self.func == "exp":
                 e = _abs(v) * np.expm1(ea) + 2 * _U * _abs(v) + _ETA
+            elif self.func in ("sinh", "cosh"):  # |derivative| <= cosh(|a| + ea) on the interval
+                e = _times(np.cosh(_abs(a) + ea), ea) + 2 * _U * _abs(v) + _ETA
+            elif self.func == "log":  # |log a - log(a - ea)| <= ea / (a - ea) for a > ea > 0
+                e = np.where(a > ea, np.divide(ea, a - ea), np.inf) + 2 * _U * _abs(v) + _ETA
             else:  # sqrt(a) - sqrt(a - ea) <= ea / (sqrt(a) + sqrt(a - ea))
                 e = np.where(a > ea, ea / (np.sqrt(_abs(a)) + np.sqrt(np.maximum(a - ea, 0.0))),
                              np.sqrt(_abs(a) + ea))

@@ -15,6 +15,8 @@ from functools import cached_property
 
 import sympy as sp
 
+from .errors import SceneError
+from .potential import D, SpringLaw, linear_law
 from .scene import WALL, Scene
 
 
@@ -24,6 +26,7 @@ class Effect(enum.Enum):
     INERTIA = "inertia"
     SPRING = "spring"
     CUBIC = "cubic"
+    POTENTIAL = "potential"
     DAMPER = "damper"
     FORCE = "force"
     GRAVITY = "gravity"
@@ -109,9 +112,16 @@ class Model:
         self.a = tuple(sp.Symbol(f"a_{m}", real=True) for m in scene.mass_names)
         self.masses = tuple(e.to_sympy(self.params) for e in scene.mass_exprs)
         sym = {**self.params, "t": self.t}
-        self.springs = tuple(
-            (s.a, s.b, s.k.to_sympy(sym), None if s.k3 is None else s.k3.to_sympy(sym), s.key)
+        #: Every spring's law V(d) (k/k3 springs as k d²/2 + k3 d⁴/4), in spring order.
+        self.laws = tuple(
+            SpringLaw(s.key, s.potential.to_sympy({**self.params, "d": D})) if s.potential is not None
+            else linear_law(s.key, s.k.to_sympy(sym), None if s.k3 is None else s.k3.to_sympy(sym))
             for s in scene.springs)
+        #: ``(a, b, k, k3, key)`` per spring; for a potential, k is its stiffness V''(d) at the
+        #: equilibrium (so K below is the Hessian there) and k3 is None.
+        self.springs = tuple(
+            (s.a, s.b, None if s.k is None else s.k.to_sympy(sym), None if s.k3 is None else s.k3.to_sympy(sym),
+             s.key) for s in scene.springs)
         self.dampers = tuple((d.a, d.b, d.c.to_sympy(sym), d.key) for d in scene.dampers)
         self.forces = tuple((f.on, f.f.to_sympy(sym), f.key) for f in scene.forces)
         self.g = None if scene.gravity is None else scene.gravity.to_sympy(sym)
@@ -136,6 +146,53 @@ class Model:
         #: Modal damping ratios ζⱼ, one per mode in ascending ω order ([damping] modal), else None.
         self.modal_zeta = None if damping is None or damping.modal is None else \
             tuple(e.to_sympy(sym) for e in damping.modal) * (scene.n if len(damping.modal) == 1 else 1)
+        #: The static equilibrium (scenes with potentials; None otherwise: x = 0, or the linear sag).
+        self.equilibrium = self._equilibrium() if scene.has_potential else None
+        if self.equilibrium is not None:
+            self.springs = tuple((a, b, stiff if k is None else k, k3, key) for (a, b, k, k3, key), stiff
+                                 in zip(self.springs, self.equilibrium.stiffness))
+
+    def _equilibrium(self):
+        """Solve for the static equilibrium (:func:`derive.equilibrium.solve`), or refuse in one line."""
+        from .equilibrium import solve
+
+        loads = [sp.Integer(0)] * self.scene.n
+        keys = []
+        if self.g is not None:
+            loads = [m * self.g for m in self.masses]
+            keys.append("gravity")
+        for on, f, key in self.forces:
+            if not f.has(self.t):
+                loads[on] += f
+                keys.append(key)
+        pieces = [(c, [self.masses[i] for i in c]) for c in self.free_components]
+        eq = solve(self.scene.file, self.scene.n, [(a, b, law) for (a, b, *_), law in zip(self.springs, self.laws)],
+                   loads, self.params, self.scene.parameters, pieces, load_keys=" and ".join(keys) or "springs")
+        if not eq.at_rest:
+            cubic = next((key for *_, k3, key in self.springs if k3 is not None), None)
+            if cubic is not None:
+                raise SceneError(self.scene.file, f"{cubic}.k3", "a cubic (k3) spring in a scene whose equilibrium is "
+                                 "away from x = 0; accepted: write that spring as a potential, "
+                                 "potential = \"k*d**2/2 + k3*d**4/4\"")
+        return eq
+
+    @property
+    def potentials(self) -> tuple[int, ...]:
+        """Indices of the springs given by a potential."""
+        return tuple(j for j, law in enumerate(self.laws) if law.given)
+
+    @cached_property
+    def linear(self) -> bool:
+        """Whether the equations are linear: k springs only, or potentials that are quadratic in d with
+        V'(0) = 0 (a linear spring written as its energy)."""
+        if any(k3 is not None for *_, k3, _ in self.springs):
+            return False
+        return all(self._quadratic(law) for law in self.laws if law.given)
+
+    @staticmethod
+    def _quadratic(law) -> bool:
+        deg = law.polynomial_degree()
+        return deg is not None and deg <= 2 and sp.simplify(law.force.subs(law.d, 0)) == 0
 
     # -- energies ------------------------------------------------------------------
     def _ext(self, a: int, b: int, q) -> sp.Expr:
@@ -150,8 +207,11 @@ class Model:
     @cached_property
     def potential_terms(self) -> tuple[tuple[str, sp.Expr], ...]:
         terms = []
-        for a, b, k, k3, key in self.springs:
+        for (a, b, k, k3, key), law in zip(self.springs, self.laws):
             d = self._ext(a, b, self.x)
+            if law.given:  # V(d) as written, d = x_b - x_a
+                terms.append((key, law.energy.subs(law.d, -d)))
+                continue
             terms.append((key, k * d**2 / 2 + (k3 * d**4 / 4 if k3 is not None else 0)))
         if self.g is not None:
             terms.append(("gravity", -sum(m * self.g * x for m, x in zip(self.masses, self.x))))
@@ -194,8 +254,13 @@ class Model:
     def terms(self) -> tuple[Term, ...]:
         """Generalized forces ``-dV/dx_i - dR/dv_i + Q_i``, one per (entry, coordinate)."""
         out: list[Term] = []
-        for a, b, k, k3, key in self.springs:
+        for (a, b, k, k3, key), law in zip(self.springs, self.laws):
             d = self._ext(a, b, self.x)
+            if law.given:  # tension V'(d) with d = x_b - x_a: +V' on a, -V' on b
+                tension = law.force.subs(law.d, -d)
+                out.extend(Term(key, Effect.POTENTIAL, i, sign * tension)
+                           for i, sign in ((a, 1), (b, -1)) if i != WALL)
+                continue
             for i, sign in ((a, 1), (b, -1)):
                 if i == WALL:
                     continue

@@ -10,56 +10,34 @@ Structure first, algebra second:
    half the size.
 3. **Factor the characteristic polynomial** ``det(K_b - λ M_b)`` of each
    block (rigid-body factors λ divided out exactly), solve the factors of
-   degree ≤ 2 (or ≤ 4 within the budget) by radicals, and build each shape
-   from cofactors (polynomials in λ reduced modulo its factor); no
-   ``simplify`` on large expressions.
-4. **Budget.** All of it runs under a wall-clock budget; past it (or for
-   factors of degree ≥ 5) the eigenvalues fall back to numeric values at the
-   scene's parameters (``CRootOf`` of the numeric polynomial), with a note.
+   degree ≤ 3 by radicals, and build each shape from cofactors (polynomials
+   in λ reduced modulo its factor); no ``simplify`` on large expressions.
+4. **Work caps, never a clock.** Blocks larger than ``MAX_SYMBOLIC_BLOCK``,
+   characteristic polynomials over ``work.MAX_DET_TERMS`` terms (bounded before
+   expanding them), factors of degree > 3 and roots over ``MAX_ROOT_OPS``
+   operations fall back to numeric values at the scene's parameters, with a
+   note. Every cap is a size, so the same scene gives the same module on any
+   machine under any load (``derive --check`` is stable).
 """
 
 from __future__ import annotations
 
-import contextlib
-import signal
-import threading
 from dataclasses import dataclass, field
 
 import sympy as sp
 
 from .accurate import MAX_MPMATH_MODES, exact_values, numeric_modes, spring_factor_modes, value
 from .model import Model
+from .work import MAX_DET_TERMS, WorkCapExceeded, check, det_terms_bound
 
-DEFAULT_BUDGET = 20.0
 #: Largest block (after rigid modes and mirror symmetry) whose determinant is expanded symbolically.
 MAX_SYMBOLIC_BLOCK = 6
 #: Largest closed-form root (SymPy operation count) worth printing and generating.
 MAX_ROOT_OPS = 120
 
 
-class BudgetExceeded(Exception):
-    """The symbolic eigen-problem took longer than its budget."""
-
-
-@contextlib.contextmanager
-def time_budget(seconds: float | None):
-    """Raise :class:`BudgetExceeded` inside the block after ``seconds`` (main thread only)."""
-    usable = (seconds is not None and seconds > 0 and hasattr(signal, "setitimer")
-              and threading.current_thread() is threading.main_thread())
-    if not usable:
-        yield
-        return
-
-    def handler(signum, frame):
-        raise BudgetExceeded
-
-    old = signal.signal(signal.SIGALRM, handler)
-    signal.setitimer(signal.ITIMER_REAL, seconds)
-    try:
-        yield
-    finally:
-        signal.setitimer(signal.ITIMER_REAL, 0)
-        signal.signal(signal.SIGALRM, old)
+#: The symbolic eigen-problem is past a work cap (kept name: it was once a time budget).
+BudgetExceeded = WorkCapExceeded
 
 
 @dataclass(frozen=True)
@@ -189,6 +167,7 @@ def _solve_block(model: Model, B: sp.Matrix, lam: sp.Symbol, n_rigid_in_block: i
     Kb = (B.T * model.K * B).applyfunc(sp.expand)
     Mb = (B.T * model.M * B).applyfunc(sp.expand)
     A = Kb - lam * Mb
+    check(det_terms_bound(A), MAX_DET_TERMS)  # before expanding: the size of the work, not its time
     poly = sp.Poly(A.det(method="berkowitz"), lam)
     if n_rigid_in_block:
         poly = sp.Poly(sp.quo(poly.as_expr(), lam**n_rigid_in_block, lam), lam)
@@ -246,15 +225,12 @@ def _cubic_real_roots(poly: sp.Poly) -> list[sp.Expr]:
     return [shift + r * sp.cos(phi - 2 * sp.pi * k / 3) for k in range(3)]
 
 
-def closed_form_modes(model: Model, budget: float | None = DEFAULT_BUDGET,
-                      max_radical_degree: int = 3) -> ModeSet:
+def closed_form_modes(model: Model, max_radical_degree: int = 3) -> ModeSet:
     """Eigenvalues ω² and shapes of ``K φ = ω² M φ`` for a (small) scene.
 
     Parameters
     ----------
     model : Model
-    budget : float or None
-        Wall-clock seconds allowed for the algebra; None for no limit.
     max_radical_degree : int
         Irreducible factors of higher degree are not solved by radicals.
 
@@ -271,19 +247,22 @@ def closed_form_modes(model: Model, budget: float | None = DEFAULT_BUDGET,
     notes: list[str] = []
     # a mirror split at best halves the problem: beyond twice the largest block nothing is solvable
     hopeless = model.scene.n - len(rigid) > 2 * MAX_SYMBOLIC_BLOCK + 1
+    # K about an equilibrium found by Newton holds numbers, not closed forms
+    numeric_k = getattr(model, "equilibrium", None) is not None and not model.equilibrium.closed_form
     try:
-        if hopeless:
+        if hopeless or numeric_k:
             raise BudgetExceeded
-        with time_budget(budget):
-            for B in _blocks(model):
-                # rigid translations lie in the symmetric block (uniform vectors are mirror-symmetric)
-                # the rigid space is mirror-invariant: its share of this block has dimension rank(Bᵀ R)
-                n_rigid = (B.T * sp.Matrix.hstack(*[sp.Matrix(s) for s in rigid])).rank() if rigid else 0
-                modes.extend(_solve_block(model, B, lam, n_rigid, max_radical_degree))
+        for B in _blocks(model):
+            # rigid translations lie in the symmetric block (uniform vectors are mirror-symmetric)
+            # the rigid space is mirror-invariant: its share of this block has dimension rank(Bᵀ R)
+            n_rigid = (B.T * sp.Matrix.hstack(*[sp.Matrix(s) for s in rigid])).rank() if rigid else 0
+            modes.extend(_solve_block(model, B, lam, n_rigid, max_radical_degree))
         closed = True
     except BudgetExceeded:
-        why = (f"{model.scene.n} masses: symmetry blocks larger than {MAX_SYMBOLIC_BLOCK}" if hopeless else
-               f"a factor of degree > 3, an unreadably long root, or over the {budget:g} s budget")
+        why = ("K is the Hessian at a numerically found equilibrium" if numeric_k else
+               f"{model.scene.n} masses: symmetry blocks larger than {MAX_SYMBOLIC_BLOCK}" if hopeless else
+               f"a factor of degree > 3, an unreadably long root, or a characteristic polynomial of more "
+               f"than {MAX_DET_TERMS} terms")
         how = ("mpmath eigensolver at increasing precision, correct to float64" if model.scene.n <= MAX_MPMATH_MODES
                else "spring-factor SVD, as the generated module's omega2(), relatively accurate to a few float64 ulps")
         notes.append(f"no closed form ({why}); eigenvalues below are numeric ({how}) at the scene's parameter values")

@@ -31,13 +31,15 @@ from .printing import latex
 
 from .accurate import MAX_MPMATH_MODES, NotAccurate, _eig_dynamical, exact_values, value
 from .model import Model
-from .modes import BudgetExceeded, ModeSet, time_budget
+from .modes import ModeSet
+from .work import ops
 from .scene import WALL
 
 #: Two successive precisions agreeing to this relative difference (of the total mass) settle a value.
 _SETTLED = 1e-17
-#: Seconds allowed for the closed forms of Γ and M*.
-CLOSED_FORM_BUDGET = 5.0
+#: Largest size (SymPy operation count of Σ mᵢφᵢ plus Σ mᵢφᵢ², measured before simplifying) of a
+#: mode whose Γ and M* are put in closed form: a work cap, never a clock (:mod:`.work`).
+MAX_INPUT_OPS = 2000
 #: Longest closed form (SymPy operation count) printed.
 MAX_OPS = 400
 
@@ -207,22 +209,20 @@ def _closed_forms(model: Model, modes: ModeSet, records: list) -> tuple[list, li
     if modes is None or not modes.closed_form:
         return none
     g_out, m_out, s_out = list(none[0]), list(none[1]), list(none[2])
-    try:
-        with time_budget(CLOSED_FORM_BUDGET):
-            for j, (mode, shape) in enumerate(records):
-                if mode.multiplicity != 1 or not mode.exact:
-                    continue
-                a = sp.Add(*(mi * c for mi, c in zip(model.masses, shape)))
-                b = sp.Add(*(mi * c**2 for mi, c in zip(model.masses, shape)))
-                a, b = sp.radsimp(sp.cancel(sp.expand(a))), sp.radsimp(sp.cancel(sp.expand(b)))
-                root = sp.sqrt(b)
-                gamma = sp.factor(sp.cancel(a / root)) if not a.has(sp.cos, sp.sin) else a / root
-                meff = sp.factor(sp.cancel(a**2 / b)) if not a.has(sp.cos, sp.sin) else sp.cancel(a**2 / b)
-                if sp.count_ops(gamma) <= MAX_OPS and sp.count_ops(meff) <= MAX_OPS:
-                    g_out[j], m_out[j] = gamma, meff
-                    s_out[j] = tuple(c / root for c in shape)
-    except BudgetExceeded:
-        pass
+    for j, (mode, shape) in enumerate(records):
+        if mode.multiplicity != 1 or not mode.exact:
+            continue
+        a = sp.Add(*(mi * c for mi, c in zip(model.masses, shape)))
+        b = sp.Add(*(mi * c**2 for mi, c in zip(model.masses, shape)))
+        if ops(a) + ops(b) > MAX_INPUT_OPS:  # past the work cap: values only for this mode
+            continue
+        a, b = sp.radsimp(sp.cancel(sp.expand(a))), sp.radsimp(sp.cancel(sp.expand(b)))
+        root = sp.sqrt(b)
+        gamma = sp.factor(sp.cancel(a / root)) if not a.has(sp.cos, sp.sin) else a / root
+        meff = sp.factor(sp.cancel(a**2 / b)) if not a.has(sp.cos, sp.sin) else sp.cancel(a**2 / b)
+        if ops(gamma) <= MAX_OPS and ops(meff) <= MAX_OPS:
+            g_out[j], m_out[j] = gamma, meff
+            s_out[j] = tuple(c / root for c in shape)
     return g_out, m_out, s_out
 
 

@@ -31,14 +31,12 @@ class Derivation:
         return self.render()
 
 
-def derive(scene: Scene, budget: float | None = None, bundled: bool = False) -> Derivation:
+def derive(scene: Scene, bundled: bool = False) -> Derivation:
     """Build the model, its modes and the module text (SymPy is imported here).
 
     Parameters
     ----------
     scene : Scene
-    budget : float, optional
-        Seconds allowed for the closed-form mode search (default: ``modes.DEFAULT_BUDGET``).
     bundled : bool
         Whether the scene ships with springchain (only changes the header's regenerate hint).
     """
@@ -51,10 +49,10 @@ def derive(scene: Scene, budget: float | None = None, bundled: bool = False) -> 
         return Derivation(scene, model, modes, lambda: render_chain_module(model, bundled=bundled))
     from .codegen import render_module
     from .model import Model
-    from .modes import DEFAULT_BUDGET, closed_form_modes
+    from .modes import closed_form_modes
 
     model = Model(scene)
-    modes = closed_form_modes(model, budget=DEFAULT_BUDGET if budget is None else budget)
+    modes = closed_form_modes(model)
     return Derivation(scene, model, modes, lambda: render_module(model, modes, bundled=bundled))
 
 

@@ -117,10 +117,41 @@ def mode_records(model: Model, modes: ModeSet) -> list[dict]:
     return out
 
 
+def equilibrium_json(model: Model) -> dict | None:
+    """``{"x", "x_value", "closed_form", "how", "springs": [{"key", "extension", "stiffness", ...}]}``
+    for a scene with potentials, else None. Strings are SymPy's ``sstr`` (numbers for a numeric one)."""
+    eq = model.equilibrium
+    if eq is None:
+        return None
+    springs = []
+    for (a, b, *_), law, d, k in zip(model.springs, model.laws, eq.extensions, eq.stiffness):
+        springs.append({"key": law.key, "potential": sstr(law.energy) if law.given else None,
+                        "extension": sstr(d), "extension_value": _num(d, model),
+                        "stiffness": sstr(k), "stiffness_value": _num(k, model)})
+    return {"x": [sstr(v) for v in eq.x], "x_value": [_num(v, model) for v in eq.x],
+            "closed_form": eq.closed_form, "how": eq.how, "springs": springs}
+
+
+def equilibrium_lines(model: Model) -> list[str]:
+    """The static equilibrium for the text report (scenes with potentials)."""
+    eq = model.equilibrium
+    if eq is None:
+        return []
+    out = ["Static equilibrium (gradient of V and constant loads = 0): x_eq = ("
+           + ", ".join(sstr(v) for v in eq.x) + ")",
+           f"    found by: {eq.how}"]
+    for law, d, k in zip(model.laws, eq.extensions, eq.stiffness):
+        out.append(f"    {law.key}: extension d = {sstr(d)}, stiffness V''(d) = {sstr(k)}"
+                   + (f"  (= {_num(k, model):.10g})" if not k.is_Number else ""))
+    return out
+
+
 def modes_json(model: Model, modes: ModeSet) -> dict:
     sc = model.scene
     records = mode_records(model, modes)
     extra = {}
+    if model.equilibrium is not None:
+        extra["equilibrium"] = equilibrium_json(model)
     if model.damped:
         from .damping_report import damped_modes, json_fields
 
@@ -146,7 +177,7 @@ def modes_json(model: Model, modes: ModeSet) -> dict:
 
 def static_equilibrium(model: Model) -> list[sp.Expr] | None:
     """x_eq = K⁻¹ M g for a scene with gravity and no free piece (None otherwise)."""
-    if model.g is None or model.free_components:
+    if model.g is None or model.free_components or model.equilibrium is not None:
         return None
     rhs = sp.Matrix(model.gravity_force)
     sol = model.K.LUsolve(rhs) if model.scene.n <= MAX_MATRIX else None
@@ -156,7 +187,11 @@ def static_equilibrium(model: Model) -> list[sp.Expr] | None:
 def effect_notes(model: Model) -> list[str]:
     """Plain-language notes on the effects a scene declares."""
     notes = []
-    if model.g is not None:
+    if model.equilibrium is not None:
+        notes.append("spring potentials: modes are those of the linearisation about the static equilibrium "
+                     "x_eq (K = Hessian of V there); the exact modal solution does not apply (integrators only)"
+                     if not model.linear else "spring potentials: all quadratic with V'(0) = 0, i.e. linear springs")
+    if model.g is not None and model.equilibrium is None:
         eq = static_equilibrium(model)
         if eq is not None:
             notes.append("gravity: static equilibrium (sag) x_eq = K^-1 M g = ("
@@ -224,7 +259,8 @@ def render_text(model: Model, modes: ModeSet) -> str:
            + " (displacements from the springs' rest configuration)",
            "", *_energy_lines(model)]
     M, K, C, D = (MATRIX_TEXT[k] for k in "MKCD")  # bold: never read like a parameter named K
-    lhs = f"{M} x''" + (f" + {C} x'" if model.damped else "") + f" + {K} x" + (
+    lhs = f"{M} x''" + (f" + {C} x'" if model.damped else "") + (
+        " + grad V(x)" if Effect.POTENTIAL in model.effects else f" + {K} x") + (
         " + f_nl(x)" if Effect.CUBIC in model.effects else "")
     rhs = " + ".join([*(["F(t)"] if model.forces else []), *(["F_table(t)"] if model.table_forces else []),
                       *([f"{M} g"] if model.g is not None else [])]) or "0"
@@ -233,9 +269,12 @@ def render_text(model: Model, modes: ModeSet) -> str:
     out += ["L = T - V", "", f"Equations of motion: {lhs} = {rhs}",
             "Per mass (Euler-Lagrange; each term traced to its scene entry):"]
     out += ["    " + line for line in equation_lines(model)]
+    if model.equilibrium is not None:
+        out += [""] + equilibrium_lines(model)
     if n <= MAX_MATRIX:
         out += ["", f"{M} = d²T/dv² (mass matrix) =", _indent(_pretty(model.M)), "",
-                f"{K} = d²V/dx² (stiffness matrix) =", _indent(_pretty(model.K))]
+                f"{K} = d²V/dx² (stiffness matrix{' at x_eq' if model.equilibrium is not None else ''}) =",
+                _indent(_pretty(model.K))]
         if model.C is not None:
             out += ["", f"{C} = d²R/dv² (damping matrix) =", _indent(_pretty(model.C))]
         if model.rayleigh_targets is not None:
@@ -287,6 +326,8 @@ def render_latex(model: Model, modes: ModeSet) -> str:
     for i in range(len(model.scene.mass_names)):  # as the text: m_i a_i = the traced forces
         rhs = sp.Add(*(t.force for t in model.terms if t.coordinate == i))
         lines.append(rf"{L(model.masses[i] * model.a[i])} &= {L(rhs)} \\")
+    if model.equilibrium is not None:
+        lines.append(rf"x_{{\mathrm{{eq}}}} &= {L(sp.Matrix(model.equilibrium.x).T)} \\")
     lines += [rf"{M} &= {L(model.M)} \\", rf"{K} &= {L(model.K)} \\",
               rf"{D} &= {M}^{{-1/2}} {K} {M}^{{-1/2}} = {L(model.D)}"]
     for mode in modes.modes:

@@ -28,7 +28,9 @@ import numpy as np
 
 from ..generated.contract import END_WORDS, End
 from .errors import SceneError
-from .expr import CONSTANTS, FUNCTIONS, Expr, Num, accepted_form
+from .expr import CONSTANTS, Expr, Num, accepted_form
+from .expr_tree import RESERVED_FUNCTIONS
+from .expr import parse_expression
 from .scene_loader import _CHUNK, Loader, did_you_mean
 from .damping import DampingModel, parse_damping
 from .loads import FORCE_KEYS, Force, Ground, TableForce, parse_forces, parse_ground  # noqa: F401
@@ -37,7 +39,9 @@ from .scene_edit import DICT_FILE, from_dict
 WALL = -1
 
 #: Names with a meaning in the scene language (expression variables, functions, constants).
-VOCABULARY = frozenset({"t", "i", "n", *FUNCTIONS, *CONSTANTS})
+#: (The functions added for potentials, log tanh cosh sinh, and the extension ``d`` of a potential are
+#: not reserved: a parameter of that name only stops the scene from calling or using them.)
+VOCABULARY = frozenset({"t", "i", "n", *RESERVED_FUNCTIONS, *CONSTANTS})
 #: Names a parameter may not take. Everything generated code binds for itself is private
 #: (starts with "_", which scene names never do), so any other identifier is safe: a parameter
 #: only has to stay clear of the scene language and of "wall".
@@ -59,10 +63,13 @@ MAX_CHAIN = 10**7
 
 TOP_KEYS = ("name", "description", "parameters", "masses", "springs", "dampers", "forces",
             "gravity", "ground", "damping", "chain", "initial", "simulation")
-SPRING_KEYS = ("between", "k", "k3")
+SPRING_KEYS = ("between", "k", "k3", "potential")
 DAMPER_KEYS = ("between", "c")
 GRAVITY_KEYS = ("g",)
-CHAIN_KEYS = ("n", "mass", "k", "k3", "left", "right")
+CHAIN_KEYS = ("n", "mass", "k", "k3", "potential", "left", "right")
+#: The extension of a spring in a ``potential`` expression: d = x_b - x_a for between = [a, b]
+#: (a wall end counts 0); in a [chain], d = x_{i+1} - x_i for the spring i between masses i and i+1.
+EXTENSION = "d"
 CHAIN_ENDS = END_WORDS
 INITIAL_KEYS = ("x", "v")
 SIMULATION_KEYS = ("dt", "steps", "record_every")
@@ -71,14 +78,17 @@ SIMULATION_KEYS = ("dt", "steps", "record_every")
 class Spring:
     """A spring between masses ``a`` and ``b`` (``WALL`` = -1 for a fixed point).
 
-    Force on ``a`` is ``-(k*d + k3*d**3)`` with extension ``d = x_a - x_b``.
+    Either linear/cubic: force on ``a`` is ``-(k*d + k3*d**3)`` with ``d = x_a - x_b`` (the sign
+    does not matter for these even energies); or given by its energy ``potential`` = V(d), an
+    expression of the extension ``d = x_b - x_a`` (then ``k`` and ``k3`` are None).
     """
 
     a: int
     b: int
-    k: Expr
+    k: Expr | None
     k3: Expr | None
     key: str
+    potential: Expr | None = None
 
 
 @dataclass(frozen=True)
@@ -97,15 +107,16 @@ class Chain:
 
     n: int
     mass: Expr
-    k: Expr
+    k: Expr | None
     k3: Expr | None
     left: End
     right: End
+    #: The spring energy V(d) of every spring (d = x_{i+1} - x_i; may use i), instead of k/k3.
+    potential: Expr | None = None
 
     @property
     def uniform(self) -> bool:
-        return "i" not in self.mass.symbols() and "i" not in self.k.symbols() and (
-            self.k3 is None or "i" not in self.k3.symbols())
+        return all("i" not in e.symbols() for e in (self.mass, self.k, self.k3, self.potential) if e is not None)
 
 
 @dataclass(frozen=True)
@@ -194,9 +205,16 @@ class Scene:
 
     @property
     def linear(self) -> bool:
-        if self.chain is not None and self.chain.k3 is not None:
-            return False
-        return all(s.k3 is None for s in self.springs)
+        if self.chain is not None:
+            return self.chain.k3 is None and self.chain.potential is None
+        return all(s.k3 is None and s.potential is None for s in self.springs)
+
+    @property
+    def has_potential(self) -> bool:
+        """Whether some spring is given by its energy (``potential = "EXPR"``)."""
+        if self.chain is not None:
+            return self.chain.potential is not None
+        return any(s.potential is not None for s in self.springs)
 
     @property
     def parameter_names(self) -> tuple[str, ...]:
@@ -466,9 +484,20 @@ def _entries(ld: Loader, ends: _Ends, table: str, allowed: tuple[str, ...], requ
 
 
 def _springs(ld: Loader, ends: _Ends, pnames: frozenset[str], env: dict) -> tuple[Spring, ...]:
-    """``[[springs]]``: linear stiffness k > 0 and an optional cubic k3 != 0."""
+    """``[[springs]]``: linear stiffness k > 0 and an optional cubic k3 != 0, or the spring's energy
+    ``potential`` = V(d) instead (:func:`potential_expression`)."""
     springs = []
-    for key, s, (a, b) in _entries(ld, ends, "springs", SPRING_KEYS, ("between", "k")):
+    for j, s in enumerate(ld.array_of_tables("springs")):
+        key = f"springs[{j}]"
+        if "potential" in s:
+            ld.keys(s, ("between", "potential"), key, required=("between", "potential"),
+                    what="a [[springs]] entry with a potential (instead of k, k3)")
+            a, b = ends(f"{key}.between", s["between"])
+            springs.append(Spring(a, b, None, None, key, potential_expression(ld, f"{key}.potential",
+                                                                            s["potential"], pnames)))
+            continue
+        ld.keys(s, SPRING_KEYS, key, required=("between", "k"), what="a [[springs]] entry")
+        a, b = ends(f"{key}.between", s["between"])
         k = ld.expression(f"{key}.k", s["k"], pnames, positive=True, bounded=True, env=env)
         k3 = (ld.expression(f"{key}.k3", s["k3"], pnames, nonzero=True, bounded=True, env=env)
               if "k3" in s else None)
@@ -527,7 +556,11 @@ def _free_pieces(n: int, springs) -> int:
 
 def _chain(ld: Loader, pnames: frozenset[str], env: dict) -> Chain:
     c = ld.table("chain")
-    ld.keys(c, CHAIN_KEYS, "chain", required=("n", "mass", "k"), what="[chain]")
+    if "potential" in c:
+        ld.keys(c, tuple(k for k in CHAIN_KEYS if k not in ("k", "k3")), "chain",
+                required=("n", "mass", "potential"), what="[chain] with a potential (instead of k, k3)")
+    else:
+        ld.keys(c, CHAIN_KEYS, "chain", required=("n", "mass", "k"), what="[chain]")
     n = int(ld.number("chain.n", c["n"], positive=True, integer=True, maximum=MAX_CHAIN))
     left, right = c.get("left", "free"), c.get("right", "free")
     for key, v in (("chain.left", left), ("chain.right", right)):
@@ -543,11 +576,32 @@ def _chain(ld: Loader, pnames: frozenset[str], env: dict) -> Chain:
     spring_idx = range(-1 if left is End.WALL else 0, n if right.has_spring else n - 1)
     mass = ld.expression("chain.mass", c["mass"], names, positive=True, bounded=True, env=env,
                          index_range=range(n))
+    if "potential" in c:
+        return Chain(n, mass, None, None, left, right,
+                     potential_expression(ld, "chain.potential", c["potential"], names))
     k = ld.expression("chain.k", c["k"], names, positive=True, bounded=True, env=env,
                       index_range=spring_idx)
     k3 = (ld.expression("chain.k3", c["k3"], names, bounded=False, env=env, index_range=spring_idx)
           if "k3" in c else None)
     return Chain(n, mass, k, k3, left, right)
+
+
+def potential_expression(ld: Loader, key: str, text, names: frozenset[str]) -> Expr:
+    """A spring's energy V(d): a whitelisted expression of the extension ``d`` and ``names``.
+
+    Checked here: the syntax, and that V depends on d. Whether V is finite and twice
+    differentiable at the equilibrium, and stiff there (V'' > 0), needs the derivatives and the
+    equilibrium: the derivation checks it (:mod:`springchain.derive.equilibrium`), in one line too.
+    """
+    if EXTENSION in names:
+        raise ld.bad(f"parameters.{EXTENSION}", EXTENSION, "in a potential, d is the spring's extension",
+                     "another parameter name (e.g. d0) in a scene with potentials")
+    expr = parse_expression(text, names | {EXTENSION}, file=ld.file, key=key)
+    if EXTENSION not in expr.symbols():
+        raise ld.bad(key, text, "does not depend on the extension d",
+                     "the spring's energy as an expression of its extension d, e.g. "
+                     "\"k*d**2/2 + beta*d**4/4\"")
+    return expr
 
 
 def _initial(ld: Loader, key: str, value, n: int, chain: bool, pnames, env) -> np.ndarray:

@@ -14,12 +14,10 @@ import sympy as sp
 
 from .printing import latex, sstr
 from .model import Model
-from .modes import BudgetExceeded, time_budget
+from .work import MAX_DET_TERMS, WorkCapExceeded, check, det_terms_bound
 
 #: Largest scene whose transfer function is derived.
 MAX_MASSES = 6
-#: Seconds allowed for the symbolic cofactor, determinant and cancellation.
-BUDGET = 20.0
 
 
 @dataclass(frozen=True)
@@ -127,9 +125,10 @@ def _descending(poly: sp.Poly, coefficient, var: str, power=None, times: str = "
     return out[2:] if out.startswith("+ ") else "-" + out[2:]
 
 
-def transfer_function(model: Model, input: int, output: int, budget: float | None = BUDGET) -> TransferFunction | None:
+def transfer_function(model: Model, input: int, output: int) -> TransferFunction | None:
     """``H(s)`` from input mass ``input`` to output mass ``output`` (indices), or None when the
-    scene is too large (more than :data:`MAX_MASSES` masses) or the algebra exceeds ``budget`` s.
+    scene is too large (more than :data:`MAX_MASSES` masses) or the determinant is past the work
+    cap (:data:`work.MAX_DET_TERMS` terms, bounded before expanding it: a size, never a time).
     """
     n = model.scene.n
     if n > MAX_MASSES:
@@ -138,16 +137,16 @@ def transfer_function(model: Model, input: int, output: int, budget: float | Non
     C = model.C if model.C is not None else sp.zeros(n, n)
     Z = model.M * s**2 + C * s + model.K
     try:
-        with time_budget(budget):
-            minor = Z.copy()
-            minor.row_del(input)
-            minor.col_del(output)
-            cof = (-1) ** (input + output) * (minor.det(method="berkowitz") if n > 1 else sp.Integer(1))
-            ratio = sp.cancel(sp.expand(cof) / sp.expand(Z.det(method="berkowitz")))
-            num, den = sp.fraction(ratio)
-            num, den = sp.collect(sp.expand(num), s), sp.collect(sp.expand(den), s)
-    except BudgetExceeded:
+        check(det_terms_bound(Z.applyfunc(sp.expand)), MAX_DET_TERMS)  # the cofactor is smaller
+    except WorkCapExceeded:
         return None
+    minor = Z.copy()
+    minor.row_del(input)
+    minor.col_del(output)
+    cof = (-1) ** (input + output) * (minor.det(method="berkowitz") if n > 1 else sp.Integer(1))
+    ratio = sp.cancel(sp.expand(cof) / sp.expand(Z.det(method="berkowitz")))
+    num, den = sp.fraction(ratio)
+    num, den = sp.collect(sp.expand(num), s), sp.collect(sp.expand(den), s)
     values = {model.params[k]: v for k, v in model.scene.parameters.items() if k in model.params}
     if model.rayleigh_targets is not None:  # α_R, β_R of [damping] rayleigh_targets
         from .rayleigh_targets import values as rayleigh_values

@@ -79,9 +79,14 @@ class When(enum.Enum):
     ALWAYS = "always"
     MASSES = "[masses] scenes"
     CHAIN = "[chain] scenes"
+    PRINTED = "[masses] scenes of at most 12 masses (printed per mass)"
     UNIFORM_CHAIN = "uniform [chain] scenes (closed-form spectrum)"
     CUBIC = "[masses] scenes with cubic springs"
     CUBIC_CHAIN = "[chain] scenes with cubic springs"
+    POTENTIALS = "scenes with spring potentials (potential = \"EXPR\")"
+    POTENTIAL = "[masses] scenes with spring potentials"
+    POTENTIAL_CHAIN = "[chain] scenes with a spring potential"
+    EQUILIBRIUM_SOLVED = "[masses] potentials whose equilibrium has no closed form"
     DAMPED = "dampers or a damping model"
     DAMPER_LIST = "[[dampers]] entries"
     RAYLEIGH = "[damping] rayleigh"
@@ -133,7 +138,7 @@ ITEMS: tuple[Item, ...] = (
     Item("DEFAULTS", _C, "dict of str to float: the scene's parameter values"),
     Item("N", _C, "int: number of masses (a chain's default n)"),
     Item("EFFECTS", _C, "tuple of str: the Lagrangian's effects ('spring', 'damper', 'gravity', ...)"),
-    Item("LINEAR", _C, "bool: no cubic springs"),
+    Item("LINEAR", _C, "bool: no cubic springs, no spring potentials other than quadratic ones"),
     Item("RIGID_MODES", _C, "int: rigid-body modes (free pieces)"),
     Item("MASS_NAMES", _C, "tuple of str, (N,)", When.MASSES),
     Item("SPRING_ENDS", _C, "tuple of (int, int), (S, 2): mass indices, -1 a wall", When.MASSES),
@@ -150,6 +155,10 @@ ITEMS: tuple[Item, ...] = (
     Item("GROUND", _C, "str: a Ground word", When.GROUND),
     Item("GROUND_HARMONIC", _C, "bool: a_g(t) is constant + harmonic", When.GROUND_EXPRESSION),
     Item("GROUND_DISPLACEMENT", _C, "bool: ground_motion() exists", When.GROUND_EXPRESSION),
+    Item("EQUILIBRIUM_CLOSED_FORM", _C, "bool: equilibrium() is a closed form (any parameter values)",
+         When.POTENTIAL),
+    Item("EQUILIBRIUM_AT_DEFAULTS", _C, "tuple of float, (N,): x_eq solved at DEFAULTS", When.EQUILIBRIUM_SOLVED),
+    Item("POTENTIAL_LAW_INDEXED", _C, "bool: the spring law depends on the spring index i", When.POTENTIAL_CHAIN),
     # -- functions: springs and modes --------------------------------------------------------
     Item("masses", _F, "ndarray (N,)"),
     Item("spring_constants", _F, "ndarray (S,), in SPRING_ENDS / spring_ends() order"),
@@ -157,6 +166,8 @@ ITEMS: tuple[Item, ...] = (
     Item("spring_cubic_constants", _F, "ndarray (S,): k3 of each spring", When.CUBIC_CHAIN),
     Item("cubic_constants", _F, "ndarray (S,): k3 of each spring", When.CUBIC),
     Item("acceleration", "(x, **parameters)", "ndarray (N, ...): a(x) = -M^-1 dV/dx"),
+    Item("scalar_force", "(x, t, out, p)", "None: writes a(x) + a_ext(t) into out (N,); p the parameter values "
+         "in PARAMETERS order; straight-line scalar code (numba-compilable)", When.PRINTED),
     Item("make_acceleration", _F, "callable x (N, ...) -> (N, ...): a(x) with constants bound"),
     Item("energy", "(x, v, **parameters)", "ndarray (...): T + V"),
     Item("mass_matrix", _F, "ndarray (N, N); chains: n <= MAX_DENSE"),
@@ -166,6 +177,14 @@ ITEMS: tuple[Item, ...] = (
     Item("omega2", _F, "ndarray (N,): squared angular frequencies, ascending"),
     Item("mode_shapes", _F, "ndarray (N, N): shapes as columns, in omega2() order", When.MASSES),
     Item("mode_omega", _F, "ndarray (n,): angular frequency of mode j, j = 0 ... n-1", When.UNIFORM_CHAIN),
+    # -- functions: spring potentials --------------------------------------------------------
+    Item("equilibrium", _F, "ndarray (N,): the static equilibrium x_eq (displacements)", When.POTENTIALS),
+    Item("spring_tensions", "(x, **parameters)", "ndarray (S, ...): V'(d) of each spring", When.POTENTIAL),
+    Item("spring_stiffnesses", "(x, **parameters)", "ndarray (S, ...): V''(d) of each spring", When.POTENTIAL),
+    Item("spring_force", "(d, [i,] **parameters)", "ndarray d.shape: the chain law's tension V'(d)",
+         When.POTENTIAL_CHAIN),
+    Item("spring_energy", "(d, [i,] **parameters)", "ndarray d.shape: V(d) - V(0)", When.POTENTIAL_CHAIN),
+    Item("spring_stiffness", "(d, [i,] **parameters)", "ndarray d.shape: V''(d)", When.POTENTIAL_CHAIN),
     # -- functions: damping --------------------------------------------------------------------
     Item("damping_matrix", _F, "ndarray (N, N): C; chains: n <= MAX_DENSE", When.DAMPED),
     Item("damping_acceleration", "(v, **parameters)", "ndarray (N, ...): -M^-1 C v", When.DAMPED),
@@ -221,6 +240,10 @@ class Provided:
     ground : Ground or None
     ground_harmonic, ground_displacement, forcing_harmonic : bool
     table_force_on : tuple of int
+    equilibrium_closed_form : bool
+        ``equilibrium()`` holds for any parameter values (True without potentials: x_eq = 0 or none).
+    law_indexed : bool
+        A ``[chain]`` potential whose law depends on the spring index (not compiled into the kernels).
     functions : frozenset of str
         The contract functions the module defines.
     """
@@ -244,11 +267,18 @@ class Provided:
     ground_displacement: bool = False
     forcing_harmonic: bool = False
     table_force_on: tuple[int, ...] = ()
+    equilibrium_closed_form: bool = True
+    law_indexed: bool = False
     functions: frozenset[str] = field(default=frozenset(), repr=False)
 
     @property
     def chain(self) -> bool:
         return self.layout is Layout.CHAIN
+
+    @property
+    def potential(self) -> bool:
+        """Spring potentials (``potential = "EXPR"``): the module binds ``equilibrium()``."""
+        return "equilibrium" in self.functions
 
     def has(self, name: str) -> bool:
         """Whether the module defines the contract function ``name``."""
@@ -287,6 +317,8 @@ def read(module: ModuleType) -> Provided:
         ground_displacement=bool(getattr(module, "GROUND_DISPLACEMENT", False)),
         forcing_harmonic=bool(getattr(module, "FORCING_HARMONIC", False)),
         table_force_on=tuple(int(i) for i in getattr(module, "TABLE_FORCE_ON", ())),
+        equilibrium_closed_form=bool(getattr(module, "EQUILIBRIUM_CLOSED_FORM", True)),
+        law_indexed=bool(getattr(module, "POTENTIAL_LAW_INDEXED", False)),
         functions=frozenset(item.name for item in ITEMS if item.function and callable(getattr(module, item.name, None))))
 
 

@@ -169,6 +169,32 @@ def acceleration(_x, g, k, m):
     return _out
 
 
+def scalar_force(_x, t, _out, _p):
+    """a(x) + a_ext(t) as straight-line scalar code (springs, cubic terms, gravity, expression forces,
+    ground acceleration), written into ``_out``: compiled by numeric (numba) for the small-scene loops.
+
+    Parameters
+    ----------
+    _x : ndarray, shape (N,)
+    t : float
+    _out : ndarray, shape (N,)
+        Overwritten with the acceleration.
+    _p : ndarray, shape (P,)
+        The parameter values in PARAMETERS order.
+    """
+    _scalar_force_terms(_x, t, _out, _p[0], _p[1], _p[2])  # the parameters in PARAMETERS order
+
+
+def _scalar_force_terms(_x, t, _out, g, k, m):
+    """scalar_force() with the parameters as arguments (the body numba compiles)."""
+    _x_m1 = _x[0]
+    _x_m2 = _x[1]
+    _x_m3 = _x[2]
+    _out[0] = (-_x_m1*k + g*m - k*(_x_m1 - _x_m2))/m
+    _out[1] = (g*m + k*(_x_m1 - _x_m2) - k*(_x_m2 - _x_m3))/m
+    _out[2] = (1/2)*(2*g*m + k*(_x_m2 - _x_m3))/m
+
+
 def make_acceleration(g, k, m):
     """acceleration() with the parameters bound: -M⁻¹K and g formed once; x shape (N,) or (N, B)."""
     _inv_m = 1.0 / _masses(g=g, k=k, m=m)
@@ -202,6 +228,7 @@ _dynamical_matrix = dynamical_matrix
 _omega2 = omega2
 _mode_shapes = mode_shapes
 _acceleration = acceleration
+_scalar_force = scalar_force
 _make_acceleration = make_acceleration
 _gravity_forces = gravity_forces
 _energy = energy

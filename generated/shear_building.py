@@ -189,6 +189,32 @@ def acceleration(_x, k, m):
     return _out
 
 
+def scalar_force(_x, t, _out, _p):
+    """a(x) + a_ext(t) as straight-line scalar code (springs, cubic terms, gravity, expression forces,
+    ground acceleration), written into ``_out``: compiled by numeric (numba) for the small-scene loops.
+
+    Parameters
+    ----------
+    _x : ndarray, shape (N,)
+    t : float
+    _out : ndarray, shape (N,)
+        Overwritten with the acceleration.
+    _p : ndarray, shape (P,)
+        The parameter values in PARAMETERS order.
+    """
+    _scalar_force_terms(_x, t, _out, _p[0], _p[1])  # the parameters in PARAMETERS order
+
+
+def _scalar_force_terms(_x, t, _out, k, m):
+    """scalar_force() with the parameters as arguments (the body numba compiles)."""
+    _x_floor1 = _x[0]
+    _x_floor2 = _x[1]
+    _x_floor3 = _x[2]
+    _out[0] = (-_x_floor1*k - k*(_x_floor1 - _x_floor2))/m
+    _out[1] = (k*(_x_floor1 - _x_floor2) - k*(_x_floor2 - _x_floor3))/m
+    _out[2] = k*(_x_floor2 - _x_floor3)/m
+
+
 def make_acceleration(k, m):
     """acceleration() with the parameters bound: -M⁻¹K formed once; x shape (N,) or (N, B)."""
     _inv_m = 1.0 / _masses(k=k, m=m)
@@ -237,6 +263,7 @@ _dynamical_matrix = dynamical_matrix
 _omega2 = omega2
 _mode_shapes = mode_shapes
 _acceleration = acceleration
+_scalar_force = scalar_force
 _make_acceleration = make_acceleration
 _damping_acceleration = damping_acceleration
 _ground_table_acceleration = ground_table_acceleration

@@ -36,8 +36,8 @@ from typing import Callable
 
 import numpy as np
 
-from .bench_runs import (adaptive_rtols, adaptive_sweep, energy_norm, progress_reporter, report_run,
-                          selected_in_order, timed_run)
+from .bench_runs import (adaptive_rtols, adaptive_sweep, compile_note, energy_norm, progress_reporter,
+                          report_run, selected_in_order, timed_run)
 from .plan import Planner, exact_method, with_tolerance
 from .plan_pilot import check_pilot, needs_pilot
 from .progress import Reporter
@@ -251,13 +251,15 @@ def run_bench(system: System, x0: np.ndarray, v0: np.ndarray, t_end: float, dt_o
     records = [job() for job in jobs]
     for m, rtols in adaptive_jobs:
         records += adaptive_sweep(m, rtols, config.adaptive_cap, lambda rtol, m=m: _run_adaptive(ctx, m, rtol),
-                                  notes, prog)
+                                  notes, prog, config.adaptive_seconds_cap)
     horizons: tuple[HorizonCurve, ...] = ()
     if exact and methods is None:
         horizons, hnotes = horizon_study(ctx)
         notes.extend(hnotes)
     desc = reference.description
+    notes.append(compile_note())
     return BenchResult(scene, t_end, exact, desc, tuple(records), horizons, tuple(notes))
+
 
 
 # -- error against horizon ---------------------------------------------------------------------------

@@ -95,7 +95,11 @@ def run_pilot_bench(system: System, x0: np.ndarray, v0: np.ndarray, t_end: float
             report_run(prog, rec)
             return rec
 
-        records += adaptive_sweep(m, adaptive_rtols(m, config), config.adaptive_cap, run, notes, prog)
+        records += adaptive_sweep(m, adaptive_rtols(m, config), config.adaptive_cap, run, notes, prog,
+                                  config.adaptive_seconds_cap)
+    from .bench_runs import compile_note
+
+    notes.append(compile_note())
     return BenchResult(scene, t_end, False, ref.description, tuple(records), (), tuple(notes))
 
 

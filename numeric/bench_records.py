@@ -58,6 +58,9 @@ class BenchConfig:
         Largest force evaluations of one fixed-step run in the sweep, per 100 time units of horizon.
     adaptive_cap : int
         An adaptive method's sweep stops after a run with more evaluations (per 100 time units).
+    adaptive_seconds_cap : float
+        ... or after a run longer than this many seconds (its tighter tolerances only cost more;
+        keeps a long horizon on a nonlinear scene within minutes).
     target_errors : tuple of float
         Errors the fixed-step sweep aims at (through the planner's model; linear scenes).
     rtols : tuple of float
@@ -72,6 +75,7 @@ class BenchConfig:
     quick: bool = False
     eval_cap: int = 200_000
     adaptive_cap: int = 200_000
+    adaptive_seconds_cap: float = 4.0
     target_errors: tuple = tuple(10.0 ** -k for k in range(1, 14))
     rtols: tuple = tuple(10.0 ** -k for k in range(3, 14))
     dop853_rtols: tuple = tuple(10.0 ** (-k / 2) for k in range(6, 28))

@@ -55,22 +55,33 @@ def adaptive_rtols(method: Method, config: BenchConfig) -> tuple[float, ...]:
 
 
 def adaptive_sweep(method: Method, rtols, cap: int, run: Callable[[float], BenchRecord], notes: list[str],
-                   prog: Reporter) -> list[BenchRecord]:
+                   prog: Reporter, seconds_cap: float = float("inf")) -> list[BenchRecord]:
     """Records of ``run(rtol)`` for tightening tolerances, stopping after the first run over ``cap``
-    force evaluations (a note says which tolerances were not run)."""
+    force evaluations or ``seconds_cap`` seconds (a note says which tolerances were not run)."""
     out = []
     for rtol in rtols:
         rec = run(rtol)
         out.append(rec)
-        if rec.force_evals > cap:
+        if rec.force_evals > cap or rec.seconds > seconds_cap:
             skipped = [r for r in rtols if r < rtol]
             if skipped:
-                notes.append(f"{method.name}: stopped at rtol={rtol:.0e} ({rec.force_evals} evaluations > cap "
-                             f"{cap}); not run: rtol " + ", ".join(f"{r:.0e}" for r in skipped))
+                why = (f"{rec.force_evals} evaluations > cap {cap}" if rec.force_evals > cap
+                       else f"{rec.seconds:.1f} s > {seconds_cap:g} s")
+                notes.append(f"{method.name}: stopped at rtol={rtol:.0e} ({why}); not run: rtol "
+                             + ", ".join(f"{r:.0e}" for r in skipped))
                 prog.total -= len(skipped)
             break
     return out
 
 
-__all__ = ["energy_norm", "progress_reporter", "report_run", "timed_run", "selected_in_order", "adaptive_rtols",
+def compile_note() -> str:
+    """The one line that reports the compiled loops' compile (or disk-cache load) time, kept out of every
+    timing (each run is timed after a warm-up call)."""
+    from .compiled.run import compile_seconds
+
+    return (f"compiled loops (small [masses] scenes): {compile_seconds():.1f} s to compile or load from the "
+            f"disk cache, once, in no timing")
+
+
+__all__ = ["compile_note", "energy_norm", "progress_reporter", "report_run", "timed_run", "selected_in_order", "adaptive_rtols",
            "adaptive_sweep"]

@@ -51,6 +51,7 @@ from ..generated.contract import MAX_DENSE, End
 from .system import interface
 from .errors import RunRefused
 from .modal import tsinc
+from .sine_transform import dst1
 
 #: Largest index-dependent chain solved through its (dense) eigenvectors.
 MAX_FALLBACK = MAX_DENSE
@@ -88,12 +89,12 @@ def _forward(basis: Basis, x: np.ndarray) -> np.ndarray:
     if basis is Basis.DCT:
         return scipy.fft.dct(x, type=2, norm="ortho", axis=0)
     if basis is Basis.DST:
-        return scipy.fft.dst(x, type=1, norm="ortho", axis=0)
+        return dst1(x, axis=0)
     if basis is Basis.FFT:
         return scipy.fft.rfft(x, axis=0)
     pad = np.zeros((2 * n,) + x.shape[1:])
     pad[:n] = x
-    return scipy.fft.dst(pad, type=1, axis=0)[0::2] / np.sqrt(2 * n + 1)
+    return np.sqrt(2.0) * dst1(pad, axis=0)[0::2]
 
 
 def _inverse(basis: Basis, q: np.ndarray, n: int, axis: int) -> np.ndarray:
@@ -101,13 +102,13 @@ def _inverse(basis: Basis, q: np.ndarray, n: int, axis: int) -> np.ndarray:
     if basis is Basis.DCT:
         return scipy.fft.idct(q, type=2, norm="ortho", axis=axis)
     if basis is Basis.DST:
-        return scipy.fft.idst(q, type=1, norm="ortho", axis=axis)
+        return dst1(q, axis=axis)  # orthonormal DST-I: its own inverse
     if basis is Basis.FFT:
         return scipy.fft.irfft(q, n=n, axis=axis)
     q = np.moveaxis(q, axis, 0)
     pad = np.zeros((2 * n,) + q.shape[1:])
     pad[0::2] = q
-    x = scipy.fft.dst(pad, type=1, axis=0)[:n] / np.sqrt(2 * n + 1)
+    x = np.sqrt(2.0) * dst1(pad, axis=0)[:n]
     return np.moveaxis(x, 0, axis)
 
 
@@ -182,7 +183,8 @@ class ChainModal:
         if not facts.chain:
             raise RunRefused("ChainModal needs a [chain] scene's generated module; use numeric.modal for others")
         if not facts.linear:
-            raise RunRefused("no exact solution: this chain has cubic springs (use an integrator, e.g. verlet)")
+            raise RunRefused("no exact solution: this chain has cubic springs or spring potentials "
+                             "(use an integrator, e.g. verlet)")
         values = dict(facts.defaults)
         values.update(params or {})
         x0, v0 = _initial(x0, v0)

@@ -30,7 +30,9 @@ stencil (:data:`Backend.NUMPY`), which is also what the tests compare with.
 Chain ends follow the generated modules: ``free``, ``wall`` (a spring
 ``k(-1)`` to a wall on the left, ``k(n-1)`` on the right) or ``ring`` (the
 spring ``k(n-1)`` closes n-1 to 0); masses and springs may depend on the
-index (then read from arrays) and springs may be cubic (``k d + k3 d³``).
+index (then read from arrays) and springs may be cubic (``k d + k3 d³``) or any potential
+``V(d)`` whose law is free of the index: its tension ``V'(d)``, compiled from the generated
+module's ``spring_force`` (:mod:`numeric.potential_law`), takes the cubic term's place.
 """
 
 import enum
@@ -45,7 +47,7 @@ from ..generated.contract import End
 from .system import interface
 from .errors import RunRefused
 from .fast_coefficients import ChainCoefficients
-from .fast_kernels import BLOCK_ELEMENTS, _compiled, _Mode, available, stream_update
+from .fast_kernels import BLOCK_ELEMENTS, _compiled, _compiled_for_laws, _Mode, available, stream_update
 
 
 class Backend(enum.Enum):
@@ -103,7 +105,12 @@ class FusedVerlet:
         coeffs = ChainCoefficients.from_module(module, params, n)
         values = dict(interface(module).defaults)
         values.update(params or {})
-        backend = default_backend() if backend is None else backend
+        law_missing = interface(module).potential and coeffs.law is None  # an index-dependent potential
+        if backend is None:
+            backend = Backend.NUMPY if law_missing else default_backend()
+        if backend is Backend.NUMBA and law_missing and available():
+            raise RunRefused("the fused chain step compiles index-free spring potentials only; this chain's "
+                             "potential depends on i: use the NumPy backend")
         if backend is Backend.NUMBA and not available():
             raise RunRefused("the fused chain step needs numba: install the `fast` extra "
                              "(pip install 'springchain[fast]') or use the NumPy backend")
@@ -120,7 +127,7 @@ class FusedVerlet:
         return self.acceleration(x)
 
     def _kernels(self):
-        k = _compiled()
+        k = _compiled_for_laws() if self.coefficients.law is not None else _compiled()
         return k.force, k.sweep, k.half_kick
 
     # -- building blocks ------------------------------------------------------------------
@@ -248,5 +255,37 @@ def chain_verlet_advance(module: ModuleType, params: dict[str, float] | None, n:
     return FusedVerlet.from_module(module, params, n, h, backend).advance
 
 
+#: Chains with at least this many masses evaluate a potential's forces through the compiled kernel in
+#: every step method (below it the module's NumPy stencil is as fast, and needs no compiling).
+COMPILED_FORCE_MIN_N = 1 << 14
+
+
+def compiled_acceleration(module: ModuleType, values: dict[str, float], n: int):
+    """``a(x)`` of a potential chain through the compiled kernel (x shape (n,) or (n, B)), for the
+    step methods other than Verlet; None below :data:`COMPILED_FORCE_MIN_N` masses, without numba or
+    for an index-dependent law."""
+    facts = interface(module)
+    if n < COMPILED_FORCE_MIN_N or not facts.potential or facts.law_indexed or not available():
+        return None
+    fv = FusedVerlet.from_module(module, values, n, 1.0, Backend.NUMBA)
+
+    def acceleration(x):
+        return fv.force(np.ascontiguousarray(x, dtype=np.float64))
+
+    return acceleration
+
+
+def acceleration_of(system) -> Callable[[np.ndarray], np.ndarray]:
+    """The conservative acceleration a(x) the step and adaptive methods evaluate: a long chain with an
+    index-free spring potential through its compiled law (:func:`compiled_acceleration`), every other
+    system through :attr:`System.acceleration_fn`."""
+    if system.chain and system.potential:
+        fast = compiled_acceleration(system.module, system.params, system.n)
+        if fast is not None:
+            return fast
+    return system.acceleration_fn
+
+
 __all__ = ["Backend", "End", "ChainCoefficients", "FusedVerlet", "available", "default_backend",
-           "chain_verlet_kernel", "chain_verlet_advance", "stream_update", "BLOCK_ELEMENTS"]
+           "chain_verlet_kernel", "chain_verlet_advance", "stream_update", "BLOCK_ELEMENTS",
+           "COMPILED_FORCE_MIN_N", "compiled_acceleration", "acceleration_of"]

@@ -36,6 +36,10 @@ class ChainCoefficients:
         Their cubic coefficients (0 if absent or linear).
     uniform : bool
         Coefficients independent of the index (arrays of length 1).
+    law : callable or None
+        A spring potential's tension V'(d), compiled by numba with the parameters bound
+        (:func:`numeric.potential_law.compiled_law`); then ``k`` holds the stiffness V''(0) (for the
+        ω_max bound) and the kernels get the law in place of k d + k3 d³. None otherwise.
     """
 
     n: int
@@ -49,6 +53,7 @@ class ChainCoefficients:
     k3_left: float
     k3_right: float
     uniform: bool
+    law: object = field(default=None, repr=False, compare=False)
 
     @classmethod
     def from_module(cls, module: ModuleType, params: dict[str, float] | None = None,
@@ -82,7 +87,12 @@ class ChainCoefficients:
         k_right = float(ks[-1]) if right in (End.WALL, End.RING) else 0.0
         k3 = None
         k3_left = k3_right = 0.0
-        if not facts.linear:  # spring_cubic_constants(): spring_constants() order
+        law = None
+        if facts.potential:  # a spring potential: the compiled law (index-free laws only)
+            from .potential_law import compiled_law
+
+            law = None if facts.law_indexed else compiled_law(module, values)
+        elif not facts.linear:  # spring_cubic_constants(): spring_constants() order
             k3s = np.asarray(module.spring_cubic_constants(**values, n=n), dtype=float)
             k3 = np.array(k3s[off:off + n - 1])
             if left is End.WALL:
@@ -97,7 +107,7 @@ class ChainCoefficients:
             inv = 1.0 / m
             kk = inner.copy() if n > 1 else np.zeros(1)
             k3a = None if k3 is None else (k3.copy() if n > 1 else np.zeros(1))
-        return cls(n, left, right, inv, kk, k3a, k_left, k_right, k3_left, k3_right, uniform)
+        return cls(n, left, right, inv, kk, k3a, k_left, k_right, k3_left, k3_right, uniform, law)
 
     @property
     def cubic(self) -> bool:
@@ -118,6 +128,10 @@ class ChainCoefficients:
         Floats for a uniform chain and arrays otherwise (the kernels are
         specialised on these types); None for the cubic ones of a linear chain.
         """
+        if self.law is not None:  # the law is the whole tension: linear coefficients 0, the law in k3's place
+            im = float(self.inv_mass[0]) if self.uniform else self.inv_mass
+            k = 0.0 if self.uniform else np.zeros_like(self.k)
+            return (self.n, im, k, self.law, 0.0, 0.0, self.law, self.law, self.left.code, self.right.code)
         if self.uniform:
             im, k = float(self.inv_mass[0]), float(self.k[0])
             k3 = None if self.k3 is None else float(self.k3[0])

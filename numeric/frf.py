@@ -5,8 +5,10 @@ mass, never from K or C formed in float64 (adding a small spring to a large one 
 away): ``[masses]`` scenes by the certified modal solve of :mod:`numeric.frf_dense` (refined with
 residuals in extended precision, mpmath where float64 cannot be certified), open ``[chain]``
 scenes by dynamic stiffness (:mod:`numeric.frf_chain`, O(n) per frequency, relatively accurate),
-rings by a tridiagonal solve with one Sherman–Morrison correction; never an N × N matrix for a
-chain. Cubic springs enter by their linear part (the response of the linearisation about
+rings of at most :data:`RING_DENSE` masses by the certified modal solve as well, longer rings by a
+tridiagonal solve with one Sherman–Morrison correction, refined with residuals from the elements,
+certified per frequency and refused in one line where that fails at an element contrast above
+:data:`RING_CONTRAST` (never an N × N matrix for a long chain). Cubic springs enter by their linear part (the response of the linearisation about
 x = 0); gravity, forces and ground motion do not change H.
 
 The grid
@@ -28,6 +30,7 @@ of a peak.
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -48,6 +51,17 @@ UNDAMPED_GAP = 1e-4
 SILENT_GAP = 1e-2
 #: Below this ζ a resonance counts as undamped.
 UNDAMPED_ZETA = 1e-9
+#: Largest ring solved by the certified modal route of :mod:`numeric.frf_dense` (the tridiagonal
+#: solve with a Sherman–Morrison corner loses κ·ε: 1e-9 N/m next to 1e3 N/m springs): the rings
+#: whose every frequency it certifies or settles in mpmath (``frf_dense.MPMATH_MAX_MASSES``).
+RING_DENSE = 24
+#: Element contrast (largest over smallest spring, dashpot or mass) of a longer ring above which an
+#: uncertified frequency is refused; below it the refined tridiagonal value is returned.
+RING_CONTRAST = 1e6
+#: Largest certified relative error of |H| accepted from the tridiagonal solve of a long ring.
+RING_CERTIFIED = 1e-10
+#: Refinement steps of a long ring's solve (residuals from the elements) before it is refused.
+REFINE_RING = 3
 #: Frequencies solved at once by the dense path (bounds the (W, N, N) stack to ~32 MB).
 _DENSE_BYTES = 32 * 2**20
 
@@ -69,6 +83,8 @@ class Operator:
     banded: bool = False
     dense: object = field(default=None, repr=False)
     chain: object = field(default=None, repr=False)
+    #: A long ring's elements (:class:`numeric.elements.Elements`): certify the tridiagonal solve.
+    elements: object = field(default=None, repr=False)
 
     @property
     def n(self) -> int:
@@ -114,6 +130,11 @@ def operator(system: System) -> Operator:
         impedances = chain_elements(el.masses, el.spring_ends, el.stiffness, el.damper_ends, el.damping)
         zero = (np.zeros(n), np.zeros(max(n - 1, 0)), 0.0)
         return Operator(system.masses, zero, zero if el.damped else None, True, chain=impedances)
+    dense = None
+    if n <= RING_DENSE:
+        from .frf_dense import DenseReceptance
+
+        dense = DenseReceptance.from_elements(el)
     diag, off = (np.asarray(b, dtype=float) for b in mod.stiffness_bands(**p, n=n))
     if n == 2 and system.spring_ends.shape[0] > 1:  # a two-mass ring: both springs join 0 and 1
         inner = (system.spring_ends >= 0).all(axis=1)
@@ -125,7 +146,7 @@ def operator(system: System) -> Operator:
             C = _bands_of_dense(np.asarray(mod.damping_matrix(**p, n=n), dtype=float))
         except ValueError as exc:
             raise RunRefused(f"frequency response of a damped chain of {n} masses: {exc}") from None
-    return Operator(system.masses, K, C, True)
+    return Operator(system.masses, K, C, True, dense=dense, elements=None if dense is not None else el)
 
 
 # -- solves -------------------------------------------------------------------------------------------
@@ -172,33 +193,110 @@ def receptance(op: Operator, omega: np.ndarray, input: int, output: int, certify
 
 
 def _receptance_banded(op: Operator, omega: np.ndarray, input: int, output: int) -> np.ndarray:
-    """Tridiagonal (LAPACK ``gbsv``) solve per frequency; a ring corner by Sherman–Morrison."""
+    """Tridiagonal (LAPACK ``gtsv``) solve per frequency; a ring corner by Sherman–Morrison. With
+    ``op.elements`` (a long ring) each value is refined with residuals from the elements and
+    certified (:func:`_certificate`, the corrections kept apart: a double-length solution), or refused
+    in one line."""
     kd, ko, kc = op.K
     cd, co, cc = op.C if op.C is not None else (0.0 * kd, 0.0 * ko, 0.0)
     n = op.n
-    b = np.zeros((n, 2), dtype=complex)
+    b = np.zeros((n, 2), dtype=complex)  # the unit force on the input, and on the output (certificate)
     b[input, 0] = 1.0
+    b[output, 1] = 1.0
     gtsv = scipy.linalg.lapack.get_lapack_funcs("gtsv", dtype=complex)
     out = np.empty(omega.shape[0], dtype=complex)
     for j, w in enumerate(omega):  # one O(n) tridiagonal solve (LAPACK zgtsv, partial pivoting) per frequency
         diag = kd - w * w * op.masses + 1j * w * cd
         offd = ko + 1j * w * co
-        a = kc + 1j * w * cc
-        if a == 0:
-            yq = _gtsv(gtsv, offd, diag, b[:, :1])
-            out[j] = yq[output, 0]
+        solve = functools.partial(_ring_solve, gtsv, offd, diag, kc + 1j * w * cc)
+        y = solve(b[:, :1] if op.elements is None else b)
+        out[j] = y[output, 0]
+        if op.elements is None:
             continue
-        gamma = -diag[0]  # Z = T' + u vᵀ, u = (γ, 0, …, a), v = (1, 0, …, a/γ)
-        diag[0] -= gamma
-        diag[-1] -= a * a / gamma
-        b[:, 1] = 0.0
-        b[0, 1], b[-1, 1] = gamma, a
-        yq = _gtsv(gtsv, offd, diag, b)
-        y, q = yq[:, 0], yq[:, 1]
-        vy = y[0] + (a / gamma) * y[-1]
-        vq = q[0] + (a / gamma) * q[-1]
-        out[j] = y[output] - q[output] * vy / (1.0 + vq)
+        x, x_lo = y[:, 0], np.zeros(n, dtype=complex)  # a double-length solution: corrections kept apart
+        for _ in range(REFINE_RING):
+            bound, r = _certificate(op.elements, w, x, y[:, 1], input, x_lo)
+            if bound <= RING_CERTIFIED * abs(x[output] + x_lo[output]):
+                break
+            x_lo = x_lo + solve(r[:, None])[:, 0]
+        else:
+            bound, _ = _certificate(op.elements, w, x, y[:, 1], input, x_lo)
+        out[j] = x[output] + x_lo[output]
+        if not bound <= RING_CERTIFIED * abs(out[j]) and _contrast(op.elements) > RING_CONTRAST:
+            raise RunRefused(
+                f"frequency response of a ring of {n} masses at omega = {w:.6g} rad/s: float64 cannot "
+                f"certify |H| to {RING_CERTIFIED:g} (error bound {bound / max(abs(out[j]), 1e-300):.2g} "
+                f"relative at element contrast {_contrast(op.elements):.2g}); rings of at most {RING_DENSE} "
+                "masses are solved accurately at any contrast", quantity="frf")
     return out
+
+
+def _ring_solve(gtsv, offd: np.ndarray, diag: np.ndarray, a: complex, b: np.ndarray) -> np.ndarray:
+    """``X`` of the symmetric tridiagonal system with corner coupling ``a`` (0: none), b shape (n, r)."""
+    if a == 0:
+        return _gtsv(gtsv, offd, diag.copy(), b)
+    diag = diag.copy()
+    gamma = -diag[0]  # Z = T' + u vᵀ, u = (γ, 0, …, a), v = (1, 0, …, a/γ)
+    diag[0] -= gamma
+    diag[-1] -= a * a / gamma
+    u = np.zeros((b.shape[0], 1), dtype=complex)
+    u[0, 0], u[-1, 0] = gamma, a
+    yq = _gtsv(gtsv, offd, diag, np.hstack([b, u]))
+    y, q = yq[:, :-1], yq[:, -1]
+    vy = y[0] + (a / gamma) * y[-1]
+    vq = q[0] + (a / gamma) * q[-1]
+    return y - q[:, None] * (vy / (1.0 + vq))[None, :]
+
+
+def _contrast(el) -> float:
+    """Largest over smallest nonzero spring, dashpot and mass of a scene (each kind apart)."""
+    out = 1.0
+    for v in (el.stiffness, el.damping, el.masses):
+        v = np.abs(np.asarray(v, dtype=float))
+        v = v[v > 0]
+        if v.size:
+            out = max(out, float(v.max() / v.min()))
+    return out
+
+
+def _apply(n: int, ends: np.ndarray, values: np.ndarray, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """``Σ v b bᵀ x`` over elements from their stretches, and ``Σ |v b bᵀ x|`` (what rounding can hide);
+    ends (E, 2) with -1 for a wall, values (E,), x (N,); both shape (N,)."""
+    a, c = ends[:, 0], ends[:, 1]
+    xa = np.where(a >= 0, x[np.maximum(a, 0)], 0.0)
+    xc = np.where(c >= 0, x[np.maximum(c, 0)], 0.0)
+    f = values * (xa - xc)
+    g = np.abs(f)  # the parameters and x are exact binary numbers: only the stretch and force round
+    out, hide = np.zeros(n, dtype=x.dtype), np.zeros(n)
+    for col, sign in ((a, 1.0), (c, -1.0)):  # the two ends of every element at once
+        on = col >= 0
+        np.add.at(out, col[on], sign * f[on])
+        np.add.at(hide, col[on], g[on])
+    return out, hide
+
+
+def _certificate(el, w: float, x: np.ndarray, y: np.ndarray, input: int,
+                 x_lo: np.ndarray | None = None) -> tuple[float, np.ndarray]:
+    """Bound on the error of ``x_out`` from the residual of ``Z x = e_in`` formed from the elements
+    (springs and dashpots by their stretches) and what its rounding can hide, weighted by the
+    output's row of Z⁻¹ (``y``, Z symmetric) with a normwise allowance — as :mod:`numeric.frf_dense`;
+    returns the bound and the residual, shape (N,)."""
+    from .frf_dense import ROW_ALLOWANCE
+
+    n = x.shape[0]
+    ends_k = np.asarray(el.spring_ends, dtype=np.intp).reshape(-1, 2)
+    ends_c = np.asarray(el.damper_ends, dtype=np.intp).reshape(-1, 2)
+    kx, hk = _apply(n, ends_k, np.asarray(el.stiffness, dtype=float), x)
+    cx, hc = _apply(n, ends_c, np.asarray(el.damping, dtype=float), x)
+    r = -(kx - w * w * el.masses * x + 1j * w * cx)
+    r[input] += 1.0
+    if x_lo is not None:  # the correction's own residual (small: its rounding is second order)
+        kl, _ = _apply(n, ends_k, np.asarray(el.stiffness, dtype=float), x_lo)
+        cl, _ = _apply(n, ends_c, np.asarray(el.damping, dtype=float), x_lo)
+        r = r - (kl - w * w * el.masses * x_lo + 1j * w * cl)
+    hidden = 8 * np.finfo(float).eps * (hk + w * w * el.masses * np.abs(x) + w * hc)
+    ay = np.abs(y)
+    return float(np.sum((ay + ROW_ALLOWANCE * np.max(ay)) * (np.abs(r) + hidden))), r
 
 
 def _gtsv(gtsv, off: np.ndarray, diag: np.ndarray, b: np.ndarray) -> np.ndarray:

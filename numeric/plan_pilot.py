@@ -2,7 +2,9 @@
 models do not cover: damped, forced, gravity and ground scenes (the augmented matrix
 exponential of :mod:`numeric.linear_exact` is exact for them) and ``[chain]`` scenes above
 :data:`numeric.plan.MAX_MASSES` masses whose exact solution is the chain transform
-(:mod:`numeric.chain_modal`, uniform chains).
+(:mod:`numeric.chain_modal`, uniform chains). Nonlinear scenes of springs only (cubic springs,
+spring potentials) up to MAX_MASSES masses have no exact solution: they are measured against a
+tight DOP853 reference (rtol :data:`TIGHT_RTOL`) instead, and the exact method is no candidate.
 
 Why not the closed-form models: :class:`~numeric.error_models.LinearChainModel` describes an
 undamped, unforced chain, and with damping the splitting of :mod:`numeric.effects` caps every
@@ -28,7 +30,7 @@ import numpy as np
 from .error_models import EPS, roundoff_floor
 from .errors import RunRefused
 from .plan import MAX_MASSES, SAFETY, AdaptiveLaw, Candidate, Horizon, Plan, calibrate_adaptive, exact_method, \
-    measure_exact_cost, measure_step_cost
+    adaptive_atol, measure_exact_cost, measure_step_cost
 from .run import registry
 from .run.exact import Solution, solve
 from .run.grid import Grid
@@ -42,6 +44,8 @@ PILOT_WORK = 4e7
 MAX_PILOT_LEVELS = 5
 #: Largest ``frames × N`` of the reference kept in memory (the reference grid is coarsened beyond it).
 REFERENCE_FLOATS = 4e6
+#: Relative tolerance of the reference of nonlinear scenes (its own error is ~1e-12 of the state's size).
+TIGHT_RTOL = 1e-13
 
 
 def needs_pilot(system: System) -> bool:
@@ -56,7 +60,7 @@ def check_pilot(system: System, what: str) -> None:
                          f"a uniform linear [chain] (this one has {system.n} masses and is "
                          f"{'nonlinear' if not system.linear else 'index-dependent'})")
     why = system.no_exact_solution
-    if why:
+    if why and not tight_reference_applies(system):
         drivers = [word for word, on in (("dampers", system.damped),
                                          ("forces", system.has("external_acceleration") or system.tabulated),
                                          ("ground motion", system.ground is not None),
@@ -65,16 +69,42 @@ def check_pilot(system: System, what: str) -> None:
                          f"so {what} calibrates every method by pilot runs against the exact solution, and there is "
                          f"none: {why}; accepted: linear springs with forces and ground acceleration constant + "
                          "harmonic (or tables), or a scene without dampers, forces, gravity and ground motion (cubic "
-                         "springs are then planned from their linearization); compare methods here with `springchain "
-                         "simulate --method NAME`")
+                         "springs and spring potentials are then planned against a tight DOP853 reference); compare "
+                         "methods here with `springchain simulate --method NAME`")
+
+
+def tight_reference_applies(system: System) -> bool:
+    """A nonlinear scene of springs only and at most MAX_MASSES masses: no exact solution, so plan
+    measures against a tight DOP853 reference (:data:`TIGHT_RTOL`) instead."""
+    return system.springs_only and not system.linear and system.n <= MAX_MASSES
+
+
+def tight_solution(system: System, x0: np.ndarray, v0: np.ndarray) -> Solution:
+    """The registry's reference adaptive method (DOP853) at rtol :data:`TIGHT_RTOL`, as a
+    :class:`~numeric.run.exact.Solution` on uniform grids ``t = k·h``."""
+    atol = adaptive_atol(x0, v0, TIGHT_RTOL * 1e-2)  # far below rtol: the reference's error is relative
+    method = registry.method(registry.REFERENCE_ADAPTIVE, Options(TIGHT_RTOL, atol, progress=False))
+
+    def evaluate(t):
+        h = float(t[1] - t[0]) if t.shape[0] > 1 else max(float(t[0]), 1.0)
+        run = record(method, system, x0, v0, Grid(h, t.shape[0] - 1))
+        return run.x, run.v
+
+    return Solution(f"reference: {registry.REFERENCE_ADAPTIVE} at rtol {TIGHT_RTOL:g} (no exact solution: "
+                    "nonlinear springs), float64", evaluate, whole=True)
 
 
 class ExactReference:
     """The exact solution (:func:`numeric.run.exact.solve`) at the times of a uniform grid:
-    ``at(t) -> (x, v)``, shapes (S, N), cached for the last grid asked."""
+    ``at(t) -> (x, v)``, shapes (S, N), cached for the last grid asked.
+
+    For a nonlinear scene of springs only (no exact solution) the reference is DOP853 at rtol
+    :data:`TIGHT_RTOL` instead (:func:`tight_solution`), and ``exact`` is False.
+    """
 
     def __init__(self, system: System, x0: np.ndarray, v0: np.ndarray):
-        self.solution: Solution = solve(system, x0, v0)
+        self.exact = not tight_reference_applies(system)
+        self.solution: Solution = solve(system, x0, v0) if self.exact else tight_solution(system, x0, v0)
         self.description = self.solution.description
         self._cache: dict = {}
 
@@ -113,6 +143,7 @@ class PilotLaw:
     size: float
     stages: float
     pilots: tuple  # ((h, error), ...) of the pilot runs, h decreasing
+    against: str = "the exact solution"
 
     def error(self, h: float, t_end: float) -> float:
         steps = t_end / h
@@ -122,7 +153,7 @@ class PilotLaw:
     def label(self) -> str:
         grow = "" if math.isinf(self.t_pilot) else f", error ∝ T beyond t = {self.t_pilot:g}"
         runs = ", ".join(f"h = {h:.3g}: {e:.2g}" for h, e in self.pilots[-2:])
-        return f"pilot-calibrated C·h^{self.p:.2g} against the exact solution ({runs}{grow})"
+        return f"pilot-calibrated C·h^{self.p:.2g} against {self.against} ({runs}{grow})"
 
 
 def _pilot_law(system: System, method: Method, ref: ExactReference, x0, v0, t_end: float, dt_out: float) -> PilotLaw:
@@ -164,7 +195,11 @@ def _pilot_law(system: System, method: Method, ref: ExactReference, x0, v0, t_en
     C = max(e / hh**p for hh, e in pilots)
     h1 = pilots[0][0]
     return PilotLaw(C, p, h1, t_pilot if t_pilot < t_end * (1 - 1e-9) else math.inf, size, stages,
-                    tuple(pilots))
+                    tuple(pilots), _against(ref.exact))
+
+
+def _against(exact: bool) -> str:
+    return "the exact solution" if exact else f"{registry.REFERENCE_ADAPTIVE} at rtol {TIGHT_RTOL:g}"
 
 
 @dataclass(frozen=True)
@@ -181,6 +216,8 @@ class PilotPlanner(Horizon):
     exact_seconds: float = math.nan
     exact_error: float = math.nan
     reference: str = ""
+    #: Whether the reference is the exact solution (then it is a candidate too); False for nonlinear scenes.
+    exact: bool = True
 
     @classmethod
     def for_system(cls, system: System, x0: np.ndarray, v0: np.ndarray, t_end: float, dt_out: float,
@@ -202,7 +239,7 @@ class PilotPlanner(Horizon):
         # the exact method: its cost on the output grid (timed on a sample of it), rounding-level error
         out = _reference_grid(t_end, dt_out, 1)
         sample = min(out.frames, max(2, int(REFERENCE_FLOATS // max(system.n, 1))), 2001)
-        exact_seconds = measure_exact_cost(system, x0, v0, out, sample, budget=0.1)
+        exact_seconds = measure_exact_cost(system, x0, v0, out, sample, budget=0.1) if ref.exact else math.nan
         size = max([law.size for law in laws.values()] + [float(np.max(np.abs(x0))), 1e-300])
         exact_error = EPS * size * (8.0 + w_max * t_end + math.sqrt(out.frames))
         laws_a = {}
@@ -217,7 +254,7 @@ class PilotPlanner(Horizon):
                 if m.refusal(system) is None:
                     laws_a[m] = calibrate_adaptive(m, system, x0, v0, g.t_end, g.h, reference, scale=size)
         return cls(float(t_end), float(dt_out), system.n, w_max, laws, costs, laws_a, exact_seconds,
-                   exact_error, ref.description)
+                   exact_error, ref.description, ref.exact)
 
     def plan_step(self, method: Method, tol: float) -> Candidate:
         law, cost = self.laws[method], self.step_costs[method]
@@ -241,14 +278,14 @@ class PilotPlanner(Horizon):
         rtol = max(min(rtol, 1e-2), MIN_RTOL)
         evals = law.evals(rtol, self.t_end)
         return Candidate(method, None, None, rtol, law.error(rtol, self.t_end),
-                         evals * law.seconds_per_eval, ok, "pilot-calibrated power law in rtol against the exact solution")
+                         evals * law.seconds_per_eval, ok, f"pilot-calibrated power law in rtol against {_against(self.exact)}")
 
     def plan(self, tol: float) -> Plan:
         if not (math.isfinite(tol) and tol > 0):
             raise ValueError(f"tolerance must be finite and > 0, got {tol!r}")
         cands = [Candidate(exact_method(), None, None, None, self.exact_error, self.exact_seconds,
                            self.exact_error <= tol, f"exact ({self.reference.split(': ', 1)[1]}); "
-                           "error at the rounding level")]
+                           "error at the rounding level")] if self.exact else []
         cands += [self.plan_step(m, tol) for m in self.laws]
         cands += [self.plan_adaptive(m, tol) for m in self.adaptive]
         ok = tuple(c for c in cands if c.reachable)
@@ -259,4 +296,5 @@ class PilotPlanner(Horizon):
         return Plan(tol, self.t_end, min(ok, key=lambda c: c.predicted_seconds), ok, bad)
 
 
-__all__ = ["PilotPlanner", "PilotLaw", "ExactReference", "needs_pilot", "check_pilot", "REFERENCE_FLOATS"]
+__all__ = ["PilotPlanner", "PilotLaw", "ExactReference", "needs_pilot", "check_pilot", "REFERENCE_FLOATS",
+           "TIGHT_RTOL", "tight_reference_applies", "tight_solution"]

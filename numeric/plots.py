@@ -102,6 +102,31 @@ def energy(t: np.ndarray, energies: dict[str, np.ndarray], e0: float | None = No
     return fig
 
 
+def modal_energies(t: np.ndarray, energies: np.ndarray, omega: np.ndarray, title: str, lowest: int = 5,
+                   unit: str = "J"):
+    """Energy of the lowest elastic modes over time (E_j(t), j = 1 … ``lowest``), and their sum.
+
+    Parameters
+    ----------
+    t : ndarray, shape (S,)
+    energies : ndarray, shape (S, N)
+        ``modal_energy_<method>``: columns in ascending ω.
+    omega : ndarray, shape (N,)
+        The modes' angular frequencies (ascending); rigid modes (ω = 0) are left out.
+    """
+    fig, ax = new_figure(figsize=(10, 4.5))
+    elastic = np.flatnonzero(omega > 0)[:lowest]
+    for r, j in enumerate(elastic):
+        ax.plot(t, energies[:, j], label=f"mode {r + 1} (ω = {omega[j]:.4g} rad/s)", lw=1.2)
+    ax.plot(t, energies.sum(axis=1), color="0.35", lw=0.8, ls="--", label="sum over all modes")
+    ax.set_xlabel("time t [s]")
+    ax.set_ylabel(f"modal energy E_j = (p_j² + ω_j² q_j²)/2 [{unit}]")
+    ax.set_title(title)
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=8, loc="upper left", bbox_to_anchor=(1.01, 1.0))
+    return fig
+
+
 def save(fig, path) -> None:
     """Save a figure atomically (temporary file, then rename) and close it."""
     from .files import atomic_path

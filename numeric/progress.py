@@ -1,8 +1,10 @@
 """One progress reporter for every long phase (runs, derivation, loading, exact solutions, writes).
 
-On a terminal a phase shows a bar (known total) or an elapsed-time line redrawn in place; when
-stderr is not a terminal it prints a plain line every few seconds instead, so logs of long runs
-still say what is going on. Nothing is printed for phases shorter than about a second.
+On a terminal a phase shows a bar (known total) or an elapsed-time line redrawn in place after
+about a second; when stderr is not a terminal it prints a plain line every 5 s instead (the first
+after 5 s), so logs of long runs still say what is going on while short phases stay silent. A
+phase that ends in an error (a refusal) says nothing more: its one error line stands alone.
+``SPRINGCHAIN_PROGRESS=0`` in the environment silences every reporter.
 
     bar = Reporter("verlet", total=steps)      # bar.update(done) as work proceeds; bar.close()
     bar.say("reference ready"); bar.count("run 3")   # milestones and counted items, one line each
@@ -13,6 +15,7 @@ still say what is going on. Nothing is printed for phases shorter than about a s
 
 from __future__ import annotations
 
+import os
 import sys
 import threading
 import time
@@ -23,6 +26,13 @@ QUIET_SECONDS = 1.0
 #: Redraw interval on a terminal, and the interval of plain lines otherwise (seconds).
 TTY_INTERVAL, PLAIN_INTERVAL = 0.2, 5.0
 PREFIX = "springchain"
+#: The environment variable that silences every reporter when set to one of :data:`OFF`.
+ENV, OFF = "SPRINGCHAIN_PROGRESS", ("0", "off", "no", "false")
+
+
+def silenced() -> bool:
+    """Whether ``SPRINGCHAIN_PROGRESS`` turns progress off (``0``, ``off``, ``no``, ``false``)."""
+    return os.environ.get(ENV, "").strip().lower() in OFF
 
 
 def _isatty(stream) -> bool:
@@ -42,7 +52,10 @@ def line(text: str, prefix: str = PREFIX, stream=None) -> None:
         pass
 
 
-note = line
+def note(text: str, prefix: str = PREFIX, stream=None) -> None:
+    """A progress milestone as one :func:`line` (e.g. "compiling numba kernels"), unless silenced."""
+    if not silenced():
+        line(text, prefix, stream)
 
 
 class Reporter:
@@ -55,9 +68,10 @@ class Reporter:
     total : int, optional
         Units of work; without it only the elapsed time is shown.
     enabled : bool, optional
-        Default: on. ``False`` silences it.
-    quiet_seconds : float
-        Nothing is shown before this much time has passed.
+        Default: on. ``False`` (or ``SPRINGCHAIN_PROGRESS=0`` in the environment) silences it.
+    quiet_seconds : float, optional
+        Nothing is shown before this much time has passed (default: :data:`QUIET_SECONDS` on a
+        terminal, :data:`PLAIN_INTERVAL` otherwise).
     prefix : str
         What each line starts with (``springchain``, ``bench``, ``sweep``, ...).
     interval : float, optional
@@ -65,14 +79,15 @@ class Reporter:
     """
 
     def __init__(self, label: str, total: int | None = None, *, enabled: bool | None = None,
-                 stream=None, quiet_seconds: float = QUIET_SECONDS, prefix: str = PREFIX,
+                 stream=None, quiet_seconds: float | None = None, prefix: str = PREFIX,
                  interval: float | None = None):
         self.label = label
         self.total = None if total is None else max(int(total), 1)
-        self.enabled = True if enabled is None else bool(enabled)
+        self.enabled = (True if enabled is None else bool(enabled)) and not silenced()
         self.stream = stream or sys.stderr
         self.tty = _isatty(self.stream)
-        self.quiet = quiet_seconds
+        self.quiet = quiet_seconds if quiet_seconds is not None else (
+            QUIET_SECONDS if self.tty else max(QUIET_SECONDS, PLAIN_INTERVAL))
         self.prefix = prefix
         self.interval = interval
         self.t0 = time.monotonic()
@@ -145,8 +160,9 @@ class Reporter:
 
 @contextmanager
 def phase(label: str, *, enabled: bool | None = None, stream=None):
-    """Show the elapsed time of a phase of unknown length if it lasts over ~1 s (a thread wakes
-    up to report; the work itself is not touched), then ``done in T s``."""
+    """Show the elapsed time of a phase of unknown length if it lasts over ~1 s (5 s when stderr is
+    not a terminal; a thread wakes up to report, the work itself is not touched), then ``done in
+    T s`` — unless the phase raised: a refusal's error line is then the only line that follows."""
     rep = Reporter(label, enabled=enabled, stream=stream)
     stop = threading.Event()
 
@@ -157,13 +173,15 @@ def phase(label: str, *, enabled: bool | None = None, stream=None):
     thread = threading.Thread(target=tick, name=f"progress: {label}", daemon=True)
     if rep.enabled:
         thread.start()
+    failed = True
     try:
         yield rep
+        failed = False
     finally:
         stop.set()
         if rep.enabled:
             thread.join()
-        rep.close(f"done in {time.monotonic() - rep.t0:.1f} s")
+        rep.close(None if failed else f"done in {time.monotonic() - rep.t0:.1f} s")
 
 
-__all__ = ["Reporter", "phase", "line", "note", "QUIET_SECONDS"]
+__all__ = ["Reporter", "phase", "line", "note", "silenced", "QUIET_SECONDS", "ENV"]

@@ -47,6 +47,33 @@ def unstable_defaults(system: System, methods: list[str], h: float) -> tuple[lis
     return [m.name for m in chosen if m not in dropped], notes
 
 
+#: Float64 error of an exact trajectory (relative to its amplitude) above which the run says so.
+EXACT_LIMIT = 1e-9
+
+
+def float64_limits(system: System, methods: list[str], t_end: float) -> list[str]:
+    """One note when an exact method's float64 limits exceed :data:`EXACT_LIMIT` of the amplitude.
+
+    Any exact solution carries ε·ω_max·t (ω itself is a float: its phase error grows with t) and
+    ε·√(m_max/m_min) (the mass-weighted modal basis puts a light mass next to a heavy one at the
+    heavy one's scale); past 1e-9 the positions are not the accurate numbers the rule promises, so
+    the run names the quantity instead of printing them silently (returns [] otherwise).
+    """
+    exact = [name for name in methods if registry.method(name).kind is Kind.EXACT]
+    if not exact or not system.linear or system.n == 0:
+        return []
+    eps = float(np.finfo(float).eps)
+    phase = eps * float(system.omega_max) * float(t_end)
+    m = np.asarray(system.masses, dtype=float)
+    mass = eps * float(np.sqrt(np.max(m) / np.min(m)))
+    if max(phase, mass) <= EXACT_LIMIT:
+        return []
+    return [f"{', '.join(exact)}: float64 limits exceed {EXACT_LIMIT:g} of the amplitude: "
+            f"eps*omega_max*t = {phase:.1e} (omega_max = {float(system.omega_max):.6g} rad/s, t = {t_end:g} s), "
+            f"eps*sqrt(m_max/m_min) = {mass:.1e}; positions are not certified to {EXACT_LIMIT:g} "
+            "(shorten the horizon or reduce the mass contrast)"]
+
+
 def applicable(system: System) -> str:
     """Which methods apply to the system, in words."""
     why = system.no_exact_solution

@@ -237,12 +237,36 @@ def stiffness_factor(masses: np.ndarray, ends: np.ndarray, k: np.ndarray) -> np.
     return F[:, :cols]
 
 
+#: Up to this many masses the pieces are found by label propagation on the spring list (a few
+#: microseconds; at most N sweeps), beyond it by SciPy's connected components (fixed costs of ~1 ms).
+SMALL_PIECES = 64
+
+
+def _small_components(n: int, a: np.ndarray, b: np.ndarray) -> tuple[int, np.ndarray]:
+    """Connected components of the springs (a_j, b_j) of n ≤ SMALL_PIECES masses: each mass takes the
+    smallest label among its neighbours until nothing changes."""
+    labels = np.arange(n)
+    for _ in range(n):
+        low = np.minimum(labels[a], labels[b])
+        new = labels.copy()
+        np.minimum.at(new, a, low)
+        np.minimum.at(new, b, low)
+        if np.array_equal(new, labels):
+            break
+        labels = new
+    roots, labels = np.unique(labels, return_inverse=True)
+    return int(roots.shape[0]), labels
+
+
 def free_pieces(n: int, ends: np.ndarray) -> list[np.ndarray]:
     """Index arrays of the connected pieces with no spring to a wall."""
     ends = _ends(ends)
     inner = (ends[:, 0] >= 0) & (ends[:, 1] >= 0)
-    graph = coo_matrix((np.ones(int(inner.sum())), (ends[inner, 0], ends[inner, 1])), shape=(n, n))
-    count, labels = connected_components(graph, directed=False)
+    if n <= SMALL_PIECES:
+        count, labels = _small_components(n, ends[inner, 0], ends[inner, 1])
+    else:
+        graph = coo_matrix((np.ones(int(inner.sum())), (ends[inner, 0], ends[inner, 1])), shape=(n, n))
+        count, labels = connected_components(graph, directed=False)
     walled = np.zeros(count, dtype=bool)
     one = (ends[:, 0] >= 0) != (ends[:, 1] >= 0)
     touched = np.where(ends[one, 0] >= 0, ends[one, 0], ends[one, 1])

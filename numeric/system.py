@@ -98,7 +98,9 @@ class System:
         return int(self.masses.shape[0])
 
     effects = _provided("effects", "The Lagrangian's effects (``spring``, ``damper``, ``gravity``, ...).")
-    linear = _provided("linear", "No cubic springs.")
+    linear = _provided("linear", "No cubic springs, no spring potentials other than quadratic ones.")
+    potential = _provided("potential", "Spring potentials (``potential = \"EXPR\"``): ``equilibrium()`` exists.")
+    law_indexed = _provided("law_indexed", "A ``[chain]`` potential whose law depends on the spring index.")
     uniform = _provided("uniform", "A uniform ``[chain]`` (coefficients independent of the index).")
     rigid_modes = _provided("rigid_modes", "The number of rigid-body modes (free pieces).")
     ground = _provided("ground", "How ``[ground]`` is given (a :class:`Ground`, equal to its word), else None.")
@@ -191,7 +193,7 @@ class System:
         ``LOADED_CHAIN_EXACT_MAX`` masses and an index-dependent one up to ``MAX_DENSE`` (both dense).
         """
         if not self.linear:
-            return "this scene has cubic springs"
+            return "this scene has spring potentials" if self.potential else "this scene has cubic springs"
         if self.has("external_acceleration") and not self.provided.forcing_harmonic:
             return "its external forces are not constant + harmonic"
         if self.ground is Ground.EXPRESSION and not self.provided.ground_harmonic:

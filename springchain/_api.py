@@ -56,6 +56,19 @@ def _chain_omega2(scene: Scene, chain_modes):
         return None
 
 
+def _chain_damped(scene: Scene, model):
+    """``(ω_n, ζ, ω_d)`` of every mode of a chain with dashpots of at most ``chain_damped.DENSE_MAX``
+    masses (:mod:`numeric.chain_damped`), else None (Rayleigh-only damping has a closed form)."""
+    from .numeric.chain_damped import DENSE_MAX, damped_rows
+
+    if not getattr(model, "dampers", None) or scene.chain.n > DENSE_MAX:
+        return None
+    from .numeric.elements import Elements
+
+    el = Elements.from_system(_system(scene)[0])
+    return damped_rows(el.masses, el.spring_ends, el.stiffness, el.damper_ends, el.damping)
+
+
 @dataclass(frozen=True)
 class Modes:
     """A scene's equations of motion and normal modes.
@@ -80,7 +93,8 @@ class Modes:
         if self.chain:
             from .derive.chain import chain_report
 
-            return chain_report(self.model, self.modes, _chain_omega2(self.scene, self.modes))[1]
+            return chain_report(self.model, self.modes, _chain_omega2(self.scene, self.modes),
+                                _chain_damped(self.scene, self.model))[1]
         from .derive.report import modes_json
 
         return modes_json(self.model, self.modes)
@@ -90,7 +104,8 @@ class Modes:
         if self.chain:
             from .derive.chain import chain_report
 
-            return chain_report(self.model, self.modes, _chain_omega2(self.scene, self.modes))[0]
+            return chain_report(self.model, self.modes, _chain_omega2(self.scene, self.modes),
+                                _chain_damped(self.scene, self.model))[0]
         from .derive.report import render_text
 
         return render_text(self.model, self.modes)
@@ -453,11 +468,29 @@ def _kept(sc: Scene, system, names, dt, steps, record_every, options, out, figur
     return compare(system, runs), t, x, v, extra, npz, figs
 
 
+def _modal_energies(sc: Scene, system, t, x, v, extra, npz, figs, figures, progress):
+    """``modal_energy_<method>`` into ``extra`` (and the NPZ, rewritten), the figure with ``figures``;
+    returns the summary's ``modal_energy`` entry and the figures."""
+    from .numeric.modal_energy import modal_energy_figure, modal_energy_record
+    from .numeric.npz import save_npz
+    from .numeric.progress import phase
+
+    with phase("modal energies", enabled=progress):
+        energies, omega = modal_energy_record(system, x, v)
+        extra.update(energies)
+        if npz is not None:
+            save_npz(npz, t, x, v, extra)
+        if figures and npz is not None:
+            figs = tuple(figs) + (modal_energy_figure(Path(npz).parent, sc.name, t, energies, omega),)
+    return ({m[len("modal_energy_"):]: {"initial": e[0].tolist()[:10], "final": e[-1].tolist()[:10]}
+             for m, e in energies.items()}, figs)
+
+
 def simulate(scene: str | Path | Scene, methods: list[str] | None = None, dt: float | None = None,
              steps: int | None = None, record_every: int | None = None, *, spectrum: str = "svd",
              rtol: float = DEFAULT_RTOL, atol: float = DEFAULT_ATOL, out: str | Path | None = None,
-             figures: bool = False, progress: bool | None = None, springs: bool = False,
-             alpha: float | None = None) -> Simulation:
+             figures: bool = False, progress: bool | None = None, modal_energy: bool = False,
+             springs: bool = False, alpha: float | None = None) -> Simulation:
     """Simulate a scene from its initial state with exact and numerical methods.
 
     Parameters
@@ -481,6 +514,10 @@ def simulate(scene: str | Path | Scene, methods: list[str] | None = None, dt: fl
     progress : bool, optional
         Progress on stderr of every phase longer than about a second (default: on; a bar on a
         terminal, a plain line every few seconds otherwise). ``False`` silences it.
+    modal_energy : bool
+        Also record ``modal_energy_<method>`` (S × N): the harmonic energy ½(q̇ⱼ² + ωⱼ² qⱼ²) of each
+        linear normal mode about the equilibrium, ascending ω (:mod:`numeric.modal_energy`), in
+        ``extra`` and the NPZ, and with ``figures`` the figure ``<scene>-modal-energy.png``.
     springs : bool
         Add ``drift_<method>``, ``spring_force_<method>`` (S × springs) and ``base_shear_<method>``
         (S,) to ``extra`` and the NPZ.
@@ -503,6 +540,8 @@ def simulate(scene: str | Path | Scene, methods: list[str] | None = None, dt: fl
     dt, steps, record_every = _grid_settings(sc, dt, steps, record_every)
     if sc.chain is None:  # refuse before any derivation when even one method would not fit
         _check_memory(sc, steps, record_every, len(methods) if methods else 1, "steps")
+    for name in methods or ():  # refusals before any work: their one line stands alone
+        registry.entry(name)  # unknown names: one line naming the accepted ones
     # refuses an unknown spectrum source, and settings out of range (the methods check them when made)
     options = Options(rtol, atol, spectrum, progress, {} if alpha is None else {"alpha": alpha})
     for name in methods or ():
@@ -512,8 +551,6 @@ def simulate(scene: str | Path | Scene, methods: list[str] | None = None, dt: fl
     names, notes = methods, []
     if not methods:  # a default Verlet that would be unstable at this dt gives way to the exact method
         names, notes = sim.unstable_defaults(system, sim.default_methods(system), dt)
-    for name in names:
-        registry.entry(name)  # unknown names: one line naming the accepted ones
     _check_settings([registry.method(name, options) for name in names], options)
     t0 = time.perf_counter()
     if system.chain:
@@ -527,6 +564,9 @@ def simulate(scene: str | Path | Scene, methods: list[str] | None = None, dt: fl
     else:
         summary, t, x, v, extra, npz, figs = _kept(sc, system, names, dt, steps, record_every, options, out, figures,
                                                    springs)
+    if modal_energy:
+        summary["modal_energy"], figs = _modal_energies(sc, system, t, x, v, extra, npz, figs, figures, progress)
+    notes = notes + sim.float64_limits(system, names, steps * dt)  # one line where float64 cannot follow
     summary.update({"scene": sc.name, "module": origin, "dt": dt, "steps": steps, "t_end": steps * dt,
                     "npz": None if npz is None else str(npz), "figures": [str(p) for p in figs],
                     "methods_that_apply": sim.applicable(system),
@@ -575,11 +615,13 @@ def plan(scene: str | Path | Scene, tol: float, t_end: float | None = None):
     sc = load(scene)
     _check_motion(sc, "plan")
     system, _ = _system(sc)
-    from .numeric.plan_pilot import PilotPlanner, needs_pilot
+    from .numeric.plan_pilot import PilotPlanner, needs_pilot, tight_reference_applies
 
     with single_threaded_blas():
-        # damped, forced, gravity, ground scenes and long uniform chains: calibrated against the exact solution
-        planner = (PilotPlanner if needs_pilot(system) else Planner).for_system(
+        # damped, forced, gravity, ground scenes and long uniform chains: calibrated against the exact solution;
+        # nonlinear (cubic, potential) scenes: against a tight DOP853 reference
+        pilot = needs_pilot(system) or tight_reference_applies(system)
+        planner = (PilotPlanner if pilot else Planner).for_system(
             system, sc.x0, sc.v0, _horizon(sc, t_end), sc.dt * sc.record_every)
         try:
             return planner.plan(tol)
@@ -612,7 +654,9 @@ def bench(scene: str | Path | Scene = "seed", t_end: float | None = None, *, qui
     derive(sc)
     derive_seconds = time.perf_counter() - t0
     config = BenchConfig.quick_config() if quick else BenchConfig()
-    with single_threaded_blas():
+    from .numeric.compiled.run import eager
+
+    with single_threaded_blas(), eager(not quick):  # the full bench compiles its loops once (a warm-up)
         result = run_bench(system, sc.x0, sc.v0, _horizon(sc, t_end), sc.dt * sc.record_every, sc.name,
                            config, progress=progress, methods=tuple(methods or ()) or None)
     return with_derive_seconds(result, derive_seconds)

@@ -220,7 +220,7 @@ def frf(scene: str | Path | Scene, input, output, omega_min: float | None = None
     response = frequency_response(system, i, o, lo, hi, points, modes)
     notes = []
     if not system.linear:
-        notes.append("cubic springs: the response of the linearisation about x = 0 (their linear part)")
+        notes.append("nonlinear springs: the response of the linearisation about the equilibrium (their stiffness there)")
     if system.chain:
         notes.append("[chain] scene: tridiagonal solve per frequency; the grid is refined at the "
                      f"{min(len(response.resonances), 40)} lowest resonances in range")
@@ -232,7 +232,7 @@ def frf(scene: str | Path | Scene, input, output, omega_min: float | None = None
         if sc.n <= MAX_MASSES:
             tf = transfer_function(model or Model(sc), i, o)
             if tf is None:
-                notes.append("the closed-form transfer function exceeded its time budget")
+                notes.append("no closed-form transfer function: its determinant is past the symbolic work cap")
     name = lambda k: str(k) if sc.chain is not None else sc.mass_names[k]  # noqa: E731
     return FrequencyResponse(sc, name(i), name(o), response.omega, response.H, response.resonances, tf, notes)
 

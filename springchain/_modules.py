@@ -23,11 +23,11 @@ from .derive.scene import Scene
 GENERATED = __package__ + ".generated"
 
 
-def derive(scene: Scene, budget: float | None = None):
+def derive(scene: Scene):
     """:func:`springchain.derive.pipeline.derive` with the bundled flag filled in."""
     from .derive.pipeline import derive as _derive
 
-    return _derive(scene, budget=budget, bundled=is_bundled(scene.file))
+    return _derive(scene, bundled=is_bundled(scene.file))
 
 
 def generated_dir() -> Path:

@@ -118,7 +118,7 @@ def _law(scene: Scene, system, disorder, vary) -> dict | None:
     """Matsuda–Ishii parameters when they apply: uniform chain, mass disorder only, nothing varied."""
     import numpy as np
 
-    if vary or [w for w, _ in disorder] != ["mass"] or not scene.chain.uniform or scene.chain.k3 is not None:
+    if vary or [w for w, _ in disorder] != ["mass"] or not scene.chain.uniform or not scene.linear:
         return None
     d = disorder[0][1]
     m, k = float(system.masses[0]), float(np.median(system.stiffness))

@@ -151,7 +151,8 @@ def cmd_simulate(args) -> int:
     try:
         result = simulate(args.scene, methods=args.method, dt=args.dt, steps=args.steps, record_every=args.record_every,
                           spectrum=args.spectrum, rtol=args.rtol, atol=args.atol, out=args.out,
-                          figures=not args.no_figures, springs=args.springs, alpha=args.alpha)
+                          figures=not args.no_figures, modal_energy=getattr(args, "modal_energy", False),
+                          springs=args.springs, alpha=args.alpha)
     except SceneError as exc:  # name the flag that set the value, when one did
         flag = {"steps": "--steps" if args.steps is not None else "simulation.steps"}.get(exc.key)
         if flag and flag != exc.key:
@@ -420,6 +421,10 @@ def _add_simulate(sub) -> None:
                    help="absolute tolerance of the adaptive methods (default: %(default)g)")
     _out(s, DEFAULT_OUT)
     s.add_argument("--no-figures", action="store_true", help="write only the NPZ")
+    s.add_argument("--modal-energy", action="store_true",
+                   help="also record modal_energy_<method> (S x N): the energy 1/2 (q'^2 + omega^2 q^2) of each "
+                        "linear normal mode about the equilibrium (ascending omega), and draw the lowest modes' "
+                        "energies over time (DIR/<name>-modal-energy.png)")
     s.add_argument("--json", action="store_true", help="print a JSON summary instead of text")
     s.add_argument("--springs", action="store_true",
                    help="add drift_<method>, spring_force_<method> (S x springs) and base_shear_<method> (S) to the NPZ")

@@ -8,7 +8,7 @@ m, N−1 equal springs k, free ends):
 * ``elements`` — the same chain as ``[masses]`` + ``[[springs]]``:
   :class:`derive.model.Model` (element-wise Euler–Lagrange), the normal
   modes (:func:`derive.modes.closed_form_modes`, which falls back to numeric
-  eigenvalues past its budget or block size, exactly as ``springchain
+  eigenvalues past its work caps or block size, exactly as ``springchain
   derive`` runs it) and :func:`derive.codegen.render_module`; the modes are
   also reported on their own;
 * ``lagrange`` — ``sympy.physics.mechanics.LagrangesMethod`` on the chain's
@@ -175,7 +175,7 @@ def work(route: Route, n: int) -> dict:
     import scipy.linalg.lapack  # noqa: F401 - the numeric mode fallback's import, not work
     from .derive.codegen import render_module
     from .derive.model import Model
-    from .derive.modes import DEFAULT_BUDGET, closed_form_modes
+    from .derive.modes import closed_form_modes
 
     t0 = time.perf_counter()
     scene = load_scene(f"cost{n}.toml", masses_scene_text(n))
@@ -185,7 +185,7 @@ def work(route: Route, n: int) -> dict:
     model.M  # noqa: B018
     model.K  # noqa: B018
     t2 = time.perf_counter()
-    modes = closed_form_modes(model, budget=DEFAULT_BUDGET)
+    modes = closed_form_modes(model)
     t3 = time.perf_counter()
     source = render_module(model, modes, bundled=False)
     t4 = time.perf_counter()

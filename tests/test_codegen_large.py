@@ -35,7 +35,7 @@ def load(source: str, name: str, tmp_path):
 @pytest.mark.parametrize("gravity", [False, True])
 def test_large_scene_assembles_matrices_and_binds_acceleration(tmp_path, gravity):
     n = 3 * MAX_PRINTED_MATRIX
-    d = derive(load_scene("c.toml", text=scene_text(n, gravity)), budget=1.0)
+    d = derive(load_scene("c.toml", text=scene_text(n, gravity)))
     module = load(d.source, f"c{n}{int(gravity)}", tmp_path)
     p = dict(module.DEFAULTS)
     values = {d.model.params[k]: v for k, v in p.items()}
@@ -51,8 +51,8 @@ def test_large_scene_assembles_matrices_and_binds_acceleration(tmp_path, gravity
 
 
 def test_source_grows_linearly_not_quadratically():
-    small = derive(load_scene("c.toml", text=scene_text(20, False)), budget=1.0).source
-    large = derive(load_scene("c.toml", text=scene_text(80, False)), budget=1.0).source
+    small = derive(load_scene("c.toml", text=scene_text(20, False))).source
+    large = derive(load_scene("c.toml", text=scene_text(80, False))).source
     # four times the masses: the text may grow about four times, never sixteen
     assert len(large) < 6 * len(small)
 
@@ -77,7 +77,7 @@ def test_large_scene_incidence_form_matches_the_symbolic_model(tmp_path):
     """Past MAX_PRINTED_MATRIX masses acceleration, damping_acceleration and energy are generated in
     incidence form (no per-mass expressions): they must equal the model's own expressions (lambdify)."""
     n = 2 * MAX_PRINTED_MATRIX + 1
-    d = derive(load_scene("nl.toml", text=nonlinear_scene_text(n)), budget=1.0)
+    d = derive(load_scene("nl.toml", text=nonlinear_scene_text(n)))
     assert "_out[" not in d.source  # no expression per mass was printed
     module = load(d.source, f"nl{n}", tmp_path)
     p = dict(module.DEFAULTS)

@@ -43,6 +43,8 @@ def test_bundled_modules_bind_only_contract_names(name):
     ('[[forces]]\non = "p"\nf = "cos(2*t)"', {"external_acceleration", "forcing_harmonics"}),
     ('[ground]\nacceleration = "sin(t)"', {"ground_acceleration", "ground_harmonics", "ground_motion"}),
     ('[gravity]\ng = "9.81"', {"gravity_forces"}),
+    ('[[springs]]\nbetween = ["q", "wall"]\npotential = "k*d**2/2 + d**4/4"',
+     {"equilibrium", "spring_tensions", "spring_stiffnesses"}),
 ])
 def test_effects_bring_their_items(text, expect, make_chain_toml, scene_from_text, import_source):
     from springchain._modules import derive
@@ -53,6 +55,17 @@ def test_effects_bring_their_items(text, expect, make_chain_toml, scene_from_tex
     facts = contract.read(module)
     assert all(facts.has(f) for f in expect), expect - facts.functions
     assert public_names(module) <= set(contract.BY_NAME)
+    assert facts.potential == ("equilibrium" in expect)
+
+
+def test_a_potential_chain_states_its_law():
+    import springchain.generated.fput_alpha as fput
+
+    facts = contract.read(fput)
+    assert facts.potential and not facts.linear and not facts.law_indexed
+    assert all(facts.has(f) for f in ("spring_force", "spring_energy", "spring_stiffness", "equilibrium"))
+    seed = contract.read(importlib.import_module("springchain.generated.seed"))
+    assert not seed.potential and not seed.law_indexed
 
 
 def test_the_chain_module_states_the_shared_facts():

@@ -57,6 +57,7 @@ def test_hostile_scene_is_refused_in_one_line(path, command, tmp_path, monkeypat
     monkeypatch.setenv("SPRINGCHAIN_CACHE", str(cache))
     refused_by = _header(path).get("commands", "modes simulate derive").split()
     if command not in refused_by:  # a setting only the commands that use it check (e.g. [simulation])
+        monkeypatch.setenv("SPRINGCHAIN_PROGRESS", "0")  # real work: a loaded machine may show progress
         argv = {"modes": ["modes", path], "simulate": [], "derive": ["derive", path, "--out", out_dir]}[command]
         status, out, err = run_cli(argv, capsys)
         assert status == 0 and err == "", err

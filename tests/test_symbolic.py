@@ -287,7 +287,7 @@ def test_model_refuses_chain_scene(scene_from_text):
 def test_budget_fallback_is_numeric_and_flagged(derived):
     """max_radical_degree=0 forces the numeric fallback; values still match eigh."""
     model = derived("wall2").model
-    modes = closed_form_modes(model, budget=5.0, max_radical_degree=0)
+    modes = closed_form_modes(model, max_radical_degree=0)
     assert not modes.closed_form and modes.notes
     values = model.scene.parameters
     subs = {model.params[k]: v for k, v in values.items()}

@@ -111,9 +111,11 @@ class Problem:
     def from_system(cls, system: "System") -> "Problem":
         """The conservative problem of a :class:`~numeric.system.System`, with its springs if it is linear."""
         chain = None
-        if system.linear and system.effects <= frozenset({"spring"}):
+        if system.linear and system.effects <= frozenset({"spring", "potential"}):  # a quadratic potential is linear
             chain = LinearChain(system.masses, system.spring_ends, system.stiffness)
-        return cls(system.acceleration_fn, linear=chain)
+        from ..fast import acceleration_of  # a long potential chain: its compiled law
+
+        return cls(acceleration_of(system), linear=chain)
 
 
 @dataclass(frozen=True)

@@ -23,7 +23,9 @@ from .protocol import Kind, Method
 def full_problem(system: System) -> Problem:
     """``ẍ = a(x) − M⁻¹C ẋ + a_ext(t)``: everything the system has, for methods that integrate it whole."""
     Ad = system.damping_rate_matrix()
-    return Problem(system.acceleration_fn, damping=None if Ad is None else (lambda v: Ad @ v),
+    from ..fast import acceleration_of  # a long potential chain: its compiled law
+
+    return Problem(acceleration_of(system), damping=None if Ad is None else (lambda v: Ad @ v),
                    external=system.external_fn)
 
 
@@ -51,7 +53,19 @@ class AdaptiveRun(Method):
         return full_problem(system)
 
     def solve(self, system: System, x0: np.ndarray, v0: np.ndarray, t: np.ndarray, rtol: float, atol: float):
-        """The solver's result on ``t`` (:class:`~numeric.integrators.ivp.AdaptiveResult`), no recorder."""
+        """The solver's result on ``t`` (:class:`~numeric.integrators.ivp.AdaptiveResult`), no recorder.
+        The RKN pairs run compiled on small ``[masses]`` scenes (:func:`numeric.compiled.run.rkn`)."""
+        table = getattr(self.solver_class, "table", None)
+        if table is not None and self.options.compiled and np.ndim(x0) == 1 and not system.chain \
+                and not system.damped:
+            from ..compiled.run import rkn, scalar_ready, worth_compiling
+
+            # a rough count: steps of the error control, and half a step per output time it steps onto
+            evals = table.evals_per_step * (float(t[-1] - t[0]) * system.omega_max * rtol ** (-1.0 / table.order)
+                                            + 0.5 * len(t))
+            if scalar_ready(system) and rtol > 0 and atol > 0 and np.all(np.diff(t) > 0) \
+                    and worth_compiling(system, "rkn_loop", evals):
+                return rkn(system, table, x0, v0, t, rtol, atol)
         return self.solver_class().solve(self.problem(system), x0, v0, t, rtol, atol)
 
     def run(self, system, x0, v0, grid, recorder) -> int:

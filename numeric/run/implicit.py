@@ -39,6 +39,10 @@ class ImplicitStep(StepMethod):
         """The integrator on ``system``'s stiffness, damping and loads (no splitting around it)."""
         return self.integrator_class.for_system(system, **self._settings())
 
+    def compiled_loop(self, system: System, integ: Integrator, grid) -> None:
+        """None: an implicit step always runs on the NumPy driver (no compiled loop solves its systems)."""
+        return None
+
     def response(self):
         """The closed-form per-mode response of the step (rational in ``z = ωh``)."""
         return self.integrator_class(**self._settings()).response()

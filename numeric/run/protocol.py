@@ -93,6 +93,9 @@ class Options:
     settings : tuple of (str, float)
         Named settings of the methods that take them (:attr:`Method.takes`; e.g. HHT-α's
         ``alpha``), sorted by name; a dict is accepted.
+    compiled : bool
+        Run small ``[masses]`` scenes' fixed-step methods as one compiled loop
+        (:mod:`numeric.compiled`) where one applies; False: always the NumPy driver.
     """
 
     rtol: float = DEFAULT_RTOL
@@ -100,6 +103,7 @@ class Options:
     spectrum: SpectrumSource = SpectrumSource.SVD
     progress: bool | None = None
     settings: tuple = ()
+    compiled: bool = True
 
     def __post_init__(self):
         items = self.settings.items() if isinstance(self.settings, dict) else self.settings

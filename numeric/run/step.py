@@ -7,9 +7,11 @@ the fused single-pass kernel (:mod:`numeric.fast`, numba when installed), everyt
 NumPy driver (:func:`numeric.driver.integrate`). :func:`stability_refusal` is the one stability
 check (``ω_max·h`` below the method's limit, ``ω_max`` from :attr:`System.omega_max`).
 
-Extension points: a compiled whole-loop driver for small scenes is chosen in
-:meth:`StepMethod.integrator`; an implicit method that takes the damping and loads into its step
-is a subclass that overrides it (:class:`.implicit.ImplicitStep`, named by its registry entry).
+Small ``[masses]`` scenes run their whole loop compiled (:mod:`numeric.compiled`: the module's
+``scalar_force`` in numba loops, chosen in :meth:`StepMethod.compiled_loop`); the NumPy driver stays
+the fallback (chains, tables, batches, ``Options(compiled=False)``, implicit steps). Extension point:
+an implicit method that takes the damping and loads into its step is a subclass that overrides
+:meth:`StepMethod.integrator` (:class:`.implicit.ImplicitStep`, named by its registry entry).
 """
 
 from __future__ import annotations
@@ -96,6 +98,15 @@ class StepMethod(Method):
 
         return OscillatorResponse.from_integrator(self.integrator_class())
 
+    def compiled_loop(self, system: System, integ: Integrator, grid) -> str | None:
+        """The compiled loop (:func:`numeric.compiled.run.route`) this run takes, or None (NumPy driver)."""
+        if not self.options.compiled or system.chain:
+            return None
+        from ..compiled.run import route
+
+        return route(system, getattr(integ, "inner", integ), grid.frames,
+                     max(integ.evals_per_step, 1.0) * grid.steps)
+
     def refusal(self, system: System) -> str | None:
         why = self.integrator(system).refusal(self.problem(system))
         return why.replace(f"method {self.name!r} ", "", 1) if why else None
@@ -110,6 +121,14 @@ class StepMethod(Method):
 
             raise RunRefused(why, quantity="dt")
         n = system.n
+        loop = self.compiled_loop(system, integ, grid)
+        if loop is not None:  # small [masses] scene: the whole run as one compiled loop
+            from ..compiled.run import run_steps
+
+            xs, vs = run_steps(system, integ.inner if hasattr(integ, "inner") else integ, loop, x0, v0, grid.h,
+                               grid.steps, grid.indices)
+            recorder.frames(0, xs, vs)
+            return integ.force_evals(problem, grid.h, grid.steps)
         long_run = grid.steps * n > PROGRESS_MIN_WORK
         bar = Reporter(self.name, grid.steps, enabled=self.options.progress if long_run else False)
         if getattr(recorder, "bulk", False):  # the recorder keeps every frame anyway: hand them over at once

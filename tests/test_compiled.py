@@ -1,0 +1,183 @@
+"""Compiled loops of small [masses] scenes (numeric.compiled): the same trajectories as the NumPy
+driver to rounding, for every step method with a loop, on a scene with every effect the generated
+scalar_force carries (cubic springs, gravity, an expression force, ground acceleration) and dampers;
+the disk cache (a second process compiles nothing); SciPy's DOP853 step sequence reproduced."""
+
+from __future__ import annotations
+
+import json
+import os
+import subprocess
+import sys
+import textwrap
+
+import numpy as np
+import pytest
+
+from helpers import scene_toml, system_of
+
+from springchain.numeric.compiled.run import dop853, route
+from springchain.numeric.run import registry
+from springchain.numeric.run.grid import Grid
+from springchain.numeric.run.implicit import ImplicitStep
+from springchain.numeric.run.protocol import Kind, Options, record
+
+pytest.importorskip("numba")
+
+EVERYTHING = scene_toml(
+    "everything", {"m": 1.0, "k": 2.0, "kappa": 0.7, "c": 0.05, "F0": 0.3, "Omega": 1.3, "g": 0.2, "A": 0.1},
+    masses={"a": "m", "b": "2*m", "c1": "m", "d": "3*m"},
+    springs=[{"between": ["wall", "a"], "k": "k", "k3": "kappa"}, {"between": ["a", "b"], "k": "k"},
+             {"between": ["b", "c1"], "k": "2*k", "k3": "kappa"}, {"between": ["c1", "d"], "k": "k"}],
+    dampers=[{"between": ["a", "b"], "c": "c"}, {"between": ["d", "wall"], "c": "c"}],
+    forces=[{"on": "c1", "f": "F0*cos(Omega*t) + F0*exp(-t)"}],
+    tables={"gravity": {"g": "g"}, "ground": {"acceleration": "A*sin(2*t)"}})
+
+DUFFING_ONLY = scene_toml(
+    "springy", {"m": 1.0, "k": 1.0, "kappa": 0.5},
+    masses={"p": "m", "q": "2*m", "r": "m"},
+    springs=[{"between": ["wall", "p"], "k": "k", "k3": "kappa"}, {"between": ["p", "q"], "k": "k", "k3": "kappa"},
+             {"between": ["q", "r"], "k": "k"}])
+
+STEP_METHODS = [m for m in registry.methods(Kind.STEP)
+                if m.name not in ("expm", "chebyshev") and not isinstance(m, ImplicitStep)]
+IMPLICIT_METHODS = [m for m in registry.methods(Kind.STEP) if isinstance(m, ImplicitStep)]
+
+
+@pytest.fixture(autouse=True)
+def _always_compile(monkeypatch):
+    """Compile even the short runs of these tests (outside them, only runs that pay a first compile)."""
+    import springchain.numeric.compiled.run as compiled_run
+
+    monkeypatch.setattr(compiled_run, "COMPILE_MIN_EVALS", 0)
+
+
+@pytest.fixture(scope="module")
+def systems(scene_from_text):
+    return {name: system_of(scene_from_text(text, f"{name}.toml"))[1]
+            for name, text in (("everything", EVERYTHING), ("springy", DUFFING_ONLY))}
+
+
+def _state(n, seed=3):
+    rng = np.random.default_rng(seed)
+    return 0.4 * rng.standard_normal(n), 0.4 * rng.standard_normal(n)
+
+
+@pytest.mark.parametrize("scene", ["everything", "springy"])
+@pytest.mark.parametrize("method", STEP_METHODS, ids=lambda m: m.name)
+def test_compiled_loop_agrees_with_numpy_driver(systems, scene, method):
+    system = systems[scene]
+    if method.refusal(system):
+        pytest.skip(method.refusal(system))
+    assert route(system, method.integrator(system).__dict__.get("inner", method.integrator(system)), 10), \
+        f"{method.name} on {scene} should run compiled"
+    x0, v0 = _state(system.n)
+    grid = Grid(0.01, 600, 7)
+    fast = record(method, system, x0, v0, grid)
+    slow = record(method.with_options(Options(compiled=False)), system, x0, v0, grid)
+    scale = max(np.abs(slow.x).max(), np.abs(slow.v).max())
+    assert np.abs(fast.x - slow.x).max() <= 1e-12 * scale
+    assert np.abs(fast.v - slow.v).max() <= 1e-12 * scale
+    assert fast.force_evals == slow.force_evals
+    # a wrong force would show: the trajectory moved away from the start by far more than rounding
+    assert np.abs(slow.x[-1] - x0).max() > 1e-3
+
+
+@pytest.mark.parametrize("scene", ["everything", "springy"])
+@pytest.mark.parametrize("method", IMPLICIT_METHODS, ids=lambda m: m.name)
+def test_implicit_steps_take_the_numpy_driver(systems, scene, method):
+    """Newmark/HHT solve with the system's operators: no compiled loop, the same frames either way."""
+    system = systems[scene]
+    if method.refusal(system):
+        pytest.skip(method.refusal(system))
+    grid = Grid(0.01, 200, 7)
+    assert method.compiled_loop(system, method.integrator(system), grid) is None
+    x0, v0 = _state(system.n)
+    on = record(method, system, x0, v0, grid)
+    off = record(method.with_options(Options(compiled=False)), system, x0, v0, grid)
+    assert np.abs(on.x - off.x).max() <= 1e-14 * np.abs(off.x).max()
+    assert np.abs(on.x[-1] - x0).max() > 1e-3
+
+
+def test_tables_fall_back_to_numpy(scene_from_text, tmp_path):
+    from helpers import write_scene
+
+    from springchain.derive.scene import load_scene
+
+    text = scene_toml("tab", {"m": 1.0, "k": 1.0}, masses={"a": "m", "b": "m"},
+                      springs=[{"between": ["a", "b"], "k": "k"}], forces=[{"on": "a", "table": "f.csv"}])
+    path = write_scene(tmp_path, "tab", text, {"f.csv": "t,f\n0,0\n1,1\n2,0\n"})
+    system = system_of(load_scene(path))[1]
+    verlet = registry.method("verlet")
+    assert route(system, verlet.integrator(system).inner, 10) is None
+
+
+def test_compiled_dop853_takes_scipys_steps(systems):
+    from scipy.integrate import DOP853
+
+    system = systems["everything"]
+    n = system.n
+    x0, v0 = _state(n)
+    Ad = system.damping_rate_matrix()
+    acc, ext = system.acceleration_fn, system.external_fn
+
+    def rhs(t, y):
+        return np.concatenate([y[n:], acc(y[:n]) + Ad @ y[n:] + np.reshape(ext(t), -1)])
+
+    T, rtol, atol = 20.0, 1e-9, 1e-11
+    solver = DOP853(rhs, 0.0, np.concatenate([x0, v0]), T, rtol=rtol, atol=atol)
+    ts = []
+    while solver.status == "running":
+        solver.step()
+        ts.append(solver.t)
+    x, v, steps, evals = dop853(system, x0, v0, T, rtol, atol, max_steps=10_000)
+    # the same steps: SciPy's initial step to rounding; after it the error norms (stage sums that cancel
+    # from O(1) to O(rtol)) keep only about -log10(rtol) + 16 digits, so the summation order moves the
+    # step ends by a relative 1e-7 (a different rule -- exponent, safety factor, norm -- moves them by %)
+    assert steps.shape[0] == len(ts) > 20
+    np.testing.assert_allclose(steps[0], ts[0], rtol=1e-13)
+    np.testing.assert_allclose(steps, ts, rtol=1e-5)
+    assert evals == solver.nfev
+    np.testing.assert_allclose(np.concatenate([x, v]), solver.y, rtol=0, atol=1e-7)
+
+
+_CHILD = textwrap.dedent("""
+    import json, numpy as np
+    from springchain._scenes import load
+    from springchain._modules import system_of
+    from springchain.numeric.run import registry
+    from springchain.numeric.run.grid import Grid
+    from springchain.numeric.run.protocol import record
+    from springchain.numeric.compiled.cache import compiled
+    system, _ = system_of(load("duffing"))
+    run = record(registry.method("verlet"), system, np.full(3, 0.1), np.zeros(3), Grid(0.001, 200_000, 20_000))
+    c = compiled(system.module)
+    d = c.loop("verlet_loop")
+    print(json.dumps({"compiled": sorted(c.compiled), "hits": sum(d.stats.cache_hits.values()),
+                      "misses": sum(d.stats.cache_misses.values()), "x": run.x[-1].tolist(),
+                      "seconds": c.compile_seconds}))
+""")
+
+
+def test_second_process_compiles_nothing(tmp_path):
+    env = {**os.environ, "SPRINGCHAIN_CACHE": str(tmp_path / "cache"), "OPENBLAS_NUM_THREADS": "1"}
+    runs = [json.loads(subprocess.run([sys.executable, "-c", _CHILD], env=env, capture_output=True, text=True,
+                                      check=True).stdout.strip().splitlines()[-1]) for _ in range(2)]
+    assert runs[0]["compiled"] == ["verlet_loop"] and runs[0]["misses"] == 1
+    assert runs[1]["compiled"] == [] and runs[1]["misses"] == 0 and runs[1]["hits"] == 1
+    assert runs[0]["x"] == runs[1]["x"]
+    assert list((tmp_path / "cache" / "compiled").glob("sc_*.py"))
+
+
+@pytest.mark.parametrize("name", ["dprkn6", "dprkn8", "dprkn12"])
+def test_compiled_rkn_pairs_agree_with_numpy(systems, name):
+    """Same pair, same step control: the trajectories agree far inside the tolerance (the step sequences
+    may part where an error norm within rounding of a decision flips it)."""
+    system = systems["springy"]
+    method = registry.method(name)
+    x0, v0 = _state(system.n)
+    t = np.linspace(0.0, 20.0, 21)
+    fast = method.solve(system, x0, v0, t, 1e-10, 1e-12)
+    slow = method.with_options(Options(compiled=False)).solve(system, x0, v0, t, 1e-10, 1e-12)
+    assert np.abs(fast.x - slow.x).max() <= 1e-8 * np.abs(slow.x).max()
+    assert abs(fast.force_evals - slow.force_evals) <= 0.1 * slow.force_evals
