@@ -382,6 +382,10 @@ def chain_report(model: ChainModel, modes: ChainModes, omega2_values=None, dampe
             lines.append(f"    note: {listed_note}")
     elif listed_note:
         lines.append(f"    note: {listed_note}")
+    from .participation import chain_note
+
+    lines += [line for note in chain_note(model) for line in ("", note)]
+    notes += chain_note(model)
     data = {"scene": sc.name, "parameters": {k: sc.parameters[k] for k in sorted(sc.parameters)},
             "masses": [], "modes": records, "closed_form": modes.closed_form,
             "notes": notes + ([listed_note] if listed_note else []),

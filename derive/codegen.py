@@ -379,8 +379,11 @@ def _damping_acceleration(c: _Context) -> list[str]:
     what = " and ".join((["the dampers"] if model.dampers else [])
                         + (["Rayleigh damping"] if model.rayleigh is not None else []))
     if c.dense or model.rayleigh is not None:  # Rayleigh terms are per mass: one line each, no N x N
-        damp = model.force_expressions(Effect.DAMPER, Effect.RAYLEIGH)
-        body = [f"    {c.unpack(model.v)} = _v", "    _out = numpy.empty(numpy.shape(_v))",
+        from .rayleigh_targets import binding_lines, private
+
+        damp = [private(e) for e in model.force_expressions(Effect.DAMPER, Effect.RAYLEIGH)]
+        body = [*binding_lines(model, c.kwcall),  # _alpha_R, _beta_R of [damping] rayleigh_targets
+                f"    {c.unpack(model.v)} = _v", "    _out = numpy.empty(numpy.shape(_v))",
                 *c.per_mass(damp), "    return _out"]
     else:
         body = _incidence_lines(c, "_v", "_DAMPER_ENDS", "damper_constants", cubic=False)

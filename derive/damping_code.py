@@ -29,6 +29,11 @@ def rayleigh_coefficients_lines(model, sig: str) -> list[str]:
     """Lines of ``rayleigh_coefficients()`` (empty without ``[damping] rayleigh``); dense and chain modules."""
     if model.rayleigh is None:
         return []
+    if getattr(model, "rayleigh_targets", None) is not None:
+        from .rayleigh_targets import coefficients_lines, values
+
+        values(model)  # refuses targets that give α or β < 0 or a repeated ω, before anything is written
+        return coefficients_lines(model, sig)
     return ["", "", f"def rayleigh_coefficients({sig}):",
             '    """(alpha, beta) of Rayleigh damping C = alpha*M + beta*K ([damping] rayleigh), shape (2,)."""',
             f"    return {array([p(e) for e in model.rayleigh])}"]
@@ -56,9 +61,11 @@ def damping_matrix_lines(model: Model, sig: str, kwcall: str, matrix=None) -> li
         w(f"    return {array([p(e) for e in model.modal_zeta])}")
         out.extend(_MODAL_HELPER.rstrip("\n").split("\n")[1:])
     parts, what = [], []
+    from .rayleigh_targets import binding_lines, private
+
     if model.C is not None:
         if matrix is not None:
-            parts.append(matrix(model.C))
+            parts.append(matrix(private(model.C)))
         else:
             if model.dampers:
                 parts.append(f"_assemble(_DAMPER_ENDS, damper_constants({kwcall}))")
@@ -79,6 +86,8 @@ def damping_matrix_lines(model: Model, sig: str, kwcall: str, matrix=None) -> li
         w('    """C = d²R/dv² (Rayleigh dissipation), shape (N, N)."""')
     else:
         w(f'    """C of {" + ".join(what)}, shape (N, N)."""')
+    if matrix is not None:
+        out.extend(binding_lines(model, kwcall))
     body = "\n        + ".join(parts)
     w(f"    return ({body})" if len(parts) > 1 else f"    return {body}")
     return out

@@ -67,6 +67,13 @@ class DampedModes:
     model: str  # "dashpots", "rayleigh", "modal" or a combination joined by " + "
 
 
+def _values(model: Model) -> dict:
+    """Exact parameter values, and α_R, β_R of ``rayleigh_targets`` (:func:`rayleigh_targets.values`)."""
+    from .rayleigh_targets import values
+
+    return {**exact_values(model.params, model.scene.parameters), **values(model)}
+
+
 def _pieces(model: Model) -> list[list[int]]:
     """Mass indices of the pieces joined by springs or dashpots (walls join nothing)."""
     n = model.scene.n
@@ -110,7 +117,7 @@ def _eig_by_piece(masses: list, springs: list, pieces: list[list[int]], dps: int
 
 def _modal_damping(model: Model, dps: int):
     """(ω² list, G matrix) in modal coordinates at working precision ``dps``."""
-    subs = exact_values(model.params, model.scene.parameters)
+    subs = _values(model)
     n = model.scene.n
     masses = [m.subs(subs) for m in model.masses]
     springs = [(a, b, k.subs(subs)) for a, b, k, _, _ in model.springs]
@@ -223,7 +230,7 @@ def _rows_float(model: Model) -> tuple[list[tuple], bool]:
     (Rayleigh and modal damping diagonal by definition), and LAPACK's eigenvalues of the state
     matrix in the balanced form ``[[0, Ω], [−Ω, −G]]``; modes of a piece without damping undamped by
     structure, as at high precision."""
-    subs = exact_values(model.params, model.scene.parameters)
+    subs = _values(model)
     w2, Phi = _float_modes(model, subs)
     G = _float_damping(model, subs, w2, Phi)
     return _float_proportional_rows(w2, G) or _float_complex_rows(w2, G)
@@ -375,7 +382,7 @@ def _closed_forms(model: Model, modes: ModeSet) -> list[sp.Expr | None]:
     """Closed-form ζⱼ per independent mode in ascending order (None where none is available)."""
     out: list[sp.Expr | None] = []
     j = 0
-    subs = exact_values(model.params, model.scene.parameters)
+    subs = _values(model)
     records = [(mode, shape) for mode in modes.modes for shape in mode.shapes]
     records.sort(key=lambda r: max(value(r[0].omega2, subs), 0.0) if r[0].exact else float(r[0].omega2))
     C_d = None
@@ -443,7 +450,7 @@ def _damped_modes(model: Model, modes: ModeSet | None) -> DampedModes:
     else:
         rows, prop = _settled_rows(model)
     exprs = _closed_forms(model, modes) if prop and modes is not None else [None] * len(rows)
-    subs = exact_values(model.params, model.scene.parameters)
+    subs = _values(model)
     out = []
     for (wn, zeta, wd, lam), expr in zip(rows, exprs + [None] * (len(rows) - len(exprs))):
         if expr is not None:  # the closed form, evaluated accurately; the numeric row checks it
@@ -501,7 +508,10 @@ def latex_lines(dm: DampedModes) -> list[str]:
     for j, r in enumerate(dm.rows, start=1):
         if r.zeta is None:
             continue
-        rhs = latex(r.zeta_expr) + rf" \approx {r.zeta:.10g}" if r.zeta_expr is not None else f"{r.zeta:.10g}"
+        from .rayleigh_targets import LATEX_NAMES
+
+        rhs = (latex(r.zeta_expr, symbol_names=LATEX_NAMES) + rf" \approx {r.zeta:.10g}"
+               if r.zeta_expr is not None else f"{r.zeta:.10g}")
         extra = (rf", & \lambda_{{{j}}} &= {r.eigenvalue.real:.10g} \pm {r.eigenvalue.imag:.10g}\,i"
                  if r.eigenvalue is not None else "")
         out.append(rf"\\ \zeta_{{{j}}} &= {rhs}{extra}")

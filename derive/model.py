@@ -135,6 +135,14 @@ class Model:
         #: ``(α, β)`` of Rayleigh damping C = αM + βK ([damping] rayleigh), else None.
         self.rayleigh = None if damping is None or damping.rayleigh is None else \
             tuple(e.to_sympy(sym) for e in damping.rayleigh)
+        #: ``((ζ_a, ζ_b), (a, b))`` of ``[damping] rayleigh_targets`` (SymPy ratios, elastic mode numbers), else
+        #: None. Its α, β enter as the symbols α_R, β_R (:mod:`derive.rayleigh_targets`).
+        self.rayleigh_targets = None if damping is None or damping.targets is None else \
+            (tuple(e.to_sympy(sym) for e in damping.targets[0]), damping.targets[1])
+        if self.rayleigh_targets is not None:
+            from .rayleigh_targets import ALPHA, BETA
+
+            self.rayleigh = (ALPHA, BETA)
         #: Modal damping ratios ζⱼ, one per mode in ascending ω order ([damping] modal), else None.
         self.modal_zeta = None if damping is None or damping.modal is None else \
             tuple(e.to_sympy(sym) for e in damping.modal) * (scene.n if len(damping.modal) == 1 else 1)

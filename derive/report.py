@@ -156,6 +156,14 @@ def modes_json(model: Model, modes: ModeSet) -> dict:
         from .damping_report import damped_modes, json_fields
 
         extra = json_fields(damped_modes(model, modes), records)
+        if model.rayleigh_targets is not None:
+            from .rayleigh_targets import model_fit
+
+            extra["damping"]["rayleigh_coefficients"] = model_fit(model, modes).to_json()
+    from . import participation as part
+
+    if part.applies(model):
+        extra.update(part.json_fields(part.participation(model, modes), records))
     return {
         "scene": sc.name,
         "parameters": {k: sc.parameters[k] for k in sorted(sc.parameters)},
@@ -269,6 +277,10 @@ def render_text(model: Model, modes: ModeSet) -> str:
                 _indent(_pretty(model.K))]
         if model.C is not None:
             out += ["", f"{C} = d²R/dv² (damping matrix) =", _indent(_pretty(model.C))]
+        if model.rayleigh_targets is not None:
+            from .rayleigh_targets import model_fit, text_lines as rayleigh_lines
+
+            out += [""] + rayleigh_lines(model_fit(model, modes))
         if model.modal_zeta is not None:
             out += ["", (f"{C} += " if model.C is not None else f"{C} = ") + f"{M} Φ diag(2 ζ_j ω_j) Φᵀ {M}  (modal "
                     "damping, ζ = (" + ", ".join(sstr(z) for z in model.modal_zeta) + "); Φ the M-orthonormal modes; "
@@ -286,6 +298,10 @@ def render_text(model: Model, modes: ModeSet) -> str:
         from .damping_report import damped_modes, damped_mode_lines
 
         out += [""] + damped_mode_lines(model, damped_modes(model, modes))
+    from . import participation as part
+
+    if part.applies(model):
+        out += [""] + part.text_lines(part.participation(model, modes))
     notes = effect_notes(model)
     if notes:
         out += [""] + [f"{n}" for n in notes]
@@ -294,7 +310,13 @@ def render_text(model: Model, modes: ModeSet) -> str:
 
 def render_latex(model: Model, modes: ModeSet) -> str:
     """The derivation as a LaTeX fragment (amsmath)."""
-    L = latex  # multi-letter names upright; the matrices bold (never like a parameter named K)
+    from functools import partial
+
+    from .rayleigh_targets import LATEX_NAMES
+
+    # multi-letter names upright; the matrices bold (never like a parameter named K); α_R, β_R of
+    # rayleigh_targets as \alpha_{R}, \beta_{R}
+    L = partial(latex, symbol_names=LATEX_NAMES)
     M, K, D = MATRIX_LATEX["M"], MATRIX_LATEX["K"], MATRIX_LATEX["D"]
     lines = [r"\begin{align*}",
              rf"T &= {L(model.T)} \\",
@@ -315,5 +337,13 @@ def render_latex(model: Model, modes: ModeSet) -> str:
         from .damping_report import damped_modes, latex_lines
 
         lines += latex_lines(damped_modes(model, modes))
+    if model.rayleigh_targets is not None:
+        from .rayleigh_targets import latex_lines as rayleigh_latex, model_fit
+
+        lines += rayleigh_latex(model_fit(model, modes))
+    from . import participation as part
+
+    if part.applies(model):
+        lines += part.latex_lines(part.participation(model, modes))
     lines.append(r"\end{align*}")
     return "\n".join(lines) + "\n"

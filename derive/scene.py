@@ -362,7 +362,8 @@ def _build(ld: Loader, sha: str) -> Scene:
     if chain is not None and isinstance(data.get("damping"), dict) and "modal" in data["damping"]:
         raise ld.bad("damping.modal", data["damping"]["modal"], "modal damping on a [chain] is not yet supported",
                      "rayleigh = [ALPHA, BETA] or [[dampers]] on a [chain]; modal with [masses]")
-    damping = parse_damping(ld, pnames, env, n, chain=chain is not None)
+    damping = parse_damping(ld, pnames, env, n, chain=chain is not None,
+                            elastic=None if chain is not None else n - _free_pieces(n, springs))
 
     times = np.linspace(0.0, dt * steps, 257)
     forces, table_forces = parse_forces(ld, ld.array_of_tables("forces"),
@@ -534,6 +535,23 @@ def _initial_state(ld: Loader, n: int, chain: bool, pnames: frozenset[str], env:
     x0 = _initial(ld, "initial.x", init["x"], n, chain, pnames, env) if "x" in init else np.zeros(n)
     v0 = _initial(ld, "initial.v", init["v"], n, chain, pnames, env) if "v" in init else np.zeros(n)
     return x0, v0, bool(init)
+
+
+def _free_pieces(n: int, springs) -> int:
+    """Connected pieces of the spring graph with no spring to a wall (one rigid-body mode each)."""
+    parent = list(range(n))
+
+    def find(i):
+        while parent[i] != i:
+            parent[i] = parent[parent[i]]
+            i = parent[i]
+        return i
+
+    for s in springs:
+        if WALL not in (s.a, s.b):
+            parent[find(s.a)] = find(s.b)
+    walled = {find(i) for s in springs for i in (s.a, s.b) if WALL in (s.a, s.b) and i != WALL}
+    return len({find(i) for i in range(n)} - walled)
 
 
 def _chain(ld: Loader, pnames: frozenset[str], env: dict) -> Chain:

@@ -148,6 +148,10 @@ def transfer_function(model: Model, input: int, output: int) -> TransferFunction
     num, den = sp.fraction(ratio)
     num, den = sp.collect(sp.expand(num), s), sp.collect(sp.expand(den), s)
     values = {model.params[k]: v for k, v in model.scene.parameters.items() if k in model.params}
+    if model.rayleigh_targets is not None:  # α_R, β_R of [damping] rayleigh_targets
+        from .rayleigh_targets import values as rayleigh_values
+
+        values.update({s: float(v) for s, v in rayleigh_values(model).items()})
     names = model.scene.mass_names
     return TransferFunction(s, num, den, names[input], names[output], values)
 

@@ -58,7 +58,9 @@ def run_pilot_bench(system: System, x0: np.ndarray, v0: np.ndarray, t_end: float
              f"the exact solution; the exact solution over the output grid took about "
              f"{planner.exact_seconds:.3g} s"]
     if system.damped:
-        notes.append("damping: every step method runs inside the damping splitting (order at most 2)")
+        own = [m.name for m in planner.laws if not m.splits(system)]
+        notes.append("damping: every step method runs inside the damping splitting (order at most 2)"
+                     + (f", but {', '.join(own)}, which integrate it in their step" if own else ""))
     for m, law in planner.laws.items():
         stages = max(m.traits.evals_per_step, 1.0)
         counts = {Grid.covering(t_end, dt_out).steps}

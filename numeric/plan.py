@@ -279,7 +279,7 @@ class Planner(Horizon):
                     costs[m] = measure_step_cost(m, system, x0, v0, Grid.covering(t_end, dt_out).h)
                 continue
             steps_.append(m)
-            responses[m] = OscillatorResponse.from_integrator(m.integrator_class())
+            responses[m] = m.response()
             costs[m] = measure_step_cost(m, system, x0, v0, h_probe)
         modal_seconds = math.nan
         grid = Grid.covering(t_end, dt_out)
@@ -369,6 +369,8 @@ class Planner(Horizon):
         """The fewest steps over the horizon inside the method's stability limit."""
         limit = method.traits.stability_limit
         w = self.model.omega_max
+        if math.isinf(limit) and math.isfinite(method.traits.order):
+            limit = math.pi  # unconditionally stable (Newmark, HHT): no accuracy beyond half a period per step
         if w == 0 or not math.isfinite(limit):
             return 1
         return max(1, math.floor(self.t_end * w / limit * (1 + 1e-12)) + 1)

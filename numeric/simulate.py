@@ -103,7 +103,8 @@ def _methods(system: System, names: list[str], options: Options) -> list[Method]
 
 def run_methods(system: System, x0: np.ndarray, v0: np.ndarray, h: float, steps: int,
                 methods: list[str], record_every: int = 1, spectrum_source: str = "svd",
-                progress: bool | None = None, rtol: float = DEFAULT_RTOL, atol: float = DEFAULT_ATOL) -> dict[str, Run]:
+                progress: bool | None = None, rtol: float = DEFAULT_RTOL, atol: float = DEFAULT_ATOL,
+                settings: tuple = ()) -> dict[str, Run]:
     """Run each named method from (x0, v0) on the grid t = i·h, i = 0..steps, keeping the frames.
 
     Parameters
@@ -111,12 +112,14 @@ def run_methods(system: System, x0: np.ndarray, v0: np.ndarray, h: float, steps:
     x0, v0 : ndarray, shape (N,)
     methods : list of str
         Registered names (:func:`numeric.run.registry.names`).
+    settings : tuple of (str, float)
+        Settings of the methods that take them (:attr:`Options.settings`, e.g. HHT's alpha).
 
     Returns
     -------
     dict of str to Run
     """
-    chosen = _methods(system, methods, Options(rtol, atol, spectrum_source, progress))
+    chosen = _methods(system, methods, Options(rtol, atol, spectrum_source, progress, settings))
     grid = Grid(h, steps, record_every)
     out: dict[str, Run] = {}
     for m in chosen:
@@ -129,7 +132,8 @@ def run_methods(system: System, x0: np.ndarray, v0: np.ndarray, h: float, steps:
 
 def stream_methods(system: System, x0: np.ndarray, v0: np.ndarray, h: float, steps: int,
                    methods: list[str], record_every: int, out: Path, scene_name: str,
-                   snapshots: int = 5, figures: bool = True, progress: bool | None = None) -> dict:
+                   snapshots: int = 5, figures: bool = True, progress: bool | None = None,
+                   settings: tuple = ()) -> dict:
     """Run long simulations writing frames straight to ``out/<name>.npz`` (bounded memory).
 
     Keeps only the energy per frame and a few profile snapshots in memory.
@@ -141,7 +145,7 @@ def stream_methods(system: System, x0: np.ndarray, v0: np.ndarray, h: float, ste
     from .progress import phase
     from .run.recorder import StreamRecorder
 
-    chosen = _methods(system, methods, Options(progress=progress))
+    chosen = _methods(system, methods, Options(progress=progress, settings=settings))
     grid = Grid(h, steps, record_every)
     t = grid.t
     keep = set(np.linspace(0, len(t) - 1, min(snapshots, len(t))).round().astype(int).tolist())

@@ -243,6 +243,15 @@ class System:
         return self.omega_max_bound() * h < limit or self.omega_max * h < limit
 
     # -- operators --------------------------------------------------------------------------------
+    @cached_property
+    def cubic_stiffness(self) -> np.ndarray | None:
+        """Cubic coefficient k₃ of each spring in ``spring_ends`` order (0 where linear), shape (S,);
+        None for linear springs."""
+        if self.linear:
+            return None
+        k3 = self.module.cubic_constants(**self.params, **({"n": self.n} if self.chain else {}))
+        return np.asarray(k3, dtype=float) * np.ones(self.spring_ends.shape[0])
+
     def damping_rate_matrix(self):
         """``-M⁻¹C``, shape (N, N); None without dampers.
 

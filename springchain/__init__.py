@@ -16,6 +16,9 @@ The public API (each name loads what it needs on first use, so ``import springch
     sc.sweep("chain100k", disorder=["mass=uniform(0.5, 1.5)"], samples=100)  # ensembles on Dask
     h = sc.frf("building", input="floor3", output="floor3")  # h.omega, h.magnitude, h.phase, h.plot()
     sc.animate("seed", mode=2, out="springchain-out")          # a GIF of mode 2 oscillating
+    sc.rayleigh_coefficients("building", zeta=(0.05, 0.05), modes=(1, 3))  # .alpha, .beta, closed forms
+    sc.response_spectrum("quake-record", zeta=[0.02, 0.05])   # SD, PSV, PSA (exact); a CSV path or bundled record
+    sc.rsa("building_quake", spectrum="quake-record")         # SRSS and CQC peaks
 
 Subpackages: :mod:`springchain.derive` (SymPy), :mod:`springchain.numeric` (NumPy/SciPy),
 :mod:`springchain.generated` (generated modules of the bundled scenes).
@@ -34,6 +37,8 @@ _LAZY = {
     "bundled_scenes": "._scenes", "sweep": "._sweep", "SweepResult": "._sweep",
     "frf": "._frf", "FrequencyResponse": "._frf", "animate": "._animate", "Animation": "._animate",
     "scene_from_dict": ".derive.scene",
+    "rayleigh_coefficients": "._structural", "response_spectrum": "._structural", "rsa": "._structural",
+    "SpectrumResult": "._structural", "RSA": "._structural",
 }
 
 __all__ = ["__version__", *_LAZY]

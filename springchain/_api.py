@@ -133,6 +133,20 @@ class Modes:
 
         return np.array([rec["omega2_value"] for rec in self.to_json().get("modes", [])], dtype=float)
 
+    @property
+    def participation(self):
+        """Modal participation in the ground direction (Γⱼ, Mⱼ*, fractions, mass-normalised shapes).
+
+        A :class:`springchain.derive.participation.Participation` (values settled to float64 on the
+        accurate route, closed forms where they exist); None for ``[chain]`` scenes and for scenes
+        whose supports cannot move (no wall, no ``[ground]``).
+        """
+        from .derive import participation as part
+
+        if self.chain or not part.applies(self.model):
+            return None
+        return part.participation(self.model, self.modes)
+
     def parse(self, text: str):
         """An ``omega2`` or ``shape`` string of :meth:`to_json` back as a SymPy expression.
 
@@ -256,6 +270,24 @@ class Simulation:
         save_npz(path, self.t, self.x, self.v, self.extra)
         return path
 
+    def _spring_series(self, method: str):
+        """(drift, spring force, base shear) of ``method``'s trajectory (:func:`numeric.storeys.spring_series`)."""
+        from .numeric.storeys import spring_series
+
+        return spring_series(_system(self.scene)[0], self.x[method])
+
+    def drifts(self, method: str):
+        """Drift ``x_b − x_a`` of every spring ``between = [a, b]`` (a wall is 0), ndarray, shape (S, springs) [m]."""
+        return self._spring_series(method)[0]
+
+    def spring_forces(self, method: str):
+        """Tension ``k·d + k3·d³`` (d the drift) of every spring: storey shears, shape (S, springs) [N]."""
+        return self._spring_series(method)[1]
+
+    def base_shear(self, method: str):
+        """Force of the wall springs on the ground (positive in +x), ndarray, shape (S,) [N]."""
+        return self._spring_series(method)[2]
+
     def plot(self, quantity: str = "x"):
         """A matplotlib Figure of every mass's position (``"x"``) or velocity (``"v"``), all methods
         (the first 12 masses; ``[chain]`` scenes: the profile at a few times)."""
@@ -343,6 +375,19 @@ def _check_disk(scene: Scene, steps: int, record_every: int, methods: int, out: 
                          f"choose another --out")
 
 
+def _check_settings(chosen, options) -> None:
+    """Refuse a setting (``alpha``) that none of the chosen methods takes, naming those that do."""
+    from .numeric.errors import RunRefused
+    from .numeric.run import registry
+
+    for key, value in options.settings:
+        if not any(key in m.takes for m in chosen):
+            takers = [m.name for m in registry.methods(options=options) if key in m.takes]
+            raise RunRefused(f"{key} {value!r}: a setting of {' and '.join(takers)}, not of "
+                             f"{', '.join(m.name for m in chosen)}; accepted: with the method {' or '.join(takers)}",
+                             quantity=key)
+
+
 def _grid_settings(sc: Scene, dt, steps, record_every) -> tuple[float, int, int]:
     """The run's step, steps and recording stride: the arguments, else the scene's; refused when not
     a finite dt > 0 and whole numbers > 0."""
@@ -361,7 +406,7 @@ def _grid_settings(sc: Scene, dt, steps, record_every) -> tuple[float, int, int]
     return dt, steps, record_every
 
 
-def _streamed(sc: Scene, system, names, dt, steps, record_every, out, figures, progress):
+def _streamed(sc: Scene, system, names, dt, steps, record_every, out, figures, options):
     """A ``[chain]`` run streamed into ``out`` (bounded memory), read back from its NPZ."""
     import numpy as np
 
@@ -371,7 +416,7 @@ def _streamed(sc: Scene, system, names, dt, steps, record_every, out, figures, p
     _check_disk(sc, steps, record_every, len(names), out, "steps")
     out.mkdir(parents=True, exist_ok=True)
     summary = stream_methods(system, sc.x0, sc.v0, dt, steps, names, record_every, out, sc.name,
-                             figures=figures, progress=progress)
+                             figures=figures, progress=options.progress, settings=options.settings)
     npz = Path(summary["npz"])
     data = np.load(npz)
     extra = {k: data[k] for k in data.files if k.startswith(("aabs_", "xabs_"))}
@@ -379,8 +424,20 @@ def _streamed(sc: Scene, system, names, dt, steps, record_every, out, figures, p
             npz, tuple(Path(p) for p in summary["figures"]))
 
 
-def _kept(sc: Scene, system, names, dt, steps, record_every, options, out, figures):
-    """An in-memory run; the NPZ (and figures) written into ``out`` when given."""
+def _spring_arrays(system, x: dict) -> dict:
+    """NPZ arrays ``drift_<method>``, ``spring_force_<method>`` (S × springs) and ``base_shear_<method>``
+    (S,) of every method's frames ``x[method]`` (S, N) (:func:`numeric.storeys.spring_series`)."""
+    from .numeric.storeys import spring_series
+
+    out = {}
+    for m, xm in x.items():
+        out[f"drift_{m}"], out[f"spring_force_{m}"], out[f"base_shear_{m}"] = spring_series(system, xm)
+    return out
+
+
+def _kept(sc: Scene, system, names, dt, steps, record_every, options, out, figures, springs=False):
+    """An in-memory run; the NPZ (and figures) written into ``out`` when given; with ``springs`` the
+    drift, spring-force and base-shear arrays of every method among its NPZ arrays."""
     from .numeric.absolute import absolute_npz_arrays
     from .numeric.compare import compare
     from .numeric.progress import phase
@@ -388,10 +445,12 @@ def _kept(sc: Scene, system, names, dt, steps, record_every, options, out, figur
 
     _check_memory(sc, steps, record_every, len(names), "steps")
     runs = run_methods(system, sc.x0, sc.v0, dt, steps, names, record_every, spectrum_source=options.spectrum,
-                       rtol=options.rtol, atol=options.atol, progress=options.progress)
+                       rtol=options.rtol, atol=options.atol, progress=options.progress, settings=options.settings)
     t = next(iter(runs.values())).t
     x, v = {m: r.x for m, r in runs.items()}, {m: r.v for m, r in runs.items()}
     extra = absolute_npz_arrays(system, t, x, v)
+    if springs:
+        extra.update(_spring_arrays(system, x))
     npz, figs = None, ()
     if out is not None:
         from .numeric.npz import save_npz
@@ -430,7 +489,8 @@ def _modal_energies(sc: Scene, system, t, x, v, extra, npz, figs, figures, progr
 def simulate(scene: str | Path | Scene, methods: list[str] | None = None, dt: float | None = None,
              steps: int | None = None, record_every: int | None = None, *, spectrum: str = "svd",
              rtol: float = DEFAULT_RTOL, atol: float = DEFAULT_ATOL, out: str | Path | None = None,
-             figures: bool = False, progress: bool | None = None, modal_energy: bool = False) -> Simulation:
+             figures: bool = False, progress: bool | None = None, modal_energy: bool = False,
+             springs: bool = False, alpha: float | None = None) -> Simulation:
     """Simulate a scene from its initial state with exact and numerical methods.
 
     Parameters
@@ -458,6 +518,11 @@ def simulate(scene: str | Path | Scene, methods: list[str] | None = None, dt: fl
         Also record ``modal_energy_<method>`` (S × N): the harmonic energy ½(q̇ⱼ² + ωⱼ² qⱼ²) of each
         linear normal mode about the equilibrium, ascending ω (:mod:`numeric.modal_energy`), in
         ``extra`` and the NPZ, and with ``figures`` the figure ``<scene>-modal-energy.png``.
+    springs : bool
+        Add ``drift_<method>``, ``spring_force_<method>`` (S × springs) and ``base_shear_<method>``
+        (S,) to ``extra`` and the NPZ.
+    alpha : float, optional
+        HHT-α's α in [−1/3, 0] (default −0.05) for ``hht``; refused when no chosen method takes it.
 
     Returns
     -------
@@ -477,18 +542,28 @@ def simulate(scene: str | Path | Scene, methods: list[str] | None = None, dt: fl
         _check_memory(sc, steps, record_every, len(methods) if methods else 1, "steps")
     for name in methods or ():  # refusals before any work: their one line stands alone
         registry.entry(name)  # unknown names: one line naming the accepted ones
-    options = Options(rtol, atol, spectrum, progress)  # refuses an unknown spectrum source
+    # refuses an unknown spectrum source, and settings out of range (the methods check them when made)
+    options = Options(rtol, atol, spectrum, progress, {} if alpha is None else {"alpha": alpha})
+    for name in methods or ():
+        registry.method(name, options)  # before any derivation
     with phase("loading the generated module (deriving it if not cached)", enabled=progress):
         system, origin = _system(sc)
     names, notes = methods, []
     if not methods:  # a default Verlet that would be unstable at this dt gives way to the exact method
         names, notes = sim.unstable_defaults(system, sim.default_methods(system), dt)
+    _check_settings([registry.method(name, options) for name in names], options)
     t0 = time.perf_counter()
     if system.chain:
         summary, t, x, v, extra, npz, figs = _streamed(sc, system, names, dt, steps, record_every, out, figures,
-                                                       progress)
+                                                       options)
+        if springs:  # from the frames read back; the NPZ rewritten with them (temp file + rename)
+            from .numeric.npz import save_npz
+
+            extra.update(_spring_arrays(system, x))
+            save_npz(npz, t, x, v, extra)
     else:
-        summary, t, x, v, extra, npz, figs = _kept(sc, system, names, dt, steps, record_every, options, out, figures)
+        summary, t, x, v, extra, npz, figs = _kept(sc, system, names, dt, steps, record_every, options, out, figures,
+                                                   springs)
     if modal_energy:
         summary["modal_energy"], figs = _modal_energies(sc, system, t, x, v, extra, npz, figs, figures, progress)
     notes = notes + sim.float64_limits(system, names, steps * dt)  # one line where float64 cannot follow

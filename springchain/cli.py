@@ -59,7 +59,7 @@ def _whole(flag):
 
 
 #: The commands that take a SCENE, and so ``--set NAME=VALUE``.
-SCENE_COMMANDS = ("derive", "modes", "simulate", "bench", "plan", "sweep", "frf", "animate")
+SCENE_COMMANDS = ("derive", "modes", "simulate", "bench", "plan", "sweep", "frf", "animate", "rsa")
 
 
 def _set_values(items: list[str]) -> dict[str, float]:
@@ -150,8 +150,9 @@ def cmd_simulate(args) -> int:
 
     try:
         result = simulate(args.scene, methods=args.method, dt=args.dt, steps=args.steps, record_every=args.record_every,
-                        spectrum=args.spectrum, rtol=args.rtol, atol=args.atol, out=args.out,
-                        figures=not args.no_figures, modal_energy=getattr(args, "modal_energy", False))
+                          spectrum=args.spectrum, rtol=args.rtol, atol=args.atol, out=args.out,
+                          figures=not args.no_figures, modal_energy=getattr(args, "modal_energy", False),
+                          springs=args.springs, alpha=args.alpha)
     except SceneError as exc:  # name the flag that set the value, when one did
         flag = {"steps": "--steps" if args.steps is not None else "simulation.steps"}.get(exc.key)
         if flag and flag != exc.key:
@@ -274,6 +275,76 @@ def cmd_animate(args) -> int:
     return 0
 
 
+# -- structural dynamics: response spectra and response-spectrum analysis ----------------------
+def _zeta(text):
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"--zeta {text!r}: not a number; accepted: a damping ratio 0 <= zeta < 1") from None
+    if not (math.isfinite(value) and 0 <= value < 1):
+        raise argparse.ArgumentTypeError(f"--zeta {text!r}: accepted: a damping ratio 0 <= zeta < 1")
+    return value
+
+
+def cmd_spectrum(args) -> int:
+    from ._structural import parse_periods, read_record, response_spectrum
+
+    periods = parse_periods(args.periods) if args.periods else None
+    result = response_spectrum(read_record(args.record), zeta=args.zeta or [0.05], periods=periods)
+    paths = result.save(args.out)
+    if args.json:
+        print(_dumps(result.to_json()))
+        return 0
+    print(result.to_text(), end="")
+    for p in paths:
+        print(f"wrote {p}")
+    return 0
+
+
+def cmd_rsa(args) -> int:
+    from ._structural import rsa
+
+    result = rsa(args.scene, args.spectrum, combine=args.combine)
+    print(_dumps(result.to_json()) if args.json else result.to_text(), end="\n" if args.json else "")
+    return 0
+
+
+def add_structural_commands(sub) -> None:
+    """The ``spectrum`` and ``rsa`` subcommands."""
+    sp_ = sub.add_parser("spectrum", help="response spectra (SD, PSV, PSA) of an accelerogram",
+                         description="Displacement, pseudo-velocity and pseudo-acceleration response spectra of a "
+                                     "ground-acceleration record (CSV with header t,a in s and m/s^2, linear between "
+                                     "rows, zero outside: the [ground] table format), exact for that piecewise-linear "
+                                     "input (closed-form one-step maps of the damped oscillator, no time-stepping "
+                                     "error; the peak between samples is refined, free vibration after the record "
+                                     "is included). Writes DIR/<record>-spectrum.png and .json.")
+    sp_.add_argument("record", help="the accelerogram CSV (header t,a), or a bundled record's name (quake-record)")
+    sp_.add_argument("--zeta", type=_zeta, action="append", metavar="Z",
+                     help="damping ratio, repeatable (default: 0.05)")
+    sp_.add_argument("--periods", metavar="A:B:N|T1,T2,...",
+                     help="periods in s: N log-spaced from A to B, or a comma list (default: 0.02:10:100)")
+    sp_.add_argument("--json", action="store_true",
+                     help='print one JSON object {"periods", "zeta", "sd", "psv", "psa", ...} and nothing else')
+    sp_.add_argument("--out", default="springchain-out", metavar="DIR",
+                     help="folder for the figure and JSON file (default: %(default)s)")
+    sp_.set_defaults(func=cmd_spectrum)
+    rs = sub.add_parser("rsa", help="response-spectrum analysis: peak floor displacements, drifts, storey "
+                                    "shears, base shear (SRSS, CQC)",
+                        description="Peak modal responses of a scene (every piece tied to a wall) to a response "
+                                    "spectrum: FILE is a record (header t,a: its exact spectrum at each mode's period "
+                                    "and damping ratio) or a design spectrum (header T,Sa; s and m/s^2, linear between "
+                                    "rows). Prints per mode T, zeta, Gamma, effective mass, SD, PSA and base shear, "
+                                    "and the floor displacements, inter-storey drifts, spring forces (storey shears) "
+                                    "and base shear combined by SRSS and by CQC (Der Kiureghian's correlation).")
+    rs.add_argument("scene", help="a scene file (TOML) or the name of a bundled scene, e.g. building_quake")
+    rs.add_argument("--spectrum", required=True, metavar="FILE",
+                    help="record (t,a) or design spectrum (T,Sa) CSV, or a bundled record's name (quake-record)")
+    rs.add_argument("--combine", choices=("cqc", "srss"), default="cqc",
+                    help="the combination the result leads with (both are printed; default: %(default)s)")
+    rs.add_argument("--json", action="store_true", help="print one JSON object and nothing else")
+    rs.set_defaults(func=cmd_rsa)
+
+
 # -- parser: one function per command ---------------------------------------------------------
 def _scene(p, example: str = "seed") -> None:
     """The SCENE argument: a path or a bundled scene's name."""
@@ -355,6 +426,11 @@ def _add_simulate(sub) -> None:
                         "linear normal mode about the equilibrium (ascending omega), and draw the lowest modes' "
                         "energies over time (DIR/<name>-modal-energy.png)")
     s.add_argument("--json", action="store_true", help="print a JSON summary instead of text")
+    s.add_argument("--springs", action="store_true",
+                   help="add drift_<method>, spring_force_<method> (S x springs) and base_shear_<method> (S) to the NPZ")
+    s.add_argument("--alpha", type=_number("--alpha", float, math.isfinite, "a finite number"), metavar="A",
+                   help="HHT-alpha's alpha for --method hht, -1/3 <= A <= 0: more numerical damping of high "
+                        "modes the more negative (default: -0.05)")
     s.set_defaults(func=cmd_simulate)
 
 
@@ -508,7 +584,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--version", action="version", version=f"springchain {__version__}")
     sub = p.add_subparsers(dest="command", required=True, parser_class=_Parser)
     for add in (_add_run, _add_derive, _add_modes, _add_simulate, _add_bench, _add_plan, _add_scaling, _add_sweep,
-                _add_frf, _add_animate):
+                _add_frf, _add_animate, add_structural_commands):
         add(sub)
     for name in SCENE_COMMANDS:  # one option, the same on every command that takes a SCENE
         sub.choices[name].add_argument(
@@ -523,7 +599,8 @@ FLAGS = {"dt": "--dt", "steps": "--steps", "record_every": "--record-every", "me
          "rtol": "--rtol", "atol": "--atol", "tol": "--tol", "spectrum": "--spectrum",
          "input": "--input", "output": "--output", "omega_min": "--omega-min", "omega_max": "--omega-max",
          "points": "--points", "mode": "--mode", "frames": "--frames", "fps": "--fps", "max_n": "--max-n",
-         "symbolic_max_n": "--symbolic-max-n"}
+         "symbolic_max_n": "--symbolic-max-n", "zeta": "--zeta", "periods": "--periods", "combine": "--combine",
+         "springs": "--springs", "alpha": "--alpha"}
 
 
 def _flag_for(args, quantity: str | None) -> str | None:

@@ -19,6 +19,7 @@ from helpers import scene_toml, system_of
 from springchain.numeric.compiled.run import dop853, route
 from springchain.numeric.run import registry
 from springchain.numeric.run.grid import Grid
+from springchain.numeric.run.implicit import ImplicitStep
 from springchain.numeric.run.protocol import Kind, Options, record
 
 pytest.importorskip("numba")
@@ -38,7 +39,9 @@ DUFFING_ONLY = scene_toml(
     springs=[{"between": ["wall", "p"], "k": "k", "k3": "kappa"}, {"between": ["p", "q"], "k": "k", "k3": "kappa"},
              {"between": ["q", "r"], "k": "k"}])
 
-STEP_METHODS = [m for m in registry.methods(Kind.STEP) if m.name not in ("expm", "chebyshev")]
+STEP_METHODS = [m for m in registry.methods(Kind.STEP)
+                if m.name not in ("expm", "chebyshev") and not isinstance(m, ImplicitStep)]
+IMPLICIT_METHODS = [m for m in registry.methods(Kind.STEP) if isinstance(m, ImplicitStep)]
 
 
 @pytest.fixture(autouse=True)
@@ -78,6 +81,22 @@ def test_compiled_loop_agrees_with_numpy_driver(systems, scene, method):
     assert fast.force_evals == slow.force_evals
     # a wrong force would show: the trajectory moved away from the start by far more than rounding
     assert np.abs(slow.x[-1] - x0).max() > 1e-3
+
+
+@pytest.mark.parametrize("scene", ["everything", "springy"])
+@pytest.mark.parametrize("method", IMPLICIT_METHODS, ids=lambda m: m.name)
+def test_implicit_steps_take_the_numpy_driver(systems, scene, method):
+    """Newmark/HHT solve with the system's operators: no compiled loop, the same frames either way."""
+    system = systems[scene]
+    if method.refusal(system):
+        pytest.skip(method.refusal(system))
+    grid = Grid(0.01, 200, 7)
+    assert method.compiled_loop(system, method.integrator(system), grid) is None
+    x0, v0 = _state(system.n)
+    on = record(method, system, x0, v0, grid)
+    off = record(method.with_options(Options(compiled=False)), system, x0, v0, grid)
+    assert np.abs(on.x - off.x).max() <= 1e-14 * np.abs(off.x).max()
+    assert np.abs(on.x[-1] - x0).max() > 1e-3
 
 
 def test_tables_fall_back_to_numpy(scene_from_text, tmp_path):

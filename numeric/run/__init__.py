@@ -9,6 +9,8 @@
     exact.py     the exact solution; the one place that chooses its solver
     step.py      fixed-step integrators; the one place that wraps an integrator for dampers and
                  forces, checks the stability limit and chooses the loop that runs it
+    implicit.py  implicit step methods (Newmark, HHT-α): the integrator built on the system's own
+                 operators (damping, loads, ground in its step), its settings, its per-mode response
     adaptive.py  tolerance-driven methods on the full first-order problem
     grid.py      the one output grid ``t = i·h``
     recorder.py  where frames go: memory or a streamed NPZ
@@ -20,9 +22,12 @@ Extension points
   ``plan``, ``bench`` and the command line's ``--method`` pick it up from there. Its declared traits
   (order, symplectic, evaluations per step, stability limit, damping support) feed the error models.
 * **Implicit step methods** (Newmark, HHT-α): an ``Integrator`` whose ``kernel`` factorises its
-  (banded) iteration matrix once per step size and solves per step; ``supports_damping = True``
-  lets :mod:`.step` hand it the damping instead of splitting around it; ``stability_limit = inf``
-  lifts the step check.
+  (banded) iteration matrix once per step size and solves per step, registered with the runner
+  :class:`.implicit.ImplicitStep` (the entry's fourth field): it builds the integrator with
+  ``for_system(system, **settings)`` (damping, loads and ground in the step, no splitting),
+  passes it the run's :attr:`~.protocol.Options.settings` its class declares (``settings``) and
+  gives plan the integrator's closed-form ``response()``; ``stability_limit = inf`` lifts the step
+  check.
 * **Compiled whole-loop drivers** (numba) for small scenes are chosen inside the step kind:
   :meth:`.step.StepMethod.integrator` already picks the fused chain kernel for plain ``[chain]``
   Verlet; another loop plugs in there, keyed on the system, without a new method name.

@@ -90,6 +90,9 @@ class Options:
     spectrum : SpectrumSource
     progress : bool or None
         Progress on stderr for phases longer than about a second (None: on).
+    settings : tuple of (str, float)
+        Named settings of the methods that take them (:attr:`Method.takes`; e.g. HHT-α's
+        ``alpha``), sorted by name; a dict is accepted.
     compiled : bool
         Run small ``[masses]`` scenes' fixed-step methods as one compiled loop
         (:mod:`numeric.compiled`) where one applies; False: always the NumPy driver.
@@ -99,9 +102,12 @@ class Options:
     atol: float = DEFAULT_ATOL
     spectrum: SpectrumSource = SpectrumSource.SVD
     progress: bool | None = None
+    settings: tuple = ()
     compiled: bool = True
 
     def __post_init__(self):
+        items = self.settings.items() if isinstance(self.settings, dict) else self.settings
+        object.__setattr__(self, "settings", tuple(sorted(items)))
         try:
             object.__setattr__(self, "spectrum", SpectrumSource(self.spectrum))
         except ValueError:
@@ -134,6 +140,11 @@ class Method(abc.ABC):
     def traits(self) -> Traits:
         """The declared traits (the implementation's)."""
         return Traits.of(self.implementation)
+
+    @property
+    def takes(self) -> tuple[str, ...]:
+        """Names of the :attr:`Options.settings` this method reads (none by default)."""
+        return ()
 
     def refusal(self, system: "System") -> str | None:
         """Why this method does not apply to ``system`` (None when it does)."""

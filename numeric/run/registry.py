@@ -20,6 +20,14 @@ from ..errors import RunRefused
 from .protocol import Kind, Method, Options
 
 
+def _imported(target: str | type) -> type:
+    """The class a target names (``"module:Class"`` relative to ``springchain.numeric``, imported now)."""
+    if not isinstance(target, str):
+        return target
+    module, _, attr = target.partition(":")
+    return getattr(importlib.import_module(module, "springchain.numeric"), attr)
+
+
 @dataclass(frozen=True)
 class Entry:
     """One registered method.
@@ -39,17 +47,25 @@ class Entry:
     name: str
     kind: Kind
     target: str | type
+    #: For ``Kind.STEP``: the :class:`~.step.StepMethod` subclass that runs the integrator
+    #: (``"module:Class"`` or the class; None: :class:`~.step.StepMethod` itself).
+    runner: str | type | None = None
 
     def load(self) -> type:
         """The implementation class (imported on first use)."""
-        if not isinstance(self.target, str):
-            return self.target
-        module, _, attr = self.target.partition(":")
-        cls = getattr(importlib.import_module(module, "springchain.numeric"), attr)
+        cls = _imported(self.target)
         declared = getattr(cls, "name", self.name)
         if self.kind is not Kind.EXACT and declared != self.name:
             raise ValueError(f"registry entry {self.name!r} loads {cls.__name__}, which calls itself {declared!r}")
         return cls
+
+    def load_runner(self) -> type:
+        """The step method class that runs a ``Kind.STEP`` entry's integrator."""
+        if self.runner is None:
+            from .step import StepMethod
+
+            return StepMethod
+        return _imported(self.runner)
 
 
 #: Every method, in the order the command line lists them: the exact one, the fixed-step
@@ -65,6 +81,9 @@ _TABLE: dict[str, Entry] = {e.name: e for e in (
     Entry("rk4", Kind.STEP, ".integrators.rk4:RK4"),
     Entry("expm", Kind.STEP, ".integrators.expm:MatrixExponential"),
     Entry("chebyshev", Kind.STEP, ".integrators.chebyshev:ChebyshevPropagator"),
+    Entry("newmark", Kind.STEP, ".integrators.newmark:NewmarkAverage", ".run.implicit:ImplicitStep"),
+    Entry("newmark-linear", Kind.STEP, ".integrators.newmark:NewmarkLinear", ".run.implicit:ImplicitStep"),
+    Entry("hht", Kind.STEP, ".integrators.newmark:HHTAlpha", ".run.implicit:ImplicitStep"),
     Entry("rk45", Kind.ADAPTIVE, ".integrators.ivp:RK45"),
     Entry("dop853", Kind.ADAPTIVE, ".integrators.ivp:DOP853"),
     Entry("lsoda", Kind.ADAPTIVE, ".integrators.ivp:LSODA"),
@@ -112,9 +131,7 @@ def method(name: str, options: Options = Options()) -> Method:
     if e.kind is Kind.EXACT:
         return cls(name, options)
     if e.kind is Kind.STEP:
-        from .step import StepMethod
-
-        return StepMethod(name, options, cls)
+        return e.load_runner()(name, options, cls)
     from .adaptive import AdaptiveRun
 
     return AdaptiveRun(name, options, cls)
@@ -126,11 +143,12 @@ def methods(kind: Kind | None = None, options: Options = Options(),
     return tuple(method(name, options) for name in names(kind) if not only or name in only)
 
 
-def register(name: str, kind: Kind, target: str | type) -> None:
-    """Add a method (an extension's integrator); its name must be new."""
+def register(name: str, kind: Kind, target: str | type, runner: str | type | None = None) -> None:
+    """Add a method (an extension's integrator, and for a step method the class that runs it); its
+    name must be new."""
     if name in _TABLE:
         raise ValueError(f"method {name!r} is registered already")
-    _TABLE[name] = Entry(name, kind, target)
+    _TABLE[name] = Entry(name, kind, target, runner)
 
 
 def unregister(name: str) -> None:

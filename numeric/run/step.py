@@ -9,8 +9,9 @@ check (``ω_max·h`` below the method's limit, ``ω_max`` from :attr:`System.ome
 
 Small ``[masses]`` scenes run their whole loop compiled (:mod:`numeric.compiled`: the module's
 ``scalar_force`` in numba loops, chosen in :meth:`StepMethod.compiled_loop`); the NumPy driver stays
-the fallback (chains, tables, batches, ``Options(compiled=False)``). Extension point: an implicit
-method that takes the damping itself (``supports_damping``) is chosen in :meth:`StepMethod.integrator`.
+the fallback (chains, tables, batches, ``Options(compiled=False)``, implicit steps). Extension point:
+an implicit method that takes the damping and loads into its step is a subclass that overrides
+:meth:`StepMethod.integrator` (:class:`.implicit.ImplicitStep`, named by its registry entry).
 """
 
 from __future__ import annotations
@@ -81,6 +82,21 @@ class StepMethod(Method):
 
             integ = EffectSplitting(integ, system.damping_rate_matrix(), system.external_fn)
         return integ
+
+    def splits(self, system: System) -> bool:
+        """Whether the integrator runs inside the damping/forcing splitting on ``system`` (an
+        implicit step integrates damping and loads in its step instead)."""
+        from ..effects import EffectSplitting
+
+        return isinstance(self.integrator(system), EffectSplitting)
+
+    def response(self):
+        """The one-step response on a mode ``q̈ = −ω²q`` that plan's error models read (amplitude,
+        phase defect, shape distortion per ``z = ωh``): an :class:`~numeric.error_models.OscillatorResponse`
+        from the integrator's step."""
+        from ..error_models import OscillatorResponse
+
+        return OscillatorResponse.from_integrator(self.integrator_class())
 
     def compiled_loop(self, system: System, integ: Integrator, grid) -> str | None:
         """The compiled loop (:func:`numeric.compiled.run.route`) this run takes, or None (NumPy driver)."""

@@ -1,0 +1,332 @@
+"""Modal participation in the ground direction: Γⱼ, effective modal mass Mⱼ*, mass-normalised shapes.
+
+For support motion every mass feels −mᵢ a_g(t) (coordinates relative to the ground), so the
+influence vector is r = 1 for every mass. With the mass-normalised shapes φⱼ (φⱼᵀMφⱼ = 1)
+
+    Γⱼ = φⱼᵀ M r,      Mⱼ* = Γⱼ² = (φᵀMr)² / φᵀMφ  (any scale of φ),
+
+and Σⱼ Mⱼ* = rᵀMr = the total mass (Φ Φᵀ M = I). Γⱼ is the participation factor *of the
+mass-normalised shape* (``shape_mass_normalised``, whose sign follows the printed shape):
+r = Σⱼ Γⱼ φⱼ.
+
+Values come from the accurate route, never from float64 sums of printed shape components
+(φᵀMr of a high mode is a sum of terms of both signs): the dynamical matrix assembled exactly
+from the element list and diagonalised by ``mpmath.eigsy`` at 40, 80, … digits until every
+value is settled to float64 (up to :data:`~derive.accurate.MAX_MPMATH_MODES` masses), beyond
+that the spring-factor SVD of the generated modules with compensated sums. Closed forms (from
+the closed-form shapes, modes of multiplicity one) are given where they agree with the values
+to 1e-12 and stay readable. Inside a repeated ω the basis is rotated so that one shape carries
+the whole participation of the eigenspace and the others none.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import mpmath
+import sympy as sp
+
+from .printing import latex
+
+from .accurate import MAX_MPMATH_MODES, NotAccurate, _eig_dynamical, exact_values, value
+from .model import Model
+from .modes import ModeSet
+from .work import ops
+from .scene import WALL
+
+#: Two successive precisions agreeing to this relative difference (of the total mass) settle a value.
+_SETTLED = 1e-17
+#: Largest size (SymPy operation count of Σ mᵢφᵢ plus Σ mᵢφᵢ², measured before simplifying) of a
+#: mode whose Γ and M* are put in closed form: a work cap, never a clock (:mod:`.work`).
+MAX_INPUT_OPS = 2000
+#: Longest closed form (SymPy operation count) printed.
+MAX_OPS = 400
+
+
+@dataclass(frozen=True)
+class Participation:
+    """Participation of every independent mode (ascending ω, the order of ``modes`` records).
+
+    Attributes
+    ----------
+    omega2 : tuple of float
+        ω² of each mode.
+    gamma : tuple of float
+        Γⱼ = φⱼᵀ M r for the mass-normalised shape φⱼ.
+    effective_mass : tuple of float
+        Mⱼ* = Γⱼ².
+    total_mass : float
+        rᵀ M r.
+    shapes : tuple of tuple of float
+        Mass-normalised shapes (φᵀMφ = 1), one per mode.
+    gamma_expr, effective_mass_expr : tuple of (sympy.Expr or None)
+        Closed forms in the scene's parameters (None where none is given).
+    shape_expr : tuple of (tuple of sympy.Expr or None)
+        Closed-form mass-normalised shapes.
+    route : str
+        How the values were computed.
+    """
+
+    omega2: tuple
+    gamma: tuple
+    effective_mass: tuple
+    total_mass: float
+    shapes: tuple
+    gamma_expr: tuple
+    effective_mass_expr: tuple
+    shape_expr: tuple
+    route: str
+
+    @property
+    def fraction(self) -> tuple:
+        """Mⱼ* / total mass."""
+        return tuple(m / self.total_mass for m in self.effective_mass)
+
+    @property
+    def cumulative(self) -> tuple:
+        """Σ_{i ≤ j} Mᵢ* / total mass (compensated sums)."""
+        return tuple(math.fsum(self.effective_mass[: j + 1]) / self.total_mass for j in range(len(self.gamma)))
+
+    @property
+    def effective_mass_sum(self) -> float:
+        return math.fsum(self.effective_mass)
+
+
+def applies(model) -> bool:
+    """Participation is reported for scenes whose supports move: ``[ground]`` or any wall end."""
+    sc = model.scene
+    if sc.chain is not None:
+        return False
+    return sc.ground is not None or any(WALL in (s.a, s.b) for s in sc.springs) or any(
+        WALL in (d.a, d.b) for d in sc.dampers)
+
+
+def chain_note(model) -> list[str]:
+    """For a ``[chain]`` scene whose supports move (a wall end or ``[ground]``): one line saying that
+    ``modes`` does not report participation for chains yet and where it is (``rsa``); else nothing."""
+    sc = model.scene
+    if sc.chain is None or not (sc.ground is not None or "wall" in (sc.chain.left, sc.chain.right)):
+        return []
+    return ["Modal participation: not reported by modes for [chain] scenes yet; `springchain rsa SCENE --spectrum "
+            "FILE` prints Gamma and the effective mass of every mode (spring-factor SVD; chains up to 2000 masses)"]
+
+
+# -- values -------------------------------------------------------------------------------------
+def _clusters(w2: list, tol) -> list[range]:
+    out, j, n = [], 0, len(w2)
+    scale = max([abs(w) for w in w2] + [1])
+    while j < n:
+        k = j + 1
+        while k < n and abs(w2[k] - w2[j]) <= tol * scale:
+            k += 1
+        out.append(range(j, k))
+        j = k
+    return out
+
+
+def _values_mp(model: Model, dps: int, n_rigid: int):
+    """(ω², Γ, shapes) at working precision ``dps`` (mpmath), repeated ω rotated (see module docstring)."""
+    subs = exact_values(model.params, model.scene.parameters)
+    n = model.scene.n
+    masses = [m.subs(subs) for m in model.masses]
+    springs = [(a, b, k.subs(subs)) for a, b, k, _, _ in model.springs]
+    w2, shapes = _eig_dynamical(masses, springs, n, dps)
+    with mpmath.workdps(dps):
+        w2 = [mpmath.mpf(0) if j < n_rigid else w for j, w in enumerate(w2)]
+        m = [mpmath.mpf(x.p) / x.q if isinstance(x, sp.Rational) else mpmath.mpf(str(sp.N(x, dps + 10)))
+             for x in masses]
+        phis = [list(s) for s in shapes]
+        tiny = mpmath.mpf(10) ** (-(dps // 2))
+        for cl in _clusters(w2, tiny):
+            if len(cl) < 2:
+                continue
+            # rotate: first vector along the projection of r onto the eigenspace, the rest M-orthogonal to it
+            g = [mpmath.fsum(m[i] * phis[j][i] for i in range(n)) for j in cl]
+            norm = mpmath.sqrt(mpmath.fsum(x * x for x in g))
+            if norm == 0:
+                continue
+            first = [mpmath.fsum(g[a] * phis[j][i] for a, j in enumerate(cl)) / norm for i in range(n)]
+            basis = [first]
+            for j in cl:
+                v = list(phis[j])
+                for b in basis:
+                    c = mpmath.fsum(m[i] * b[i] * v[i] for i in range(n))
+                    v = [v[i] - c * b[i] for i in range(n)]
+                nv = mpmath.sqrt(mpmath.fsum(m[i] * v[i] ** 2 for i in range(n)))
+                if nv > mpmath.mpf(10) ** (-(dps // 3)) and len(basis) < len(cl):
+                    basis.append([x / nv for x in v])
+            for a, j in enumerate(cl):
+                phis[j] = basis[a]
+        gamma = [mpmath.fsum(m[i] * phi[i] for i in range(n)) for phi in phis]
+        return w2, gamma, phis, m
+
+
+def _accurate_values(model: Model):
+    """(ω², Γ, shapes, total mass) as floats, settled to float64, plus the route's name."""
+    n_rigid = len(model.free_components)
+    n = model.scene.n
+    if n > MAX_MPMATH_MODES:
+        return _spring_factor_values(model) + ("spring-factor SVD (float64, compensated sums)",)
+    prev = None
+    dps = 40
+    while dps <= 640:
+        w2, gamma, phis, m = _values_mp(model, dps, n_rigid)
+        with mpmath.workdps(dps):
+            total = mpmath.fsum(m)
+            cur = ([float(x) for x in w2], [float(g) for g in gamma], [[float(c) for c in p] for p in phis],
+                   float(total))
+            if prev is not None and all(abs(a - b) <= _SETTLED * math.sqrt(cur[3]) + 1e-300
+                                        for a, b in zip(prev[1], cur[1])):
+                return cur + (f"mpmath eigsy at {dps} digits (settled to float64)",)
+        prev = cur
+        dps *= 2
+    raise NotAccurate("participation factors did not settle to float64 accuracy within 640 digits")
+
+
+def _spring_factor_values(model: Model):
+    import numpy as np
+
+    from .spring_factor import accurate_modes_function
+
+    subs = exact_values(model.params, model.scene.parameters)
+    masses = [float(m.subs(subs)) for m in model.masses]
+    ends = tuple((a, b) for a, b, *_ in model.springs)
+    ks = [float(k.subs(subs)) for _, _, k, _, _ in model.springs]
+    run = accurate_modes_function(len(masses), ends, tuple(tuple(sorted(p)) for p in model.free_components))
+    w2, shapes = run(masses, ks)  # M-orthonormal physical shapes, columns
+    shapes = np.asarray(shapes, dtype=float)
+    gamma = [math.fsum(mi * c for mi, c in zip(masses, shapes[:, j])) for j in range(shapes.shape[1])]
+    return ([float(w) for w in w2], gamma, [shapes[:, j].tolist() for j in range(shapes.shape[1])],
+            math.fsum(masses))
+
+
+# -- closed forms -------------------------------------------------------------------------------
+def _closed_forms(model: Model, modes: ModeSet, records: list) -> tuple[list, list, list]:
+    """Γ, M* and mass-normalised shapes in closed form per record (None where not available)."""
+    n_rec = len(records)
+    none = ([None] * n_rec, [None] * n_rec, [None] * n_rec)
+    if modes is None or not modes.closed_form:
+        return none
+    g_out, m_out, s_out = list(none[0]), list(none[1]), list(none[2])
+    for j, (mode, shape) in enumerate(records):
+        if mode.multiplicity != 1 or not mode.exact:
+            continue
+        a = sp.Add(*(mi * c for mi, c in zip(model.masses, shape)))
+        b = sp.Add(*(mi * c**2 for mi, c in zip(model.masses, shape)))
+        if ops(a) + ops(b) > MAX_INPUT_OPS:  # past the work cap: values only for this mode
+            continue
+        a, b = sp.radsimp(sp.cancel(sp.expand(a))), sp.radsimp(sp.cancel(sp.expand(b)))
+        root = sp.sqrt(b)
+        gamma = sp.factor(sp.cancel(a / root)) if not a.has(sp.cos, sp.sin) else a / root
+        meff = sp.factor(sp.cancel(a**2 / b)) if not a.has(sp.cos, sp.sin) else sp.cancel(a**2 / b)
+        if ops(gamma) <= MAX_OPS and ops(meff) <= MAX_OPS:
+            g_out[j], m_out[j] = gamma, meff
+            s_out[j] = tuple(c / root for c in shape)
+    return g_out, m_out, s_out
+
+
+def participation(model: Model, modes: ModeSet | None) -> Participation:
+    """Γⱼ, Mⱼ*, fractions and mass-normalised shapes of every independent mode (see module docstring).
+
+    Parameters
+    ----------
+    model : Model
+    modes : ModeSet or None
+        The closed-form modes (for closed forms and the sign of each shape); None for values only.
+
+    Cached on the model (one computation per report).
+    """
+    cache = model.__dict__.setdefault("_participation", {})
+    key = modes is not None
+    if key not in cache:
+        cache[key] = _participation(model, modes)
+    return cache[key]
+
+
+def _participation(model: Model, modes: ModeSet | None) -> Participation:
+    w2, gamma, phis, total, route = _accurate_values(model)
+    n = len(gamma)
+    subs = exact_values(model.params, model.scene.parameters)
+    records = []
+    if modes is not None:
+        records = [(mode, shape) for mode in modes.modes for shape in mode.shapes]
+        records.sort(key=lambda r: max(value(r[0].omega2, subs), 0.0) if r[0].exact else float(r[0].omega2))
+    # the sign of each mass-normalised shape follows the printed shape (modes of multiplicity one)
+    if len(records) == n:
+        for j, (mode, shape) in enumerate(records):
+            if mode.multiplicity != 1:
+                continue
+            printed = [value(c, subs) if not isinstance(c, float) else c for c in shape]
+            dot = math.fsum(float(mi) * p * q for mi, p, q in
+                            zip((value(x, subs) for x in model.masses), printed, phis[j]))
+            if dot < 0:
+                phis[j] = [-c for c in phis[j]]
+                gamma[j] = -gamma[j]
+    g_expr, m_expr, s_expr = _closed_forms(model, modes, records) if len(records) == n else ([None] * n,) * 3
+    # keep a closed form only where it agrees with the accurate value
+    for j in range(n):
+        if g_expr[j] is None:
+            continue
+        try:
+            gv, mv = value(g_expr[j], subs), value(m_expr[j], subs)
+        except NotAccurate:
+            gv = mv = float("nan")
+        scale = math.sqrt(total)
+        if not (abs(gv - gamma[j]) <= 1e-12 * scale and abs(mv - gamma[j] ** 2) <= 1e-12 * total):
+            g_expr[j] = m_expr[j] = s_expr[j] = None
+    return Participation(tuple(w2), tuple(gamma), tuple(g * g for g in gamma), total,
+                         tuple(tuple(p) for p in phis), tuple(g_expr), tuple(m_expr), tuple(s_expr), route)
+
+
+# -- rendering ----------------------------------------------------------------------------------
+def json_fields(p: Participation, records: list[dict]) -> dict:
+    """Add ``participation_factor``, ``effective_mass``, ``effective_mass_fraction``,
+    ``effective_mass_cumulative``, ``shape_mass_normalised`` (and the ``*_expr`` closed forms) to each
+    mode record, in place; return the top-level ``participation`` field."""
+    frac, cum = p.fraction, p.cumulative
+    for j, rec in enumerate(records[: len(p.gamma)]):
+        rec["participation_factor"] = p.gamma[j]
+        rec["effective_mass"] = p.effective_mass[j]
+        rec["effective_mass_fraction"] = frac[j]
+        rec["effective_mass_cumulative"] = cum[j]
+        rec["shape_mass_normalised"] = list(p.shapes[j])
+        rec["participation_factor_expr"] = None if p.gamma_expr[j] is None else sp.sstr(p.gamma_expr[j])
+        rec["effective_mass_expr"] = None if p.effective_mass_expr[j] is None else sp.sstr(p.effective_mass_expr[j])
+    return {"participation": {"influence": "ground: r = 1 for every mass", "total_mass": p.total_mass,
+                              "effective_mass_sum": p.effective_mass_sum, "route": p.route}}
+
+
+def text_lines(p: Participation) -> list[str]:
+    """The text report's participation section."""
+    out = ["Modal participation (ground direction, r = 1 for every mass; shapes mass-normalised, "
+           "phi^T M phi = 1; Gamma = phi^T M r, M* = Gamma^2):",
+           f"    {'mode':>4}  {'omega':>14}  {'Gamma':>14}  {'M*':>14}  {'M*/M':>10}  {'cumulative':>10}"]
+    frac, cum = p.fraction, p.cumulative
+    for j, g in enumerate(p.gamma):
+        w = math.sqrt(max(p.omega2[j], 0.0))
+        out.append(f"    {j + 1:>4}  {w:>14.10g}  {g:>14.10g}  {p.effective_mass[j]:>14.10g}  "
+                   f"{frac[j]:>10.6f}  {cum[j]:>10.6f}")
+    out.append(f"    total mass = {p.total_mass:.10g}; sum of M* = {p.effective_mass_sum:.17g} "
+               f"(relative difference {abs(p.effective_mass_sum - p.total_mass) / p.total_mass:.1e}); {p.route}")
+    for j, g in enumerate(p.gamma_expr):
+        if g is not None:
+            out.append(f"    mode {j + 1}: Gamma = {sp.sstr(g)}   M* = {sp.sstr(p.effective_mass_expr[j])}")
+    for j, s in enumerate(p.shapes):
+        out.append(f"    mode {j + 1}: mass-normalised shape ({', '.join(f'{c:.10g}' for c in s)})")
+    return out
+
+
+def latex_lines(p: Participation) -> list[str]:
+    """``\\Gamma_j``, ``M^*_j`` lines for the LaTeX report (closed forms where known)."""
+    out = []
+    for j, g in enumerate(p.gamma):
+        ge, me = p.gamma_expr[j], p.effective_mass_expr[j]
+        gt = (latex(ge) + rf" \approx {g:.10g}") if ge is not None else f"{g:.10g}"
+        mt = (latex(me) + rf" \approx {p.effective_mass[j]:.10g}") if me is not None else \
+            f"{p.effective_mass[j]:.10g}"
+        out.append(rf"\\ \Gamma_{{{j + 1}}} &= {gt}, & M^*_{{{j + 1}}} &= {mt}")
+    return out
+
+
+__all__ = ["Participation", "participation", "applies", "json_fields", "text_lines", "latex_lines"]
