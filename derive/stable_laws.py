@@ -49,7 +49,7 @@ class expm1mx(sp.Function):
         return expm1(self.args[0])
 
     @classmethod
-    def eval(cls, z):
+    def eval(cls, z):  # SymPy's Function hook for automatic simplification; no text is evaluated
         if z.is_zero:
             return sp.Integer(0)
 
@@ -78,7 +78,7 @@ class log1pmx(sp.Function):
         return -z / (1 + z)
 
     @classmethod
-    def eval(cls, z):
+    def eval(cls, z):  # SymPy's Function hook for automatic simplification; no text is evaluated
         if z.is_zero:
             return sp.Integer(0)
 
