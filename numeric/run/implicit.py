@@ -39,6 +39,14 @@ class ImplicitStep(StepMethod):
         """The integrator on ``system``'s stiffness, damping and loads (no splitting around it)."""
         return self.integrator_class.for_system(system, **self._settings())
 
+    def refusal(self, system: System) -> str | None:
+        """The step solves with the stiffness of linear and cubic springs: a scene with spring
+        potentials is refused (before its operator is built)."""
+        if system.potential:
+            return ("solves with the stiffness of linear and cubic springs; this scene has spring potentials: "
+                    "use verlet, an RKN pair or an adaptive method")
+        return super().refusal(system)
+
     def compiled_loop(self, system: System, integ: Integrator, grid) -> None:
         """None: an implicit step always runs on the NumPy driver (no compiled loop solves its systems)."""
         return None
