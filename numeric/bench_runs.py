@@ -50,8 +50,9 @@ def selected_in_order(selected: set, kind: Kind) -> list[Method]:
 
 
 def adaptive_rtols(method: Method, config: BenchConfig) -> tuple[float, ...]:
-    """The tolerances an adaptive method sweeps: the reference method (DOP853) gets the finer list."""
-    return config.dop853_rtols if method == registry.method(registry.REFERENCE_ADAPTIVE) else config.rtols
+    """The tolerances an adaptive method sweeps: DOP853 and its compiled peer get the finer list."""
+    peers = (registry.REFERENCE_ADAPTIVE, registry.COMPILED_PEER)
+    return config.dop853_rtols if method.name in peers else config.rtols
 
 
 def adaptive_sweep(method: Method, rtols, cap: int, run: Callable[[float], BenchRecord], notes: list[str],
