@@ -250,7 +250,7 @@ class Planner(Horizon):
 
     @classmethod
     def for_system(cls, system: System, x0: np.ndarray, v0: np.ndarray, t_end: float, dt_out: float,
-                   adaptive: bool = True, reference: Callable | None = None) -> "Planner":
+                   adaptive: bool = True, reference: Callable | None = None, settings: tuple = ()) -> "Planner":
         """Measure costs and build the models (call inside :func:`~numeric.timing.single_threaded_blas`).
 
         Parameters
@@ -259,6 +259,8 @@ class Planner(Horizon):
             ``reference(t) -> x (S, N)`` at multiples ``t`` of ``dt_out``, for the pilot runs
             (adaptive methods; step methods on a nonlinear scene). Default: the exact modal
             solution (linear scenes) or DOP853 at rtol 1e-13 (others).
+        settings : tuple of (str, float), optional
+            Method settings (HHT's ``alpha``: :attr:`~numeric.run.protocol.Options.settings`), checked by the caller.
         """
         if system.n > MAX_MASSES:
             raise RunRefused(f"plan and bench use the dense modes of the chain: at most {MAX_MASSES} masses "
@@ -270,7 +272,7 @@ class Planner(Horizon):
         exact = bool(system.springs_only and system.exact_available)
         steps_, responses, costs, props = [], {}, {}, []
         h_probe = min(dt_out, 0.5 / max(model.omega_max, 1e-300))
-        for m in registry.methods(Kind.STEP, Options(progress=False)):
+        for m in registry.methods(Kind.STEP, Options(progress=False, settings=settings)):
             if m.refusal(system):
                 continue
             if not math.isfinite(m.traits.order):
@@ -308,7 +310,7 @@ class Planner(Horizon):
         laws = {}
         if adaptive:
             for m in registry.methods(Kind.ADAPTIVE):
-                if m.refusal(system) is None:
+                if m.refusal(system) is None and m.name != registry.COMPILED_PEER:  # a benchmark peer only
                     laws[m] = calibrate_adaptive(m, system, x0, v0, t_pilot, dt_out, reference)
         planner = cls(float(t_end), float(dt_out), system.n, model, exact, tuple(steps_), responses, costs,
                       tuple(props), laws, modal_seconds)
