@@ -177,10 +177,15 @@ def _pilot_law(system: System, method: Method, ref: ExactReference, x0, v0, t_en
         steps = (grid.steps // j) * mm
         if level >= 2 and steps * n * stages > 4 * PILOT_WORK:
             break
-        tr = record(method, system, x0, v0, Grid(h, steps, mm))
+        try:
+            tr = record(method, system, x0, v0, Grid(h, steps, mm))
+        except RunRefused as exc:  # an implicit step's Newton iterations at the first, largest step: try h/2
+            if pilots or getattr(exc, "quantity", None) != "dt":
+                raise
+            continue
         err = max(float(np.max(np.abs(tr.x - x_ref[::j][: tr.x.shape[0]]))), 1e-300)
         pilots.append((h, err))
-        if level == 0:
+        if len(pilots) == 1:
             continue
         (ha, ea), (hb, eb) = pilots[-2], pilots[-1]
         if eb <= 10 * roundoff_floor(size, stages, steps):  # on the rounding floor: the slope says nothing

@@ -6,7 +6,8 @@ The scheme is :mod:`numeric.integrators.newmark`'s, step for step: predictor ``x
 ``ṽ = v + (1 − γ)h a``; ``a₁`` from ``S a₁ = (1 + α)(f(x̃, t₁) + D ṽ) − α F₀`` with
 ``S = I − (1 + α)(βh² A + γh D)`` (``F₀ = f(x₀, t₀) + D v₀``, the force of the step below), factored
 once (LAPACK's ``getrf``: ``lu``, ``piv``, passed in); cubic springs then Newton on the residual with
-the tangent ``A(x) = −M⁻¹Bᵀdiag(k + 3k₃d²)B`` refactored per iteration, and the same stopping rule.
+the tangent ``A(x) = −M⁻¹Bᵀdiag(k + 3k₃d²)B`` refactored per iteration (Gaussian elimination in place), and the
+same stopping rule.
 """
 
 import numpy as np
@@ -35,6 +36,38 @@ def _lu_solve(lu, piv, r, out):
         for c in range(i + 1, n):
             s -= lu[i, c] * out[c]
         out[i] = s / lu[i, i]
+
+
+def _gauss_solve(S, r, out):
+    """``out = S⁻¹ r`` by Gaussian elimination with partial pivoting, in place (S and r are overwritten;
+    no allocation: the Newton iterations of an N ≤ 12 scene)."""
+    n = r.shape[0]
+    for c in range(n):
+        piv = c
+        big = abs(S[c, c])
+        for i in range(c + 1, n):
+            if abs(S[i, c]) > big:
+                big = abs(S[i, c])
+                piv = i
+        if piv != c:
+            for j in range(n):
+                tmp = S[c, j]
+                S[c, j] = S[piv, j]
+                S[piv, j] = tmp
+            tmp = r[c]
+            r[c] = r[piv]
+            r[piv] = tmp
+        for i in range(c + 1, n):
+            f = S[i, c] / S[c, c]
+            if f != 0.0:
+                for j in range(c + 1, n):
+                    S[i, j] -= f * S[c, j]
+                r[i] -= f * r[c]
+    for i in range(n - 1, -1, -1):
+        s = r[i]
+        for j in range(i + 1, n):
+            s -= S[i, j] * out[j]
+        out[i] = s / S[i, i]
 
 
 def _tangent_matrix(x, masses, ends, k, k3, D, c1, c2, S):
@@ -123,7 +156,7 @@ def newmark_loop(x0, v0, p, h, steps, rec, xs, vs, beta, gamma, alpha, lu, piv, 
                 for r in range(n):
                     R[r] = a1[r] - R[r] + alpha * F0[r]
                 _tangent_matrix(x1, masses, ends, k, k3, D, c1, c2, S)
-                da[:] = np.linalg.solve(S, R)
+                _gauss_solve(S, R, da)
                 size = 0.0
                 for r in range(n):
                     a1[r] -= da[r]
@@ -157,4 +190,4 @@ def _store_frame(xs, vs, j, x, v):
 
 #: The loops this template exports, and the helpers they call (compiled by :mod:`.cache`).
 LOOPS = ("newmark_loop",)
-HELPERS = ("_lu_solve", "_tangent_matrix", "_with_damping", "_store_frame")
+HELPERS = ("_lu_solve", "_gauss_solve", "_tangent_matrix", "_with_damping", "_store_frame")
