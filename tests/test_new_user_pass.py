@@ -247,3 +247,33 @@ def test_verlet_converges_to_exact(scene, ref):
     slope = np.polyfit(np.log(hs), np.log(errs), 1)[0]
     assert 1.85 < slope < 2.15, (slope, errs)
     assert errs[-1] < 1e-4, errs
+
+
+# -- defects a new user met on the command line -------------------------------------------------
+def test_spectrum_missing_record_says_what_a_record_is(tmp_path, monkeypatch, capsys):
+    """`springchain spectrum nosuch.csv` said "names are relative to the scene file's folder" (there is no
+    scene) and did not mention the bundled records."""
+    from springchain.cli import main
+
+    monkeypatch.chdir(tmp_path)
+    assert main(["spectrum", "nosuch.csv"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1, err
+    assert "nosuch.csv" in err[0] and "not a bundled record" in err[0] and "quake-record" in err[0], err
+    assert "scene file" not in err[0], err
+
+
+def test_progress_final_line_once():
+    """A sweep printed its last progress line (8/8 samples) twice: once when the count reached the total
+    and again when the driver reported the end."""
+    import io
+
+    from springchain.numeric.progress import Reporter
+
+    out = io.StringIO()
+    rep = Reporter("sweep", 8, enabled=True, stream=out, quiet_seconds=0, prefix="sweep", interval=0)
+    rep.update(2)
+    rep.update(8)
+    rep.update(8)
+    lines = out.getvalue().splitlines()
+    assert sum("8/8" in s for s in lines) == 1, lines
