@@ -277,3 +277,83 @@ def test_progress_final_line_once():
     rep.update(8)
     lines = out.getvalue().splitlines()
     assert sum("8/8" in s for s in lines) == 1, lines
+
+
+# -- issue 20's loose end: participation of [chain] scenes whose supports move ---------------------
+CHAIN = """
+name = "wchain"
+description = "eight alternating masses from a wall, contrast 1e10 in the springs"
+[parameters]
+m = 2.0
+k = 5.0
+[chain]
+n = 8
+mass = "m*(1 + i % 2)"
+k = "k*(1 + 1e10*(i % 2))"
+left = "wall"
+right = "free"
+[initial]
+x = "0.01*i"
+v = "0"
+"""
+
+
+def _chain_reference(text):
+    """Γ (first component of each mass-normalised shape positive) and M* by mpmath from the TOML numbers."""
+    d = tomllib.loads(text)
+    p = {k: mp.mpf(v) for k, v in d["parameters"].items()}
+    n = d["chain"]["n"]
+    m = [p["m"] * (1 + i % 2) for i in range(n)]
+    ks = [p["k"] * (1 + mp.mpf(1e10) * (i % 2)) for i in range(n - 1)]  # spring i joins i and i+1
+    K = mp.zeros(n, n)
+    if d["chain"]["left"] == "wall":  # README: "a wall spring k at i = -1"
+        K[0, 0] += p["k"] * (1 + mp.mpf(1e10) * ((-1) % 2))
+    for i, kk in enumerate(ks):
+        K[i, i] += kk
+        K[i + 1, i + 1] += kk
+        K[i, i + 1] -= kk
+        K[i + 1, i] -= kk
+    s = mp.diag([1 / mp.sqrt(x) for x in m])
+    e, Q = mp.eigsy(s * K * s)
+    order = sorted(range(n), key=lambda j: e[j])
+    gamma = []
+    for j in order:
+        phi = [Q[i, j] / mp.sqrt(m[i]) for i in range(n)]
+        sign = 1 if phi[0] > 0 else -1
+        gamma.append(sign * mp.fsum(m[i] * phi[i] for i in range(n)))
+    return [e[j] for j in order], gamma, mp.fsum(m)
+
+
+def test_chain_with_wall_reports_participation(tmp_path):
+    path = tmp_path / "wchain.toml"
+    path.write_text(CHAIN)
+    m = sc.modes(sc.load(path))
+    with mp.workdps(DPS):
+        w2, gamma, total = _chain_reference(CHAIN)
+        w2 = np.array([float(v) for v in w2])
+        gamma = np.array([float(g) for g in gamma])
+        total = float(total)
+    p = m.participation
+    assert p is not None
+    np.testing.assert_allclose(p.omega2, w2, rtol=1e-12)
+    assert np.abs(np.array(p.gamma) - gamma).max() <= 1e-12 * np.sqrt(total), (p.gamma, gamma)
+    assert abs(p.effective_mass_sum - total) <= 1e-13 * total
+    data = m.to_json()
+    assert data["participation"]["total_mass"] == pytest.approx(total, rel=1e-15)
+    got = np.array([rec["participation_factor"] for rec in data["modes"]])
+    np.testing.assert_allclose(got, p.gamma, rtol=0, atol=0)
+    text = m.to_text()
+    assert "Modal participation (ground direction" in text and "not reported" not in text
+
+
+def test_chain_participation_only_where_it_applies(tmp_path):
+    """A free chain without [ground] has none; a long chain with a wall keeps the note pointing to rsa."""
+    free = tmp_path / "free.toml"
+    free.write_text(CHAIN.replace('left = "wall"', 'left = "free"'))
+    m = sc.modes(sc.load(free))
+    assert m.participation is None and "participation" not in m.to_json()
+    long = tmp_path / "long.toml"
+    long.write_text(CHAIN.replace("n = 8", "n = 60"))
+    m = sc.modes(sc.load(long))
+    assert m.participation is None
+    assert any("springchain rsa" in s for s in m.to_json()["notes"])
