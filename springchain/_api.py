@@ -91,8 +91,12 @@ def _chain_participation(scene: Scene, model):
     first = np.argmax(np.abs(phi) > 1e-12 * np.max(np.abs(phi), axis=0, keepdims=True), axis=0)
     phi = phi * np.where(phi[first, np.arange(phi.shape[1])] < 0, -1.0, 1.0)[None, :]
     m = np.asarray(el.masses, dtype=float)
-    gamma = [math.fsum(m * phi[:, j]) for j in range(phi.shape[1])]
-    return part.from_values(spec.omega2, gamma, phi.T, math.fsum(m), "spring-factor SVD (float64, compensated sums)")
+    total = math.fsum(m)
+    if spec.rigid:  # a free-free chain: r = 1 is its rigid mode, so Γ = (√M, 0, ..., 0) exactly by structure
+        gamma = [math.sqrt(total)] + [0.0] * (phi.shape[1] - 1)
+    else:
+        gamma = [math.fsum(m * phi[:, j]) for j in range(phi.shape[1])]
+    return part.from_values(spec.omega2, gamma, phi.T, total, "spring-factor SVD (float64, compensated sums)")
 
 
 @dataclass(frozen=True)

@@ -357,3 +357,14 @@ def test_chain_participation_only_where_it_applies(tmp_path):
     m = sc.modes(sc.load(long))
     assert m.participation is None
     assert any("springchain rsa" in s for s in m.to_json()["notes"])
+
+
+def test_free_chain_with_ground_rigid_mode_carries_all_mass(tmp_path):
+    """r = 1 is the rigid mode of a free-free chain: Γ = (√M, 0, ..., 0) exactly, not rounding noise."""
+    path = tmp_path / "gchain.toml"
+    path.write_text('name = "gchain"\n[parameters]\nm = 1.0\nk = 3.0\nA = 0.5\n[chain]\nn = 5\n'
+                    'mass = "m*(1 + i)"\nk = "k*(1 + 1e10*(i % 2))"\nleft = "free"\nright = "free"\n'
+                    '[ground]\nacceleration = "A*sin(2*t)"\n')
+    p = sc.modes(sc.load(path)).participation
+    assert p.gamma[0] == pytest.approx(np.sqrt(15.0), rel=1e-15)
+    assert p.gamma[1:] == (0.0,) * 4 and p.omega2[0] == 0.0
