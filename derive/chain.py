@@ -386,15 +386,10 @@ def chain_report(model: ChainModel, modes: ChainModes, omega2_values=None, dampe
             lines.append(f"    note: {listed_note}")
     elif listed_note:
         lines.append(f"    note: {listed_note}")
-    from . import participation as part
+    from .participation import chain_section
 
-    extra = {}
-    if participation is not None and len(records) == len(participation.gamma):
-        lines += [""] + part.text_lines(participation)
-        extra = part.json_fields(participation, records)
-    else:
-        lines += [line for note in part.chain_note(model) for line in ("", note)]
-        notes += part.chain_note(model)
+    part_lines, part_notes, extra = chain_section(model, participation, records)
+    lines, notes = lines + part_lines, notes + part_notes
     data = {"scene": sc.name, "parameters": {k: sc.parameters[k] for k in sorted(sc.parameters)},
             "masses": [], "modes": records, "closed_form": modes.closed_form,
             "notes": notes + ([listed_note] if listed_note else []),

@@ -127,6 +127,15 @@ def chain_note(model) -> list[str]:
             "FILE` prints Gamma and the effective mass of every mode (spring-factor SVD; chains up to 2000 masses)"]
 
 
+def chain_section(model, p: Participation | None, records: list[dict]) -> tuple[list[str], list[str], dict]:
+    """A chain report's participation: ``(text lines, notes, top-level JSON)``; the table (and the
+    per-mode JSON fields, added to ``records`` in place) when ``p`` covers every record, else the note."""
+    if p is not None and len(records) == len(p.gamma):
+        return [""] + text_lines(p), [], json_fields(p, records)
+    notes = chain_note(model)
+    return [line for note in notes for line in ("", note)], notes, {}
+
+
 # -- values -------------------------------------------------------------------------------------
 def _clusters(w2: list, tol) -> list[range]:
     out, j, n = [], 0, len(w2)
@@ -344,4 +353,4 @@ def latex_lines(p: Participation) -> list[str]:
     return out
 
 
-__all__ = ["Participation", "participation", "applies", "chain_applies", "from_values", "chain_note", "json_fields", "text_lines", "latex_lines"]
+__all__ = ["Participation", "participation", "applies", "chain_applies", "from_values", "chain_note", "chain_section", "json_fields", "text_lines", "latex_lines"]
