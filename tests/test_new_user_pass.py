@@ -186,6 +186,15 @@ def test_modes_omega2_and_zeta(scene, ref):
     np.testing.assert_allclose(got_wd, [float(z) for z in wd], rtol=1e-12)
     per_mode = np.array([md["damping_ratio"] for md in data["modes"]])
     np.testing.assert_allclose(per_mode, [float(z) for z in zeta], rtol=1e-10)
+    # participation (the scene has a wall): |Γ_j| = |φ_jᵀ M 1| of the mass-normalised shapes
+    with mp.workdps(DPS):
+        s = mp.diag([1 / mp.sqrt(ref.M[i, i]) for i in range(4)])
+        e, Q = mp.eigsy(s * ref.K * s)
+        gamma = [abs(mp.fsum(ref.M[i, i] * s[i, i] * Q[i, j] for i in range(4)))
+                 for j in sorted(range(4), key=lambda j: e[j])]
+        total = float(mp.fsum(ref.M[i, i] for i in range(4)))
+    got_gamma = np.abs(np.array(m.participation.gamma))
+    assert np.abs(got_gamma - np.array([float(g) for g in gamma])).max() <= 1e-13 * np.sqrt(total)
 
 
 def test_frf_magnitude(scene, ref):
