@@ -13,6 +13,7 @@ exponential). Nothing of springchain is used to build the reference.
 from __future__ import annotations
 
 import tomllib
+import types
 
 import mpmath as mp
 import numpy as np
@@ -377,3 +378,17 @@ def test_free_chain_with_ground_rigid_mode_carries_all_mass(tmp_path):
     p = sc.modes(sc.load(path)).participation
     assert p.gamma[0] == pytest.approx(np.sqrt(15.0), rel=1e-15)
     assert p.gamma[1:] == (0.0,) * 4 and p.omega2[0] == 0.0
+
+
+def test_numba_import_is_outside_the_method_clock(monkeypatch):
+    """`springchain run` printed `verlet 574-1015 ms` (README: 6.56 ms): the first compiled method's clock
+    included importing numba (about 1 s). The import now happens before any method's clock starts."""
+    from springchain.numeric import fast_kernels, simulate as sim
+
+    events = []
+    real_available, real_clock = fast_kernels.available, sim.time.perf_counter
+    monkeypatch.setattr(fast_kernels, "available", lambda: events.append("import numba") or real_available())
+    monkeypatch.setattr(sim, "time", types.SimpleNamespace(perf_counter=lambda: events.append("clock") or real_clock()))
+    sc.simulate("seed", methods=["verlet"], steps=20, progress=False)
+    assert "import numba" in events and "clock" in events
+    assert events.index("import numba") < events.index("clock"), events
