@@ -392,3 +392,24 @@ def test_numba_import_is_outside_the_method_clock(monkeypatch):
     sc.simulate("seed", methods=["verlet"], steps=20, progress=False)
     assert "import numba" in events and "clock" in events
     assert events.index("import numba") < events.index("clock"), events
+
+
+@pytest.mark.xfail(strict=True, reason="rsa takes Γ and the spring extensions from float64 SVD shapes: at contrast "
+                   "1e10 a stiff spring's modal force (k times a difference of nearly equal shape components) and "
+                   "the tiny Γ of a mode orthogonal to r are good to 1e-5 ... 1e-6 only; not fixed in the "
+                   "new-user pass (needs the spring-factor's left singular vectors or the mpmath participation)")
+def test_rsa_modal_spring_forces_at_contrast(scene, ref):
+    r = sc.rsa(scene, spectrum="quake-record")
+    data = r.to_json()
+    K, w = ref.p["K"], ref.p["w"]
+    worst = 0.0
+    with mp.workdps(DPS):
+        s = mp.diag([1 / mp.sqrt(ref.M[i, i]) for i in range(4)])
+        e, Q = mp.eigsy(s * ref.K * s)
+        for rec, j in zip(data["modes"], sorted(range(4), key=lambda j: e[j])):
+            phi = [s[i, i] * Q[i, j] for i in range(4)]
+            phi = [-c for c in phi] if phi[0] < 0 else phi
+            x = [mp.fsum(ref.M[i, i] * c for i, c in enumerate(phi)) * mp.mpf(rec["sd"]) * c for c in phi]
+            force = [K * x[0], w * (x[1] - x[0]), K * (x[2] - x[1]), w * (x[3] - x[2])]
+            worst = max(worst, max(float(abs(g - f) / abs(f)) for g, f in zip(rec["spring_force"], force)))
+    assert worst < 1e-10, worst
