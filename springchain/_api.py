@@ -69,6 +69,36 @@ def _chain_damped(scene: Scene, model):
     return damped_rows(el.masses, el.spring_ends, el.stiffness, el.damper_ends, el.damping)
 
 
+def _chain_participation(scene: Scene, model):
+    """Γⱼ, Mⱼ* and mass-normalised shapes of an open chain with a wall end or ``[ground]`` whose modes are
+    all listed (at most ``MAX_MODES_LISTED`` masses), from the spring-factor SVD (:mod:`numeric.spectrum`;
+    Γ by compensated sums; the sign of each shape: its first non-negligible component positive, as ``rsa``);
+    else None."""
+    from .derive import participation as part
+    from .derive.chain import MAX_MODES_LISTED
+
+    if not part.chain_applies(model) or scene.chain.n > MAX_MODES_LISTED or "ring" in (scene.chain.left,
+                                                                                        scene.chain.right):
+        return None
+    import numpy as np
+
+    from .numeric.elements import Elements
+    from .numeric.spectrum import spectrum
+
+    el = Elements.from_system(_system(scene)[0])
+    spec = spectrum(el.masses, el.spring_ends, el.stiffness)
+    phi = spec.shapes
+    first = np.argmax(np.abs(phi) > 1e-12 * np.max(np.abs(phi), axis=0, keepdims=True), axis=0)
+    phi = phi * np.where(phi[first, np.arange(phi.shape[1])] < 0, -1.0, 1.0)[None, :]
+    m = np.asarray(el.masses, dtype=float)
+    total = math.fsum(m)
+    if spec.rigid:  # a free-free chain: r = 1 is its rigid mode, so Γ = (√M, 0, ..., 0) exactly by structure
+        gamma = [math.sqrt(total)] + [0.0] * (phi.shape[1] - 1)
+    else:
+        gamma = [math.fsum(m * phi[:, j]) for j in range(phi.shape[1])]
+    return part.from_values(spec.omega2, gamma, phi.T, total, "spring-factor SVD (float64, compensated sums)")
+
+
 @dataclass(frozen=True)
 class Modes:
     """A scene's equations of motion and normal modes.
@@ -94,7 +124,7 @@ class Modes:
             from .derive.chain import chain_report
 
             return chain_report(self.model, self.modes, _chain_omega2(self.scene, self.modes),
-                                _chain_damped(self.scene, self.model))[1]
+                                _chain_damped(self.scene, self.model), self.participation)[1]
         from .derive.report import modes_json
 
         return modes_json(self.model, self.modes)
@@ -105,7 +135,7 @@ class Modes:
             from .derive.chain import chain_report
 
             return chain_report(self.model, self.modes, _chain_omega2(self.scene, self.modes),
-                                _chain_damped(self.scene, self.model))[0]
+                                _chain_damped(self.scene, self.model), self.participation)[0]
         from .derive.report import render_text
 
         return render_text(self.model, self.modes)
@@ -138,12 +168,15 @@ class Modes:
         """Modal participation in the ground direction (Γⱼ, Mⱼ*, fractions, mass-normalised shapes).
 
         A :class:`springchain.derive.participation.Participation` (values settled to float64 on the
-        accurate route, closed forms where they exist); None for ``[chain]`` scenes and for scenes
-        whose supports cannot move (no wall, no ``[ground]``).
+        accurate route, closed forms where they exist; values only for open ``[chain]`` scenes of at most
+        40 masses); None for scenes whose supports cannot move (no wall, no ``[ground]``), rings and
+        longer chains.
         """
         from .derive import participation as part
 
-        if self.chain or not part.applies(self.model):
+        if self.chain:
+            return _chain_participation(self.scene, self.model)
+        if not part.applies(self.model):
             return None
         return part.participation(self.model, self.modes)
 
