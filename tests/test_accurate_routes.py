@@ -25,7 +25,7 @@ from springchain.cli import main
 import accuracy_reference as ref
 from springchain.derive.damping_report import ZETA_FLOOR
 
-BUDGET = float(os.environ.get("SPRINGCHAIN_SLOW_BUDGET", "1"))
+from helpers import SLOW_BUDGET as BUDGET  # noqa: E402
 EXAMPLES = int(os.environ.get("SPRINGCHAIN_HYPOTHESIS_EXAMPLES", "6"))
 _SETTINGS = dict(deadline=None, suppress_health_check=[HealthCheck.too_slow, HealthCheck.function_scoped_fixture])
 
