@@ -85,7 +85,7 @@ class Reporter:
         self.total = None if total is None else max(int(total), 1)
         self.enabled = (True if enabled is None else bool(enabled)) and not silenced()
         self.stream = stream or sys.stderr
-        self.tty = _isatty(self.stream)
+        self.tty = self.enabled and _isatty(self.stream)  # no system call for a silenced reporter
         self.quiet = quiet_seconds if quiet_seconds is not None else (
             QUIET_SECONDS if self.tty else max(QUIET_SECONDS, PLAIN_INTERVAL))
         self.prefix = prefix

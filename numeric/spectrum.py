@@ -51,6 +51,7 @@ into the elastic modes.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from functools import cached_property
 
 import numpy as np
 import scipy.linalg
@@ -96,6 +97,16 @@ class Spectrum:
     def shapes(self) -> np.ndarray:
         """Physical, M-orthonormal mode shapes ``M^-1/2 e`` as columns, shape (N, N)."""
         return self.vectors / np.sqrt(self.masses)[:, None]
+
+    @cached_property
+    def root_masses(self) -> np.ndarray:
+        """``√m``, shape (N,) (computed once: the modal solution's set-up from each initial state)."""
+        return np.sqrt(self.masses)
+
+    @cached_property
+    def shapes_t(self) -> np.ndarray:
+        """:attr:`shapes` transposed, ``Eᵀ M^-1/2`` (modes along the rows), shape (N, N), computed once."""
+        return self.vectors.T / self.root_masses[None, :]
 
     @property
     def omega_max(self) -> float:
