@@ -202,8 +202,10 @@ class ModalSolution:
         """
         cs, s = _cos_tsinc_padded(t, self.spectrum.omega)  # (2N, P), P ≥ S, contiguous
         n = self.spectrum.omega.shape[0]
-        xv = self._maps.T @ cs  # (2N, P): [x; v] along the rows
-        return xv[:n, :s].T, xv[n:, :s].T
+        g = self._maps
+        # x and v each as one product with the (contiguous) table: (P, N) blocks whose first S rows are
+        # contiguous, so a recorder copies them in one pass
+        return (cs.T @ g[:, :n])[:s], (cs.T @ g[:, n:])[:s]
 
     def acceleration_at(self, t) -> np.ndarray:
         """Accelerations ``ẍ = -M^-1/2 E Ω² q`` at times ``t`` (analytic, no differencing).
