@@ -86,6 +86,7 @@ _TABLE: dict[str, Entry] = {e.name: e for e in (
     Entry("hht", Kind.STEP, ".integrators.newmark:HHTAlpha", ".run.implicit:ImplicitStep"),
     Entry("rk45", Kind.ADAPTIVE, ".integrators.ivp:RK45"),
     Entry("dop853", Kind.ADAPTIVE, ".integrators.ivp:DOP853"),
+    Entry("dop853-compiled", Kind.ADAPTIVE, ".compiled.peer:CompiledDOP853"),
     Entry("lsoda", Kind.ADAPTIVE, ".integrators.ivp:LSODA"),
     Entry("dprkn6", Kind.ADAPTIVE, ".integrators.dprkn6:DPRKN6"),
     Entry("dprkn8", Kind.ADAPTIVE, ".integrators.dprkn8:DPRKN8"),
@@ -97,6 +98,8 @@ EXACT = "modal"
 #: The default step method, and the reference adaptive method of plans, benches and references.
 DEFAULT_STEP = "verlet"
 REFERENCE_ADAPTIVE = "dop853"
+#: SciPy's DOP853 compiled (numeric.compiled.peer): bench's second peer, compiled against compiled.
+COMPILED_PEER = "dop853-compiled"
 #: The step method of the benchmark's grid reference (eighth order, symplectic).
 REFERENCE_STEP = "kahan-li8"
 
