@@ -6,7 +6,8 @@ with BLAS pinned to one thread, side by side:
 1. **Verlet on the seed** (3 masses, dt = 0.1) for ``--steps`` steps through the method protocol
    (``registry.method("verlet")``, the compiled loop, every 1000th frame recorded) against a
    hand-written numba Verlet loop on the same system (its acceleration typed in by hand from the
-   scene: m, 3m, m and two springs k), in ns per step; the two final states are compared.
+   scene: m, 3m, m and two springs k; recording the same frames), timed in turns, in ns per step;
+   the recorded frames are compared.
 2. **Duffing over T = 1000** (three masses, cubic springs; error = max |x − x_ref| at t = T, the
    reference Kahan–Li 8 compiled at h = 1/400, checked against the compiled DOP853 at rtol 1e-13):
    the fixed-step methods (compiled) over a sweep of steps and the RKN pairs ``dprkn8``, ``dprkn12``
@@ -17,7 +18,9 @@ with BLAS pinned to one thread, side by side:
    1e-3 … 1e-10 the seconds to reach it are read off each sweep's Pareto front by log–log
    interpolation; the best springchain method is compared with both DOP853s.
 3. **The seed's exact solution** (``modal``, the accurate SVD spectrum, S = 1001 output times)
-   against the sin/cos floor: ``np.cos``/``np.sin`` of the N·S phases.
+   against the sin/cos floor (``np.cos``/``np.sin`` of the N·S phases), timed in turns: the
+   evaluation (modes computed), with the spectrum's set-up (a fresh system), and the API call
+   ``springchain.simulate`` (see :func:`exact_vs_floor`).
 
 Compile time (or loading from the disk cache) is reported once, separately, and is in no timing.
 Timings are the minimum of repeats (:func:`springchain.numeric.timing.measure`).
@@ -58,11 +61,17 @@ def _hand_verlet():
     import numba
 
     @numba.njit(cache=True)
-    def loop(x, v, h, steps, k, m):
+    def loop(x, v, h, steps, k, m, rec, xs, vs):
+        """The seed typed in by hand (m, 3m, m; two springs k), accelerations kept in registers; records
+        the same frames as springchain's loop (step indices ``rec``) into ``xs``, ``vs``."""
         a0 = -k * (x[0] - x[1]) / m
         a1 = (k * (x[0] - x[1]) - k * (x[1] - x[2])) / (3 * m)
         a2 = k * (x[1] - x[2]) / m
-        for _ in range(steps):
+        for r in range(3):
+            xs[0, r] = x[r]
+            vs[0, r] = v[r]
+        j = 1
+        for i in range(steps):
             x[0] += h * v[0] + 0.5 * h * h * a0
             x[1] += h * v[1] + 0.5 * h * h * a1
             x[2] += h * v[2] + 0.5 * h * h * a2
@@ -73,28 +82,41 @@ def _hand_verlet():
             v[1] += 0.5 * h * (a1 + b1)
             v[2] += 0.5 * h * (a2 + b2)
             a0, a1, a2 = b0, b1, b2
+            if j < rec.shape[0] and rec[j] == i + 1:
+                for r in range(3):
+                    xs[j, r] = x[r]
+                    vs[j, r] = v[r]
+                j += 1
         return x, v
 
     return loop
 
 
-def verlet_per_step(steps: int) -> dict:
+def verlet_per_step(steps: int, budget: float = 4.0) -> dict:
+    """springchain's Verlet (the method protocol into a memory recorder, the compiled loop) and the hand
+    loop, both recording every 1000th step, timed in turns (:func:`~numeric.timing.interleaved_seconds`)."""
     from springchain.numeric.run import registry
     from springchain.numeric.run.grid import Grid
     from springchain.numeric.run.protocol import Options, record
+    from springchain.numeric.timing import interleaved_seconds
 
     system, x0, v0 = _system("seed")
     h = 0.1
     method = registry.method("verlet", Options(progress=False))
     grid = Grid(h, steps, 1000)
     record(method, system, x0, v0, Grid(h, 10, 1))  # compile/load once, outside the timing
-    ours, run = _timed(lambda: record(method, system, x0, v0, grid))
     hand = _hand_verlet()
-    hand(x0.copy(), v0.copy(), h, 10, 1.0, 1.0)
-    theirs, (xh, vh) = _timed(lambda: hand(x0.copy(), v0.copy(), h, steps, 1.0, 1.0))
-    diff = float(np.max(np.abs(run.x[-1] - xh)))
-    return {"steps": steps, "springchain_ns": 1e9 * ours / steps, "hand_numba_ns": 1e9 * theirs / steps,
-            "ratio": ours / theirs, "final_state_difference": diff}
+    rec = np.arange(0, steps + 1, 1000)
+    xs, vs = np.empty((rec.shape[0], 3)), np.empty((rec.shape[0], 3))
+    secs = interleaved_seconds({"ours": (lambda: record(method, system, x0, v0, grid), steps),
+                                "hand": (lambda: hand(x0.copy(), v0.copy(), h, steps, 1.0, 1.0, rec, xs, vs), steps)},
+                               budget=budget, min_rounds=5)
+    run = record(method, system, x0, v0, grid)
+    hand(x0.copy(), v0.copy(), h, steps, 1.0, 1.0, rec, xs, vs)
+    diff = float(np.max(np.abs(run.x - xs)))
+    return {"steps": steps, "record_every": 1000, "springchain_ns": 1e9 * secs["ours"],
+            "hand_numba_ns": 1e9 * secs["hand"], "ratio": secs["ours"] / secs["hand"],
+            "final_state_difference": diff, "largest_position": float(np.max(np.abs(xs)))}
 
 
 # -- 2. Duffing work-precision ---------------------------------------------------------------------
@@ -201,15 +223,28 @@ def duffing(t_end: float, say=print) -> dict:
 
 
 # -- 3. exact solution against the sin/cos floor -----------------------------------------------------
-def exact_vs_floor(frames: int = 1001) -> dict:
+def exact_vs_floor(frames: int = 1001, budget: float = 3.0) -> dict:
+    """The seed's exact solution (``modal``, S = ``frames`` times t = i·h) against ``np.cos``/``np.sin`` of
+    the N·S phases, timed in turns (:func:`~numeric.timing.interleaved_seconds`), three ways:
+
+    * ``evaluation``: the method's run into a memory recorder on a system whose modes are computed (what
+      every run after the first on a loaded system pays: solution from x0, v0 and its S frames);
+    * ``with_setup``: the same on a fresh system, so also the accurate spectrum (the spring-factor SVD,
+      rigid modes by structure) — once per system, as a compile is once per process for a step method;
+    * ``api``: ``springchain.simulate(scene, ["modal"], progress=False)`` on the loaded scene, no files:
+      also the module lookup, the grid checks, energies and the summary.
+    """
+    import springchain
+    from springchain import _api
     from springchain.numeric.run import registry
     from springchain.numeric.run.grid import Grid
-    from springchain.numeric.run.protocol import record
+    from springchain.numeric.run.protocol import Options, record
+    from springchain.numeric.timing import interleaved_seconds
 
+    scene = _api.load("seed")
     system, x0, v0 = _system("seed")
     grid = Grid(0.1, frames - 1, 1)
-    method = registry.method("modal")
-    ours, _ = _timed(lambda: record(method, system.fresh(), x0, v0, grid))
+    method = registry.method("modal", Options(progress=False))
     w = np.sqrt(np.abs(system.module.omega2(**system.params)))[:, None]
     t = grid.t[None, :]
 
@@ -217,8 +252,17 @@ def exact_vs_floor(frames: int = 1001) -> dict:
         ph = w * t
         return np.cos(ph), np.sin(ph)
 
-    theirs, _ = _timed(floor)
-    return {"frames": frames, "modal_us": 1e6 * ours, "sincos_floor_us": 1e6 * theirs, "ratio": ours / theirs}
+    secs = interleaved_seconds({
+        "floor": (floor, 1),
+        "evaluation": (lambda: record(method, system, x0, v0, grid), 1),
+        "with_setup": (lambda: record(method, system.fresh(), x0, v0, grid), 1),
+        "api": (lambda: springchain.simulate(scene, ["modal"], steps=frames - 1, record_every=1, progress=False), 1),
+    }, budget=budget, min_rounds=5)
+    us = {k: 1e6 * v for k, v in secs.items()}
+    return {"frames": frames, "sincos_floor_us": us["floor"], "evaluation_us": us["evaluation"],
+            "with_setup_us": us["with_setup"], "api_us": us["api"],
+            "ratio": us["evaluation"] / us["floor"], "ratio_with_setup": us["with_setup"] / us["floor"],
+            "ratio_api": us["api"] / us["floor"]}
 
 
 def main(argv=None) -> int:
@@ -237,12 +281,15 @@ def main(argv=None) -> int:
     with single_threaded_blas():
         t0 = time.perf_counter()
         v = verlet_per_step(args.steps)
-        say(f"1. Verlet on the seed, {v['steps']:.0e} steps: springchain {v['springchain_ns']:.1f} ns/step, "
-            f"hand-written numba {v['hand_numba_ns']:.1f} ns/step (ratio {v['ratio']:.2f}; target ≤ 2); "
-            f"final states differ by {v['final_state_difference']:.1e}")
+        say(f"1. Verlet on the seed, {v['steps']:.0e} steps, every 1000th recorded by both: springchain "
+            f"{v['springchain_ns']:.1f} ns/step, hand-written numba {v['hand_numba_ns']:.1f} ns/step "
+            f"(ratio {v['ratio']:.2f}; target ≤ 2); frames differ by {v['final_state_difference']:.1e} "
+            f"(|x| up to {v['largest_position']:.1e})")
         e = exact_vs_floor()
-        say(f"3. seed exact solution, S = {e['frames']}: modal {e['modal_us']:.0f} µs, sin/cos floor "
-            f"{e['sincos_floor_us']:.1f} µs (ratio {e['ratio']:.1f}; target ≤ 3)")
+        say(f"3. seed exact solution, S = {e['frames']}: sin/cos floor {e['sincos_floor_us']:.1f} µs; "
+            f"evaluation {e['evaluation_us']:.0f} µs (ratio {e['ratio']:.1f}; target ≤ 3); "
+            f"with the spectrum's set-up {e['with_setup_us']:.0f} µs ({e['ratio_with_setup']:.1f}); "
+            f"springchain.simulate {e['api_us']:.0f} µs ({e['ratio_api']:.1f})")
         d = duffing(args.t_end, say)
         total = time.perf_counter() - t0
     say(f"2. Duffing, T = {d['t_end']:g}: seconds to reach each accuracy (error at t = T)")

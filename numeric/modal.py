@@ -82,27 +82,33 @@ def cos_tsinc(t: np.ndarray, w: np.ndarray) -> np.ndarray:
     each entry is a sum of two products, so the result stays within a few ulps of the direct
     one (absolute, in units of 1 and of t). Other grids take the direct route.
     """
+    cs, s = _cos_tsinc_padded(t, w)
+    return cs[:, :s]
+
+
+def _cos_tsinc_padded(t: np.ndarray, w: np.ndarray) -> tuple[np.ndarray, int]:
+    """:func:`cos_tsinc` as a C-contiguous (2N, P) array whose first ``s = t.shape[0]`` columns are the
+    times ``t`` (P ≥ s: a uniform grid's last block runs on past the last time), and ``s``."""
     n, s = w.shape[0], t.shape[0]
     split = _uniform_split(t)
     if split is None:
         ph = np.multiply.outer(w, t)
         z = np.exp(1j * ph)
-        return np.concatenate((z.real, _tsinc_table(t, w, z.imag)))
+        return np.concatenate((z.real, _tsinc_table(t, w, z.imag))), s
     b, h = split
     blocks = -(-s // b)
-    a = t[::b]                                                        # (blocks,)
-    r = _steps(s)[:b] * h                                             # (B,)
-    ha, hb = np.multiply.outer(w, a), np.multiply.outer(w, r)
-    hc, tc, sa, sb = np.cos(ha), np.cos(hb), np.sin(ha), np.sin(hb)
-    hs = _tsinc_table(a, w, sa)[:, :, None]   # (N, blocks, 1)
-    ts = _tsinc_table(r, w, sb)[:, None, :]   # (N, 1, B)
-    hc, tc = hc[:, :, None], tc[:, None, :]
+    # the block starts a = t_{jB} and the offsets r·h in one row of times: one cos, one sin, one table
+    ab = np.concatenate((t[::b], _steps(s)[:b] * h))                  # (blocks + B,)
+    ph = np.multiply.outer(w, ab)
+    c, sn = np.cos(ph), np.sin(ph)
+    ts = _tsinc_table(ab, w, sn)
+    hc, tc = c[:, :blocks, None], c[:, None, blocks:]                  # (N, blocks, 1), (N, 1, B)
     out = np.empty((2, n, blocks, b))
     np.multiply(hc, tc, out=out[0])
-    out[0] -= sa[:, :, None] * sb[:, None, :]  # the sines themselves: ω² would overflow at huge ω
-    np.multiply(hs, tc, out=out[1])
-    out[1] += hc * ts
-    return out.reshape(2 * n, blocks * b)[:, :s]
+    out[0] -= sn[:, :blocks, None] * sn[:, None, blocks:]  # the sines themselves: ω² would overflow at huge ω
+    np.multiply(ts[:, :blocks, None], tc, out=out[1])
+    out[1] += hc * ts[:, None, blocks:]
+    return out.reshape(2 * n, blocks * b), s
 
 
 @dataclass(frozen=True)
@@ -123,11 +129,11 @@ class ModalSolution:
     @classmethod
     def from_initial(cls, spectrum: Spectrum, x0: np.ndarray, v0: np.ndarray) -> "ModalSolution":
         """The solution through displacements ``x0`` and velocities ``v0``, shape (N,) or (N, B)."""
-        r = np.sqrt(spectrum.masses)
-        r = r.reshape(r.shape + (1,) * (np.ndim(x0) - 1))
+        r = spectrum.root_masses
         E = spectrum.vectors
         if np.ndim(x0) == 1:  # one state: plain matrix-vector products
             return cls(spectrum, E.T @ (r * x0), E.T @ (r * v0))
+        r = r.reshape(r.shape + (1,) * (np.ndim(x0) - 1))
         return cls(spectrum, np.tensordot(E.T, r * x0, axes=1), np.tensordot(E.T, r * v0, axes=1))
 
     def _modal(self, t):
@@ -179,13 +185,14 @@ class ModalSolution:
         Rows 0..N-1 multiply cos(ω_j t): ``q0_j e_jᵀ/√m`` into x and ``p0_j e_jᵀ/√m`` into v;
         rows N..2N-1 multiply t·sinc(ω_j t): ``p0_j e_jᵀ/√m`` into x and ``-ω_j² q0_j e_jᵀ/√m`` into v.
         """
-        Et = self.spectrum.vectors.T / np.sqrt(self.spectrum.masses)[None, :]
+        Et = self.spectrum.shapes_t
         q0, p0, w2 = self.q0[:, None], self.p0[:, None], self.spectrum.omega2[:, None]
-        n = Et.shape[0]
-        g = np.empty((2 * n, 2 * Et.shape[1]))
-        g[:n, :Et.shape[1]] = q0 * Et
-        g[:n, Et.shape[1]:] = g[n:, :Et.shape[1]] = p0 * Et
-        g[n:, Et.shape[1]:] = -w2 * q0 * Et
+        n, m = Et.shape
+        g = np.empty((2 * n, 2 * m))
+        np.multiply(q0, Et, out=g[:n, :m])
+        np.multiply(p0, Et, out=g[:n, m:])
+        g[n:, :m] = g[:n, m:]
+        np.multiply(-w2 * q0, Et, out=g[n:, m:])
         return g
 
     def _trajectory(self, t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -193,10 +200,12 @@ class ModalSolution:
 
         t·sinc(ωt) = sin(ωt)/ω for ω > 0; rigid modes (ω = 0 exactly, by structure) get t.
         """
-        cs = cos_tsinc(t, self.spectrum.omega)  # (2N, S)
+        cs, s = _cos_tsinc_padded(t, self.spectrum.omega)  # (2N, P), P ≥ S, contiguous
         n = self.spectrum.omega.shape[0]
-        xv = cs.T @ self._maps
-        return xv[:, :n], xv[:, n:]
+        g = self._maps
+        # x and v each as one product with the (contiguous) table: (P, N) blocks whose first S rows are
+        # contiguous, so a recorder copies them in one pass
+        return (cs.T @ g[:, :n])[:s], (cs.T @ g[:, n:])[:s]
 
     def acceleration_at(self, t) -> np.ndarray:
         """Accelerations ``ẍ = -M^-1/2 E Ω² q`` at times ``t`` (analytic, no differencing).

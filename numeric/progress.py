@@ -85,7 +85,7 @@ class Reporter:
         self.total = None if total is None else max(int(total), 1)
         self.enabled = (True if enabled is None else bool(enabled)) and not silenced()
         self.stream = stream or sys.stderr
-        self.tty = _isatty(self.stream)
+        self.tty = self.enabled and _isatty(self.stream)  # no system call for a silenced reporter
         self.quiet = quiet_seconds if quiet_seconds is not None else (
             QUIET_SECONDS if self.tty else max(QUIET_SECONDS, PLAIN_INTERVAL))
         self.prefix = prefix
@@ -162,29 +162,60 @@ class Reporter:
             pass
 
 
+class _Ticker:
+    """One daemon thread that updates every open :func:`phase`, started by the first one (a thread
+    per phase cost 0.1–1 ms to start and join, more than the exact solution of a small scene). It
+    polls (every 0.2 s while a terminal phase is open, else every second) rather than being woken,
+    so opening and closing a phase costs a lock and a list operation; it holds the lock around each
+    round of updates, so a phase that has left :meth:`drop` is never updated again."""
+
+    def __init__(self) -> None:
+        self.lock = threading.Lock()
+        self.open: list[Reporter] = []
+        self.thread: threading.Thread | None = None
+
+    def add(self, rep: Reporter) -> None:
+        with self.lock:
+            self.open.append(rep)
+            if self.thread is None or not self.thread.is_alive():
+                self.thread = threading.Thread(target=self._run, name="springchain progress", daemon=True)
+                self.thread.start()
+
+    def drop(self, rep: Reporter) -> None:
+        with self.lock:
+            self.open.remove(rep)
+
+    def _run(self) -> None:
+        wait = 1.0
+        while True:
+            time.sleep(wait)
+            with self.lock:
+                for rep in self.open:
+                    rep.update()
+                wait = min([TTY_INTERVAL if rep.tty else 1.0 for rep in self.open], default=1.0)
+
+
+_TICKER = _Ticker()
+if hasattr(os, "register_at_fork"):  # a child process starts with no phases and no ticker thread
+    os.register_at_fork(after_in_child=lambda: globals().__setitem__("_TICKER", _Ticker()))
+
+
 @contextmanager
 def phase(label: str, *, enabled: bool | None = None, stream=None):
     """Show the elapsed time of a phase of unknown length if it lasts over ~1 s (5 s when stderr is
-    not a terminal; a thread wakes up to report, the work itself is not touched), then ``done in
-    T s`` — unless the phase raised: a refusal's error line is then the only line that follows."""
+    not a terminal; one shared thread wakes up to report, the work itself is not touched), then
+    ``done in T s`` — unless the phase raised: a refusal's error line is then the only line that follows."""
     rep = Reporter(label, enabled=enabled, stream=stream)
-    stop = threading.Event()
-
-    def tick():
-        while not stop.wait(TTY_INTERVAL if rep.tty else 1.0):
-            rep.update()
-
-    thread = threading.Thread(target=tick, name=f"progress: {label}", daemon=True)
+    ticker = _TICKER
     if rep.enabled:
-        thread.start()
+        ticker.add(rep)
     failed = True
     try:
         yield rep
         failed = False
     finally:
-        stop.set()
         if rep.enabled:
-            thread.join()
+            ticker.drop(rep)
         rep.close(None if failed else f"done in {time.monotonic() - rep.t0:.1f} s")
 
 

@@ -51,6 +51,7 @@ into the elastic modes.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from functools import cached_property
 
 import numpy as np
 import scipy.linalg
@@ -96,6 +97,16 @@ class Spectrum:
     def shapes(self) -> np.ndarray:
         """Physical, M-orthonormal mode shapes ``M^-1/2 e`` as columns, shape (N, N)."""
         return self.vectors / np.sqrt(self.masses)[:, None]
+
+    @cached_property
+    def root_masses(self) -> np.ndarray:
+        """``√m``, shape (N,) (computed once: the modal solution's set-up from each initial state)."""
+        return np.sqrt(self.masses)
+
+    @cached_property
+    def shapes_t(self) -> np.ndarray:
+        """:attr:`shapes` transposed, ``Eᵀ M^-1/2`` (modes along the rows), shape (N, N), computed once."""
+        return self.vectors.T / self.root_masses[None, :]
 
     @property
     def omega_max(self) -> float:
@@ -230,7 +241,7 @@ def stiffness_factor(masses: np.ndarray, ends: np.ndarray, k: np.ndarray) -> np.
         W[p, :] = 0.0
         W[:, p] = 0.0
         if nb.size:
-            W[np.ix_(nb, nb)] += np.outer(w, w / dp)
+            W[nb[:, None], nb] += np.outer(w, w / dp)
             W[nb, nb] = 0.0
             wall[nb] += w * (wall[p] / dp)
             d[nb] = wall[nb] + W[nb].sum(axis=1)
@@ -274,9 +285,32 @@ def free_pieces(n: int, ends: np.ndarray) -> list[np.ndarray]:
     return [np.flatnonzero(labels == c) for c in range(count) if not walled[c]]
 
 
+def _small_rigid_basis(masses: np.ndarray, ends: np.ndarray) -> np.ndarray:
+    """:func:`rigid_basis` for n ≤ :data:`SMALL_PIECES` in a dozen array operations (no loop over pieces):
+    which masses reach which by ⌈log2(n − 1)⌉ squarings of the (I + adjacency) matrix; each piece is
+    labelled by its smallest mass, so the columns come in the order of :func:`free_pieces`."""
+    n = masses.shape[0]
+    a, b = ends[:, 0], ends[:, 1]
+    inner = (a >= 0) & (b >= 0)
+    reach = np.eye(n)
+    reach[a[inner], b[inner]] = 1.0
+    reach[b[inner], a[inner]] = 1.0
+    for _ in range(max(n - 2, 0).bit_length()):  # paths of up to 2^k springs: all n − 1 after the last
+        reach = np.minimum(reach @ reach, 1.0)
+    labels = np.argmax(reach, axis=1)  # the smallest mass of each mass's piece
+    walled = np.zeros(n, dtype=bool)
+    one = (a >= 0) != (b >= 0)
+    walled[labels[np.where(a[one] >= 0, a[one], b[one])]] = True
+    roots = np.flatnonzero((labels == np.arange(n)) & ~walled)
+    R = np.where(labels[:, None] == roots[None, :], np.sqrt(masses)[:, None], 0.0)
+    return R / np.linalg.norm(R, axis=0)[None, :]
+
+
 def rigid_basis(masses: np.ndarray, ends: np.ndarray) -> np.ndarray:
     """Orthonormal mass-weighted rigid-body vectors, one column per free piece, shape (N, r)."""
     n = masses.shape[0]
+    if n <= SMALL_PIECES:
+        return _small_rigid_basis(masses, _ends(ends))
     pieces = free_pieces(n, ends)
     R = np.zeros((n, len(pieces)))
     for j, idx in enumerate(pieces):  # loop over pieces, not masses

@@ -48,16 +48,19 @@ def verlet_loop(x0, v0, p, h, steps, rec, xs, vs, E):
     _force(x, 0.0, a, p)
     hh, h2 = 0.5 * h * h, 0.5 * h
     _store(xs, vs, 0, x, v)
+    damped = E.shape[0] > 0  # tested once: an undamped run then calls no damping helper (2x per step)
     j = 1
     for i in range(steps):
-        _half_damp(v, E, tmp)
+        if damped:
+            _half_damp(v, E, tmp)
         for r in range(n):
             x[r] = x[r] + h * v[r] + hh * a[r]
         _force(x, (i + 1) * h, an, p)
         for r in range(n):
             v[r] = v[r] + h2 * (a[r] + an[r])
             a[r] = an[r]
-        _half_damp(v, E, tmp)
+        if damped:
+            _half_damp(v, E, tmp)
         if j < rec.shape[0] and rec[j] == i + 1:
             _store(xs, vs, j, x, v)
             j += 1
@@ -72,9 +75,10 @@ def kahan_verlet_loop(x0, v0, p, h, steps, rec, xs, vs, E):
     _force(x, 0.0, a, p)
     half = 0.5 * h
     _store(xs, vs, 0, x, v)
+    damped = E.shape[0] > 0
     j = 1
     for i in range(steps):
-        if E.shape[0]:
+        if damped:
             _half_damp(v, E, tmp)
             cv[:] = 0.0
         for r in range(n):
@@ -93,7 +97,7 @@ def kahan_verlet_loop(x0, v0, p, h, steps, rec, xs, vs, E):
             s = v[r] + y
             cv[r] = (s - v[r]) - y
             v[r] = s
-        if E.shape[0]:
+        if damped:
             _half_damp(v, E, tmp)
             cv[:] = 0.0
         if j < rec.shape[0] and rec[j] == i + 1:
@@ -110,9 +114,11 @@ def splitting_loop(x0, v0, p, h, steps, rec, xs, vs, E, kicks, drifts, nodes):
     _force(x, 0.0, a, p)
     _store(xs, vs, 0, x, v)
     s = drifts.shape[0]
+    damped = E.shape[0] > 0
     j = 1
     for i in range(steps):
-        _half_damp(v, E, tmp)
+        if damped:
+            _half_damp(v, E, tmp)
         for r in range(n):
             v[r] = v[r] + kicks[0] * a[r]
         for q in range(s):
@@ -122,7 +128,8 @@ def splitting_loop(x0, v0, p, h, steps, rec, xs, vs, E, kicks, drifts, nodes):
             _force(x, (i + nodes[q + 1]) * h, a, p)
             for r in range(n):
                 v[r] = v[r] + k * a[r]
-        _half_damp(v, E, tmp)
+        if damped:
+            _half_damp(v, E, tmp)
         if j < rec.shape[0] and rec[j] == i + 1:
             _store(xs, vs, j, x, v)
             j += 1
@@ -152,10 +159,12 @@ def rk4_loop(x0, v0, p, h, steps, rec, xs, vs, E, Ad):
     _force(x, 0.0, a, p)
     h2, h6 = 0.5 * h, h / 6.0
     _store(xs, vs, 0, x, v)
+    damped = E.shape[0] > 0
     j = 1
     for i in range(steps):
         t = i * h
-        _half_damp(v, E, k4)
+        if damped:
+            _half_damp(v, E, k4)
         _total(a, v, Ad, k1)
         for r in range(n):
             x2[r] = v[r] + h2 * k1[r]
@@ -176,7 +185,8 @@ def rk4_loop(x0, v0, p, h, steps, rec, xs, vs, E, Ad):
             x[r] = x[r] + h6 * (v[r] + 2.0 * (x2[r] + x3[r]) + x4[r])
             v[r] = v[r] + h6 * (k1[r] + 2.0 * (k2[r] + k3[r]) + k4[r])
         _force(x, (i + 1) * h, a, p)
-        _half_damp(v, E, k4)
+        if damped:
+            _half_damp(v, E, k4)
         if j < rec.shape[0] and rec[j] == i + 1:
             _store(xs, vs, j, x, v)
             j += 1
