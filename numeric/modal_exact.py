@@ -7,16 +7,20 @@ nearly orthogonal to r = 1 is a sum of terms of both signs. Here, for scenes of 
 :data:`MP_MAX_MASSES` masses:
 
 1. ``D = M^-1/2 K M^-1/2`` is assembled exactly from the elements (every float parameter an exact
-   binary fraction, :func:`numeric.frf_dense._mp`) and diagonalised by ``mpmath.eigsy`` at 30, 60,
-   120, … digits;
+   binary fraction, :func:`numeric.frf_dense._mp`) and diagonalised by ``mpmath.eigsy`` at
+   d₀ = 30 + log10(λ_max/λ_min) digits (the spread from the float64 spectrum), then 2d₀, 4d₀;
 2. per mode (ascending ω, M-orthonormal physical shape φⱼ, the sign of its first non-negligible
    component positive, as the float route): Γⱼ, the peak quantities per unit spectral
    displacement Γⱼφⱼ (floors), Γⱼ(φ_b − φ_a) (drifts), k·Γⱼ(φ_b − φ_a) (spring forces),
    λⱼΓⱼ² = rᵀKΓⱼφⱼ (base shear), and G = ΦᵀCΦ (dashpots from their elements; Rayleigh
    α + βλⱼ and modal damping 2ζⱼωⱼ on the diagonal by definition) for ζⱼ = Gⱼⱼ/(2ωⱼ);
 3. the precision doubles until two successive precisions agree on every one of these to
-   :data:`SETTLED` relative (or :data:`FLOOR` of the mode's largest where a value is tiny), and
-   each is rounded to float64 once.
+   :data:`SETTLED` relative once their difference is scaled to the higher precision (or to
+   :data:`FLOOR` of the largest of its kind where a value is tiny: a high mode localised away from
+   the wall can have Γ ~ 1e-60), and each is rounded to float64 once.
+
+Cost (one core, measured): ``eigsy`` is about 1.2 s per precision at 24 masses (0.15 s at 12), so
+:data:`MP_MAX_MASSES` is 24; two precisions settle a scene unless it has repeated frequencies.
 
 Repeated frequencies (no unique shapes, so no unique per-mode values) do not settle: the caller
 falls back to the float route and says so.
@@ -24,6 +28,7 @@ falls back to the float route and says so.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -32,13 +37,17 @@ from .elements import Elements
 from .frf_dense import _mp
 
 #: Largest scene whose modal quantities are computed in mpmath (cost measured in the README's rsa section).
-MP_MAX_MASSES = 40
+MP_MAX_MASSES = 24
 #: Two successive precisions agreeing to this relative difference settle a value.
 SETTLED = 1e-17
-#: Values smaller than this fraction of their mode's largest (of the same kind) settle absolutely.
-FLOOR = 1e-15
-#: Precisions tried (decimal digits).
-DIGITS = (30, 60, 120, 240)
+#: Values smaller than this fraction of the largest of their kind (over all modes) settle absolutely.
+FLOOR = 1e-40
+#: Margin on the error estimate of the higher precision (its difference from the lower one, scaled by
+#: the ratio of their unit roundoffs).
+SAFETY = 1e6
+#: Digits of the first precision beyond log10 of the spread λ_max/λ_min; then doubled, :data:`LEVELS` in all.
+DIGITS = 30
+LEVELS = 3
 
 
 @dataclass(frozen=True)
@@ -132,34 +141,39 @@ _PER_MODE = ("omega", "gamma", "zeta", "base")
 _ROWS = ("shapes", "displacement", "drift", "force")
 
 
-def _settled(a: dict, b: dict) -> bool:
-    """Whether every value of ``b`` agrees with ``a`` (one precision lower) to :data:`SETTLED`."""
-    def close(u, v, scale):
-        return abs(u - v) <= SETTLED * abs(v) + FLOOR * SETTLED * scale
-
-    for key in _PER_MODE:
-        scale = max(abs(v) for v in b[key])
-        if not all(close(u, v, scale) for u, v in zip(a[key], b[key])):
+def _settled(a: dict, b: dict, gain: float) -> bool:
+    """Whether every value of ``b`` is settled: its estimated error, the difference from ``a`` (computed
+    with ``gain`` times the unit roundoff of ``b``) times ``gain`` times :data:`SAFETY`, is at most
+    :data:`SETTLED` of it or :data:`FLOOR` of the largest value of its kind (over all modes)."""
+    for key in _PER_MODE + _ROWS:
+        flat_a = [v for row in a[key] for v in row] if key in _ROWS else a[key]
+        flat_b = [v for row in b[key] for v in row] if key in _ROWS else b[key]
+        scale = max((abs(v) for v in flat_b), default=0)
+        if not all(abs(u - v) * gain * SAFETY <= SETTLED * abs(v) + FLOOR * scale for u, v in zip(flat_a, flat_b)):
             return False
-    for key in _ROWS:
-        for ra, rb in zip(a[key], b[key]):
-            scale = max((abs(v) for v in rb), default=0)
-            if not all(close(u, v, scale) for u, v in zip(ra, rb)):
-                return False
     return True
 
 
-def exact_modes(el: Elements) -> ExactModes | None:
+def exact_modes(el: Elements, omega: np.ndarray) -> ExactModes | None:
     """The modal quantities of an all-elastic scene (every piece tied to a wall) settled in mpmath;
-    None where they do not settle by the last of :data:`DIGITS` (repeated frequencies)."""
+    None where they do not settle within :data:`LEVELS` precisions (repeated frequencies).
+
+    Parameters
+    ----------
+    el : Elements
+    omega : ndarray, shape (N,)
+        The float64 frequencies (accurate spectrum), for the first precision.
+    """
     import mpmath
 
+    spread = float(np.max(omega) / np.min(omega)) ** 2 if np.min(omega) > 0 else 1e300
+    first = DIGITS + int(math.ceil(math.log10(max(spread, 1.0))))
     prev = None
-    for dps in DIGITS:
+    for dps in (first << i for i in range(LEVELS)):
         cur = _at(el, dps)
         if prev is not None:
             with mpmath.workdps(dps):
-                ok = _settled(prev, cur)
+                ok = _settled(prev, cur, mpmath.mpf(10) ** -(dps // 2))
             if ok:
                 f = lambda v: np.array([float(u) for u in v])  # noqa: E731  (the one rounding)
                 rows = {key: np.array([[float(u) for u in row] for row in cur[key]]).reshape(len(cur["omega"]), -1)
