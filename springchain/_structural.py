@@ -396,8 +396,9 @@ def rsa(scene, spectrum, combine: str = "cqc") -> RSA:
 
         why = (f"more than {MP_MAX_MASSES} masses" if system.n > MP_MAX_MASSES
                else "repeated frequencies: the per-mode split is not unique")
-        notes.append(f"Gamma, drifts and spring forces from float64 shapes ({why}): not certified at high stiffness "
-                     "contrast (periods, base shear and the storey shears of a chain hung from one wall are)")
+        notes.append(f"Gamma, drifts and spring forces from float64 shapes ({why}): each mode's values are good to "
+                     "float64 of the largest mode's, not certified per mode at high stiffness contrast (the storey "
+                     "shears of a chain hung from one wall come from inertia sums, free of that cancellation)")
     if not system.linear:
         notes.append("cubic springs: the analysis uses the linear springs (the linearization about x = 0)")
     if isinstance(spectrum, (str, Path)):
