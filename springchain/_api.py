@@ -480,9 +480,17 @@ def _spring_arrays(system, x: dict) -> dict:
     return out
 
 
-def _kept(sc: Scene, system, names, dt, steps, record_every, options, out, figures, springs=False):
+def _notes_array(notes: list[str]) -> dict:
+    """``{"notes": array of str}`` for the NPZ when there are notes (the float64-limit line), else {}."""
+    import numpy as np
+
+    return {"notes": np.array(notes, dtype=str)} if notes else {}
+
+
+def _kept(sc: Scene, system, names, dt, steps, record_every, options, out, figures, springs=False, notes=()):
     """An in-memory run; the NPZ (and figures) written into ``out`` when given; with ``springs`` the
-    drift, spring-force and base-shear arrays of every method among its NPZ arrays."""
+    drift, spring-force and base-shear arrays of every method among its NPZ arrays, with ``notes``
+    a ``notes`` array of str (the float64-limit line, also in the summary)."""
     from .numeric.absolute import absolute_npz_arrays
     from .numeric.compare import compare
     from .numeric.progress import phase
@@ -496,6 +504,7 @@ def _kept(sc: Scene, system, names, dt, steps, record_every, options, out, figur
     extra = absolute_npz_arrays(system, t, x, v)
     if springs:
         extra.update(_spring_arrays(system, x))
+    extra.update(_notes_array(list(notes)))
     npz, figs = None, ()
     if out is not None:
         from .numeric.npz import save_npz
@@ -597,21 +606,23 @@ def simulate(scene: str | Path | Scene, methods: list[str] | None = None, dt: fl
     if not methods:  # a default Verlet that would be unstable at this dt gives way to the exact method
         names, notes = sim.unstable_defaults(system, sim.default_methods(system), dt)
     _check_settings([registry.method(name, options) for name in names], options)
+    limits = sim.float64_limits(system, names, steps * dt)  # one line where float64 cannot follow
     t0 = time.perf_counter()
     if system.chain:
         summary, t, x, v, extra, npz, figs = _streamed(sc, system, names, dt, steps, record_every, out, figures,
                                                        options)
-        if springs:  # from the frames read back; the NPZ rewritten with them (temp file + rename)
+        if springs or limits:  # from the frames read back; the NPZ rewritten with them (temp file + rename)
             from .numeric.npz import save_npz
 
-            extra.update(_spring_arrays(system, x))
+            extra.update(_spring_arrays(system, x) if springs else {})
+            extra.update(_notes_array(limits))
             save_npz(npz, t, x, v, extra)
     else:
         summary, t, x, v, extra, npz, figs = _kept(sc, system, names, dt, steps, record_every, options, out, figures,
-                                                   springs)
+                                                   springs, limits)
     if modal_energy:
         summary["modal_energy"], figs = _modal_energies(sc, system, t, x, v, extra, npz, figs, figures, progress)
-    notes = notes + sim.float64_limits(system, names, steps * dt)  # one line where float64 cannot follow
+    notes = notes + limits
     summary.update({"scene": sc.name, "module": origin, "dt": dt, "steps": steps, "t_end": steps * dt,
                     "npz": None if npz is None else str(npz), "figures": [str(p) for p in figs],
                     "methods_that_apply": sim.applicable(system),

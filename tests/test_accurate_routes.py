@@ -549,5 +549,9 @@ def test_exact_run_past_float64_limits_says_so(tmp_path, capsys):
     assert np.max(np.abs(run.x["modal"][-3:] - want)) > 1e-9 * np.max(np.abs(want))  # the note is no false alarm
     assert main(["simulate", str(path), "--method", "modal", "--out", str(tmp_path / "o"), "--no-figures"]) == 0
     assert "note: modal: float64 limits exceed 1e-09" in capsys.readouterr().out
+    with np.load(tmp_path / "o" / "lim.npz") as data:  # the note travels with the numbers
+        assert [str(n) for n in data["notes"]] == [note]
     short = _write(tmp_path, text.replace("dt = 1000.0", "dt = 0.001"), "short")
-    assert sc.simulate(short, methods=["modal"]).summary["notes"] == []
+    assert sc.simulate(short, methods=["modal"], out=tmp_path / "s").summary["notes"] == []
+    with np.load(tmp_path / "s" / "lim.npz") as data:  # (the scene keeps its name)
+        assert "notes" not in data.files
