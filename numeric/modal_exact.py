@@ -88,7 +88,7 @@ def _at(el: Elements, dps: int) -> dict:
 
     n = el.n
     with mpmath.workdps(dps):
-        mp = lambda v: _mp(v, mpmath)  # noqa: E731
+        mp = lambda v: _mp(v, mpmath)
         m = [mp(v) for v in el.masses.tolist()]
         s = [1 / mpmath.sqrt(v) for v in m]
         springs = [(a, b, mp(k)) for (a, b), k in zip(el.spring_ends.tolist(), el.stiffness.tolist())]
@@ -109,7 +109,7 @@ def _at(el: Elements, dps: int) -> dict:
             big = max(abs(c) for c in col)
             first = next(c for c in col if abs(c) > mpmath.mpf("1e-12") * big)
             phi.append([-c for c in col] if first < 0 else col)
-        x = lambda row, i: row[i] if i >= 0 else 0  # noqa: E731  (a wall does not move)
+        x = lambda row, i: row[i] if i >= 0 else 0  # a wall does not move
         gamma = [mpmath.fsum(mi * c for mi, c in zip(m, row)) for row in phi]
         disp = [[g * c for c in row] for g, row in zip(gamma, phi)]
         drift = [[g * (x(row, b) - x(row, a)) for a, b, _ in springs] for g, row in zip(gamma, phi)]
@@ -167,7 +167,7 @@ def exact_modes(el: Elements, omega: np.ndarray) -> ExactModes | None:
     import mpmath
 
     spread = float(np.max(omega) / np.min(omega)) ** 2 if np.min(omega) > 0 else 1e300
-    first = DIGITS + int(math.ceil(math.log10(max(spread, 1.0))))
+    first = DIGITS + math.ceil(math.log10(max(spread, 1.0)))
     prev = None
     for dps in (first << i for i in range(LEVELS)):
         cur = _at(el, dps)
@@ -175,7 +175,7 @@ def exact_modes(el: Elements, omega: np.ndarray) -> ExactModes | None:
             with mpmath.workdps(dps):
                 ok = _settled(prev, cur, mpmath.mpf(10) ** -(dps // 2))
             if ok:
-                f = lambda v: np.array([float(u) for u in v])  # noqa: E731  (the one rounding)
+                f = lambda v: np.array([float(u) for u in v])  # the one rounding
                 rows = {key: np.array([[float(u) for u in row] for row in cur[key]]).reshape(len(cur["omega"]), -1)
                         for key in _ROWS}
                 return ExactModes(*(f(cur[key]) for key in _PER_MODE), rows["shapes"].T, rows["displacement"],

@@ -240,7 +240,7 @@ def _float_peaks(system: System, modes: ModalProperties, sd: np.ndarray) -> tupl
     never a difference of nearly equal displacements times k); other topologies take k(x_b − x_a)."""
     g = modes.gamma * sd
     u = g[:, None] * modes.shapes.T  # (J, N)
-    B, sign = spring_geometry(system)
+    B, _ = spring_geometry(system)
     drift = u @ B.T
     force = drift * system.stiffness[None, :]
     lam = modes.omega**2
