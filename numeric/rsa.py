@@ -122,7 +122,10 @@ class ModalProperties:
                              f"{spec.rigid} free piece(s) (rigid-body modes, infinite period); accepted: a scene "
                              "whose every piece has a spring to a wall", quantity="scene")
         if system.n <= MP_MAX_MASSES:
-            ex = exact_modes(Elements.from_system(system), spec.omega)
+            from .progress import phase
+
+            with phase(f"modal quantities of {system.n} masses in extended precision"):
+                ex = exact_modes(Elements.from_system(system), spec.omega)
             if ex is not None:
                 return cls(ex.omega, ex.zeta, ex.gamma, ex.shapes, float(math.fsum(system.masses)),
                            ex.proportional, ex)
