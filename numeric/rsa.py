@@ -26,7 +26,9 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from .elements import Elements
 from .errors import RunRefused
+from .modal_exact import MP_MAX_MASSES, ExactModes, exact_modes
 from .system import System
 
 
@@ -50,9 +52,10 @@ def cqc_correlation(omega: np.ndarray, zeta: np.ndarray) -> np.ndarray:
     w = np.asarray(omega, dtype=float)
     z = np.asarray(zeta, dtype=float)
     r = w[None, :] / w[:, None]
+    one_minus_r2 = (w[:, None] - w[None, :]) * (w[:, None] + w[None, :]) / w[:, None] ** 2  # 1 − r², no cancellation
     zi, zj = z[:, None], z[None, :]
     num = 8.0 * np.sqrt(zi * zj) * (zi + r * zj) * r**1.5
-    den = (1.0 - r**2) ** 2 + 4.0 * zi * zj * r * (1.0 + r**2) + 4.0 * (zi**2 + zj**2) * r**2
+    den = one_minus_r2**2 + 4.0 * zi * zj * r * (1.0 + r**2) + 4.0 * (zi**2 + zj**2) * r**2
     with np.errstate(invalid="ignore", divide="ignore"):
         rho = np.where(den > 0, num / np.where(den > 0, den, 1.0), 0.0)
     np.fill_diagonal(rho, 1.0)
@@ -82,6 +85,9 @@ class ModalProperties:
     total_mass : float
     proportional : bool
         Whether ΦᵀCΦ is diagonal (to 1e-10 of its diagonal); otherwise ζ is its diagonal, an approximation.
+    exact : ExactModes or None
+        The per-unit-SD peaks of every mode, each correctly rounded (:mod:`numeric.modal_exact`);
+        None on the float route (more than ``MP_MAX_MASSES`` masses, or repeated frequencies).
     """
 
     omega: np.ndarray = field(repr=False)
@@ -90,6 +96,7 @@ class ModalProperties:
     shapes: np.ndarray = field(repr=False)
     total_mass: float = 0.0
     proportional: bool = True
+    exact: ExactModes | None = field(default=None, repr=False)
 
     @property
     def effective_mass(self) -> np.ndarray:
@@ -101,7 +108,9 @@ class ModalProperties:
 
     @classmethod
     def from_system(cls, system: System) -> "ModalProperties":
-        """Modes by the spring-factor SVD (rigid modes refused), ζ from the system's damping matrix."""
+        """Modes by the spring-factor SVD (rigid modes refused); Γ, ζ and the per-unit-SD peaks from
+        :func:`numeric.modal_exact.exact_modes` up to ``MP_MAX_MASSES`` masses, else ζ from the
+        system's damping matrix and Γ by compensated sums of the float64 shapes."""
         from .spectrum import spectrum
 
         if system.chain and system.n > 2000:
@@ -112,6 +121,14 @@ class ModalProperties:
             raise RunRefused(f"response-spectrum analysis needs every mass tied to a wall: this scene has "
                              f"{spec.rigid} free piece(s) (rigid-body modes, infinite period); accepted: a scene "
                              "whose every piece has a spring to a wall", quantity="scene")
+        if system.n <= MP_MAX_MASSES:
+            from .progress import phase
+
+            with phase(f"modal quantities of {system.n} masses in extended precision"):
+                ex = exact_modes(Elements.from_system(system), spec.omega)
+            if ex is not None:
+                return cls(ex.omega, ex.zeta, ex.gamma, ex.shapes, float(math.fsum(system.masses)),
+                           ex.proportional, ex)
         phi = spec.shapes
         # the sign of each shape: its first non-zero component positive (as the printed closed-form shapes)
         first = np.argmax(np.abs(phi) > 1e-12 * np.max(np.abs(phi), axis=0, keepdims=True), axis=0)
@@ -210,12 +227,36 @@ def spring_geometry(system: System) -> tuple[np.ndarray, np.ndarray]:
 def analyse(system: System, sd: np.ndarray, modes: ModalProperties, spectrum: str = "") -> RSAResult:
     """Peak modal responses for the spectral displacements ``sd`` (shape (J,)) of the system's modes."""
     sd = np.asarray(sd, dtype=float)
-    u = (modes.gamma * sd)[:, None] * modes.shapes.T  # (J, N)
-    B, sign = spring_geometry(system)
+    if modes.exact is not None:  # each per-unit peak correctly rounded: one more rounding here
+        ex = modes.exact
+        u, drift, force, base = (ex.displacement * sd[:, None], ex.drift * sd[:, None], ex.force * sd[:, None],
+                                 ex.base * sd)
+    else:
+        u, drift, force, base = _float_peaks(system, modes, sd)
+    return RSAResult(modes, sd, u, drift, force, base, cqc_correlation(modes.omega, modes.zeta), spectrum)
+
+
+def _float_peaks(system: System, modes: ModalProperties, sd: np.ndarray) -> tuple:
+    """Peaks from float64 shapes (the route past ``MP_MAX_MASSES`` masses): floors Γφ·SD, base shear
+    λΓ²·SD (= rᵀK u, no sum of signed forces). Spring forces of a chain hanging from one wall are storey
+    shears, λ Σ_{masses beyond} mᵢφᵢ (the inertia forces beyond the spring: a stiff spring's force is
+    never a difference of nearly equal displacements times k); other topologies take k(x_b − x_a)."""
+    g = modes.gamma * sd
+    u = g[:, None] * modes.shapes.T  # (J, N)
+    B, _ = spring_geometry(system)
     drift = u @ B.T
     force = drift * system.stiffness[None, :]
-    base = force @ sign
-    return RSAResult(modes, sd, u, drift, force, base, cqc_correlation(modes.omega, modes.zeta), spectrum)
+    lam = modes.omega**2
+    ends, n = system.spring_ends, system.n
+    path = np.stack([np.arange(-1, n - 1), np.arange(n)], axis=1)
+    inertia = lam[:, None] * (system.masses[None, :] * u)  # (J, N)
+    if ends.shape == path.shape and np.array_equal(ends, path):  # wall - 0 - 1 - ... - n-1 (free)
+        force = np.cumsum(inertia[:, ::-1], axis=1)[:, ::-1]
+        drift = force / system.stiffness[None, :]
+    elif ends.shape == path.shape and np.array_equal(ends, np.stack([np.arange(n), np.r_[np.arange(1, n), -1]], 1)):
+        force = -np.cumsum(inertia, axis=1)  # 0 - 1 - ... - n-1 - wall: f_s = -λ Σ_{i<=s} m_i φ_i
+        drift = force / system.stiffness[None, :]
+    return u, drift, force, lam * modes.gamma**2 * sd
 
 
 __all__ = ["Combination", "cqc_correlation", "combine", "ModalProperties", "RSAResult", "analyse",

@@ -391,6 +391,14 @@ def rsa(scene, spectrum, combine: str = "cqc") -> RSA:
     notes = []
     if not modes.proportional:
         notes.append("damping is not proportional: each mode's zeta is the diagonal of Phi^T C Phi (an approximation)")
+    if modes.exact is None:
+        from .numeric.modal_exact import MP_MAX_MASSES
+
+        why = (f"more than {MP_MAX_MASSES} masses" if system.n > MP_MAX_MASSES
+               else "repeated frequencies: the per-mode split is not unique")
+        notes.append(f"Gamma, drifts and spring forces from float64 shapes ({why}): each mode's values are good to "
+                     "float64 of the largest mode's, not certified per mode at high stiffness contrast (the storey "
+                     "shears of a chain hung from one wall come from inertia sums, free of that cancellation)")
     if not system.linear:
         notes.append("cubic springs: the analysis uses the linear springs (the linearization about x = 0)")
     if isinstance(spectrum, (str, Path)):

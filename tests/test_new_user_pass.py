@@ -394,10 +394,6 @@ def test_numba_import_is_outside_the_method_clock(monkeypatch):
     assert events.index("import numba") < events.index("clock"), events
 
 
-@pytest.mark.xfail(strict=True, reason="rsa takes Γ and the spring extensions from float64 SVD shapes: at contrast "
-                   "1e10 a stiff spring's modal force (k times a difference of nearly equal shape components) and "
-                   "the tiny Γ of a mode orthogonal to r are good to 1e-5 ... 1e-6 only; not fixed in the "
-                   "new-user pass (needs the spring-factor's left singular vectors or the mpmath participation)")
 def test_rsa_modal_spring_forces_at_contrast(scene, ref):
     r = sc.rsa(scene, spectrum="quake-record")
     data = r.to_json()
