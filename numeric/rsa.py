@@ -22,10 +22,10 @@ from __future__ import annotations
 
 import enum
 import math
-from dataclasses import dataclass, field
 
 import numpy as np
 
+from .array_record import array_record
 from .errors import RunRefused
 from .system import System
 
@@ -69,7 +69,7 @@ def combine(peaks: np.ndarray, how: Combination, rho: np.ndarray | None = None) 
     return np.sqrt(np.maximum(quad, 0.0)).reshape(R.shape[1:])
 
 
-@dataclass(frozen=True)
+@array_record
 class ModalProperties:
     """The elastic modes of a system as RSA needs them.
 
@@ -84,10 +84,10 @@ class ModalProperties:
         Whether ΦᵀCΦ is diagonal (to 1e-10 of its diagonal); otherwise ζ is its diagonal, an approximation.
     """
 
-    omega: np.ndarray = field(repr=False)
-    zeta: np.ndarray = field(repr=False)
-    gamma: np.ndarray = field(repr=False)
-    shapes: np.ndarray = field(repr=False)
+    omega: np.ndarray
+    zeta: np.ndarray
+    gamma: np.ndarray
+    shapes: np.ndarray
     total_mass: float = 0.0
     proportional: bool = True
 
@@ -135,7 +135,7 @@ class ModalProperties:
         return cls(omega, zeta, gamma, phi, float(math.fsum(m)), proportional)
 
 
-@dataclass(frozen=True)
+@array_record
 class RSAResult:
     """Peak modal responses and their SRSS and CQC combinations.
 
@@ -159,12 +159,12 @@ class RSAResult:
     """
 
     modes: ModalProperties
-    sd: np.ndarray = field(repr=False)
-    displacement: np.ndarray = field(repr=False)
-    drift: np.ndarray = field(repr=False)
-    spring_force: np.ndarray = field(repr=False)
-    base_shear: np.ndarray = field(repr=False)
-    rho: np.ndarray = field(repr=False)
+    sd: np.ndarray
+    displacement: np.ndarray
+    drift: np.ndarray
+    spring_force: np.ndarray
+    base_shear: np.ndarray
+    rho: np.ndarray
     spectrum: str = ""
 
     @property
