@@ -327,7 +327,8 @@ def _damping_ratios(model: ChainModel, records: list[dict], damped) -> str:
     return ""
 
 
-def chain_report(model: ChainModel, modes: ChainModes, omega2_values=None, damped=None) -> tuple[str, dict]:
+def chain_report(model: ChainModel, modes: ChainModes, omega2_values=None, damped=None,
+                 participation=None) -> tuple[str, dict]:
     """Text and JSON description of a chain's derivation and spectrum.
 
     The JSON has the top-level shape of non-chain scenes (``scene, parameters, masses, modes,
@@ -335,6 +336,9 @@ def chain_report(model: ChainModel, modes: ChainModes, omega2_values=None, dampe
     chain's ``n, left, right, uniform, j_range`` and its symbolic ``family`` (omega2, shape).
     A damped chain's listed modes carry ``damping_ratio`` and ``omega_damped`` (``damped``: the
     ``(ω_n, ζ, ω_d)`` rows of ``numeric.chain_damped.damped_rows``, see :func:`_damping_ratios`).
+    ``participation``: a :class:`~.participation.Participation` of every mode (ascending ω, the
+    records' order) for a chain whose supports move, printed and added to the records as for
+    ``[masses]`` scenes; without it such a chain gets a note saying where participation is.
     """
     sc, ch = model.scene, model.chain
     force = sp.factor_terms(model.interior_equation())
@@ -382,10 +386,10 @@ def chain_report(model: ChainModel, modes: ChainModes, omega2_values=None, dampe
             lines.append(f"    note: {listed_note}")
     elif listed_note:
         lines.append(f"    note: {listed_note}")
-    from .participation import chain_note
+    from .participation import chain_section
 
-    lines += [line for note in chain_note(model) for line in ("", note)]
-    notes += chain_note(model)
+    part_lines, part_notes, extra = chain_section(model, participation, records)
+    lines, notes = lines + part_lines, notes + part_notes
     data = {"scene": sc.name, "parameters": {k: sc.parameters[k] for k in sorted(sc.parameters)},
             "masses": [], "modes": records, "closed_form": modes.closed_form,
             "notes": notes + ([listed_note] if listed_note else []),
@@ -393,6 +397,7 @@ def chain_report(model: ChainModel, modes: ChainModes, omega2_values=None, dampe
             "j_range": None if modes.j_range is None else list(modes.j_range),
             "family": {"omega2": None if modes.omega2 is None else sp.sstr(modes.omega2),
                        "shape": None if modes.shape is None else sp.sstr(modes.shape)}}
+    data.update(extra)
     if damping_data is not None:
         data["damping"] = damping_data
     if law_data is not None:

@@ -280,13 +280,20 @@ def _scalar_force(c: _Context) -> list[str]:
     """scalar_force(x, t, out, p): the per-mass forces over scalars (no NumPy calls on arrays), for
     scenes printed per mass. Damping is not in it: the loops take -M⁻¹C as a matrix (Strang splitting)."""
     model = c.model
-    if not c.dense or c.laws:  # spring potentials: their series tensions stay on the NumPy path for now
+    if not c.dense:
         return []
     call = ", ".join(["_x", "t", "_out"] + [f"_p[{j}]" for j in range(len(c.params))])
     outer = [f"    _scalar_force_terms({call})  # the parameters in PARAMETERS order"]
     body = [f"    _{s} = _x[{i}]" for i, s in enumerate(model.x)]
     first = True
+    helpers: list[str] = []
+    if c.laws:  # spring potentials: one tension line per spring (stable forms), summed on the masses
+        lines, helpers = _scalar_tension_lines(model, c)
+        body += lines
+        first = False
     for group in _SCALAR_EFFECTS:
+        if c.laws and Effect.SPRING in group:
+            continue
         if group == (Effect.GROUND,) and model.ground is None:  # a ground table: data at run time
             continue
         exprs = model.force_expressions(*group)
@@ -298,9 +305,41 @@ def _scalar_force(c: _Context) -> list[str]:
         body += [f"    _out[{i}] {op} {c.p(e / m)}" for i, (e, m) in enumerate(zip(exprs, model.masses))
                  if first or e != 0]
         first = False
-    return (function("scalar_force(_x, t, _out, _p)", _SCALAR_DOC, outer)
-            + function(f"_scalar_force_terms(_x, t, _out{c.kw})",
-                       "scalar_force() with the parameters as arguments (the body numba compiles).", body))
+    out = (function("scalar_force(_x, t, _out, _p)", _SCALAR_DOC, outer)
+           + function(f"_scalar_force_terms(_x, t, _out{c.kw})",
+                      "scalar_force() with the parameters as arguments (the body numba compiles).", body))
+    if helpers:
+        from .law_helpers import helper_source
+
+        out += ["", "", *helper_source(helpers).rstrip("\n").split("\n")]
+    return out
+
+
+def _scalar_tension_lines(model, c: _Context) -> tuple[list[str], list[str]]:
+    """Lines ``_d<j> = x_b - x_a``, ``_t<j> = V'(_d<j>)`` (the stable forms of derive.stable_laws, as the
+    NumPy ``spring_tensions``), then ``_out[i] = (Σ ±_t<j> + m_i g) / m_i``; and the scalar helpers they call."""
+    from .law_helpers import SCALAR
+    from .potential import D
+    from .potential_code import dense_law_exprs, helpers_needed
+
+    tensions = dense_law_exprs(model)[0]
+    lines = []
+    sums = [sp.Integer(0)] * len(model.masses)
+    for j, ((a, b, *_), tension) in enumerate(zip(model.springs, tensions)):
+        end = lambda i: 0 if i < 0 else model.x[i]  # noqa: E731  (a wall is at 0)
+        lines.append(f"    _d{j} = {c.p(end(b) - end(a))}")
+        text = c.p(tension.xreplace({D: sp.Symbol(f"_d{j}")}))
+        for name, scalar in SCALAR.items():
+            text = text.replace(f"{name}(", f"{scalar}(")
+        lines.append(f"    _t{j} = {text}")
+        tj = sp.Symbol(f"_t{j}")
+        if a >= 0:
+            sums[a] += tj
+        if b >= 0:
+            sums[b] -= tj
+    gravity = model.force_expressions(Effect.GRAVITY)
+    lines += [f"    _out[{i}] = {c.p((s + g) / m)}" for i, (s, g, m) in enumerate(zip(sums, gravity, model.masses))]
+    return lines, sorted(SCALAR[h] for h in helpers_needed(tensions))
 
 
 def _incidence_lines(c: _Context, arg: str, ends: str, constants: str, *, cubic: bool,

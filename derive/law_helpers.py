@@ -42,14 +42,39 @@ def _log1pmx(_z):
         return _np.where(_np.abs(_z) <= 0.5, _series, _np.log1p(_z) - _z)
 
 
-#: The helpers a generated module may need, by the name its code calls.
-HELPERS = {"_expm1mx": _expm1mx, "_log1pmx": _log1pmx}
+def _expm1mx_s(_z):
+    """_expm1mx of one float, in straight scalar code (``scalar_force``: numba compiles it)."""
+    if abs(_z) <= 0.5:
+        _s = 0.0
+        for _j in range(len(_EXPM1MX_COEFFICIENTS) - 1, -1, -1):
+            _s = _s * _z + _EXPM1MX_COEFFICIENTS[_j]
+        return _s * _z * _z
+    return _np.expm1(_z) - _z
+
+
+def _log1pmx_s(_z):
+    """_log1pmx of one float, in straight scalar code (``scalar_force``: numba compiles it)."""
+    if abs(_z) <= 0.5:
+        _s = _z / (2.0 + _z)
+        _q = _s * _s
+        _t = 0.0
+        for _j in range(18, -1, -1):
+            _t = _t * _q + 1.0 / (2 * _j + 3)
+        return -_z * _z / (2.0 + _z) + 2.0 * _s * _q * _t
+    return _np.log1p(_z) - _z
+
+
+#: The helpers a generated module may need, by the name its code calls (``_s``: the scalar forms of
+#: ``scalar_force``, which call them where the array forms are called).
+HELPERS = {"_expm1mx": _expm1mx, "_log1pmx": _log1pmx, "_expm1mx_s": _expm1mx_s, "_log1pmx_s": _log1pmx_s}
+#: The scalar form of each array helper.
+SCALAR = {"_expm1mx": "_expm1mx_s", "_log1pmx": "_log1pmx_s"}
 
 
 def helper_source(names) -> str:
     """The source of the named helpers (and the series table if ``_expm1mx`` is one of them)."""
     parts = []
-    if "_expm1mx" in names:
+    if "_expm1mx" in names:  # the scalar form reads the same table (emitted with the array form)
         text = inspect.getsource(__import__(__name__, fromlist=["x"])).split("_EXPM1MX_COEFFICIENTS = ", 1)[1]
         parts.append("_EXPM1MX_COEFFICIENTS = " + text.split("\n\n\n", 1)[0])
     parts += [inspect.getsource(HELPERS[n]).rstrip("\n") for n in sorted(names)]

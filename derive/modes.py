@@ -75,43 +75,66 @@ def _rigid_shapes(model: Model) -> list[tuple[sp.Expr, ...]]:
             for comp in model.free_components]
 
 
-def _mirror(model: Model) -> list[int] | None:
-    """The reversal permutation if it leaves M and K unchanged, else None."""
+def _pieces(model: Model) -> list[list[int]]:
+    """Index sets of the decoupled pieces of ``K`` and ``M`` (connected by non-zero entries)."""
     n = model.scene.n
+    parent = list(range(n))
+
+    def find(i):
+        while parent[i] != i:
+            parent[i] = parent[parent[i]]
+            i = parent[i]
+        return i
+
+    for i in range(n):
+        for j in range(i + 1, n):
+            if model.K[i, j] != 0 or model.M[i, j] != 0:
+                parent[find(i)] = find(j)
+    groups: dict[int, list[int]] = {}
+    for i in range(n):
+        groups.setdefault(find(i), []).append(i)
+    return sorted(groups.values())
+
+
+def _mirror(model: Model, piece: list[int]) -> list[int] | None:
+    """The reversal of ``piece`` (as positions in it) if it leaves its M and K unchanged, else None."""
+    n = len(piece)
     if n < 2:
         return None
     p = list(range(n - 1, -1, -1))
     M, K = model.M, model.K
-    for i in range(n):
-        if sp.expand(M[i, i] - M[p[i], p[i]]) != 0:
+    for a in range(n):
+        i, pi = piece[a], piece[p[a]]
+        if sp.expand(M[i, i] - M[pi, pi]) != 0:
             return None
-        for j in range(n):
-            if sp.expand(K[i, j] - K[p[i], p[j]]) != 0:
+        for b in range(n):
+            if sp.expand(K[i, piece[b]] - K[pi, piece[p[b]]]) != 0:
                 return None
     return p
 
 
 def _blocks(model: Model) -> list[sp.Matrix]:
-    """Bases (columns) of the invariant subspaces used to split the problem."""
+    """Bases (columns) of the invariant subspaces used to split the problem: one set per
+    decoupled piece (pieces share no spring, so their problems are independent), each split
+    again into mirror-symmetric and antisymmetric halves when the piece reads the same reversed."""
     n = model.scene.n
-    p = _mirror(model)
-    if p is None:
-        return [sp.eye(n)]
-    sym, anti = [], []
-    for i in range(n):
-        j = p[i]
-        if i < j:
-            e = [0] * n
-            e[i] = e[j] = 1
-            sym.append(e)
-            f = [0] * n
-            f[i], f[j] = 1, -1
-            anti.append(f)
-        elif i == j:
-            e = [0] * n
-            e[i] = 1
-            sym.append(e)
-    return [sp.Matrix(sym).T, sp.Matrix(anti).T] if anti else [sp.Matrix(sym).T]
+    blocks = []
+    for piece in _pieces(model):
+        p = _mirror(model, piece)
+        if p is None:
+            p = list(range(len(piece)))
+        sym, anti = [], []
+        for a, b in enumerate(p):
+            if a <= b:
+                e = [0] * n
+                e[piece[a]] = e[piece[b]] = 1
+                sym.append(e)
+            if a < b:
+                f = [0] * n
+                f[piece[a]], f[piece[b]] = 1, -1
+                anti.append(f)
+        blocks.extend(sp.Matrix(half).T for half in (sym, anti) if half)
+    return blocks
 
 
 def _cofactor_vector(A: sp.Matrix, fac: sp.Expr, lam: sp.Symbol) -> list[sp.Expr] | None:

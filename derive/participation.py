@@ -103,14 +103,38 @@ def applies(model) -> bool:
         WALL in (d.a, d.b) for d in sc.dampers)
 
 
-def chain_note(model) -> list[str]:
-    """For a ``[chain]`` scene whose supports move (a wall end or ``[ground]``): one line saying that
-    ``modes`` does not report participation for chains yet and where it is (``rsa``); else nothing."""
+def chain_applies(model) -> bool:
+    """A ``[chain]`` scene whose supports move: a wall end or ``[ground]``."""
     sc = model.scene
-    if sc.chain is None or not (sc.ground is not None or "wall" in (sc.chain.left, sc.chain.right)):
+    return sc.chain is not None and (sc.ground is not None or "wall" in (sc.chain.left, sc.chain.right))
+
+
+def from_values(omega2, gamma, shapes, total_mass: float, route: str) -> Participation:
+    """A :class:`Participation` of values only (no closed forms): a ``[chain]``'s, computed on the
+    numeric side (``springchain._api``) from the accurate spectrum and handed to the report."""
+    n = len(gamma)
+    return Participation(tuple(float(w) for w in omega2), tuple(float(g) for g in gamma),
+                         tuple(float(g) ** 2 for g in gamma), float(total_mass),
+                         tuple(tuple(float(c) for c in s) for s in shapes), (None,) * n, (None,) * n, (None,) * n,
+                         route)
+
+
+def chain_note(model) -> list[str]:
+    """For a ``[chain]`` scene whose supports move (a wall end or ``[ground]``) and whose participation is
+    not reported (rings, chains whose modes are not all listed): one line saying where it is (``rsa``)."""
+    if not chain_applies(model):
         return []
-    return ["Modal participation: not reported by modes for [chain] scenes yet; `springchain rsa SCENE --spectrum "
+    return ["Modal participation: reported by modes for open chains of at most 40 masses; `springchain rsa SCENE --spectrum "
             "FILE` prints Gamma and the effective mass of every mode (spring-factor SVD; chains up to 2000 masses)"]
+
+
+def chain_section(model, p: Participation | None, records: list[dict]) -> tuple[list[str], list[str], dict]:
+    """A chain report's participation: ``(text lines, notes, top-level JSON)``; the table (and the
+    per-mode JSON fields, added to ``records`` in place) when ``p`` covers every record, else the note."""
+    if p is not None and len(records) == len(p.gamma):
+        return [""] + text_lines(p), [], json_fields(p, records)
+    notes = chain_note(model)
+    return [line for note in notes for line in ("", note)], notes, {}
 
 
 # -- values -------------------------------------------------------------------------------------
@@ -326,4 +350,4 @@ def latex_lines(p: Participation) -> list[str]:
     return out
 
 
-__all__ = ["Participation", "participation", "applies", "json_fields", "text_lines", "latex_lines"]
+__all__ = ["Participation", "participation", "applies", "chain_applies", "from_values", "chain_note", "chain_section", "json_fields", "text_lines", "latex_lines"]

@@ -37,7 +37,7 @@ from typing import Callable
 import numpy as np
 
 from .bench_runs import (adaptive_rtols, adaptive_sweep, compile_note, energy_norm, progress_reporter,
-                          report_run, selected_in_order, timed_run)
+                          peer_filter, report_run, selected_in_order, timed_run)
 from .plan import Planner, exact_method, with_tolerance
 from .plan_pilot import check_pilot, needs_pilot
 from .progress import Reporter
@@ -154,7 +154,7 @@ def _grid_sweep(ctx: _Context, method: Method) -> list[tuple[int, int, int]]:
     n_grid = int(round(ctx.t_end / spacing))
     traits = method.traits
     w = ctx.planner.model.omega_max * 1.25  # nonlinear stiffening margin over the linearization
-    h = 0.9 * traits.stability_limit / w
+    h = 0.9 * min(traits.stability_limit, 2.0) / w  # an unconditionally stable step starts at ω·h = 1.8
     k = int(round(spacing / ctx.dt_out))
     out = {(n_grid * k, k, 1)}
     while True:
@@ -174,7 +174,7 @@ def _grid_sweep(ctx: _Context, method: Method) -> list[tuple[int, int, int]]:
 
 def run_bench(system: System, x0: np.ndarray, v0: np.ndarray, t_end: float, dt_out: float, scene: str = "",
               config: BenchConfig | None = None, progress: bool = True,
-              methods: tuple[str, ...] | None = None) -> BenchResult:
+              methods: tuple[str, ...] | None = None, settings: tuple = ()) -> BenchResult:
     """Run the whole sweep (call inside :func:`~numeric.timing.single_threaded_blas`).
 
     Parameters
@@ -188,6 +188,8 @@ def run_bench(system: System, x0: np.ndarray, v0: np.ndarray, t_end: float, dt_o
     config : BenchConfig, optional
     methods : tuple of str, optional
         Restrict to these method names (default: every method that applies).
+    settings : tuple of (str, float), optional
+        Method settings (HHT's ``alpha``), checked by the caller.
     """
     config = config or BenchConfig()
     if t_end > 100.0:  # caps are per 100 time units: a longer horizon sweeps the same steps
@@ -198,7 +200,7 @@ def run_bench(system: System, x0: np.ndarray, v0: np.ndarray, t_end: float, dt_o
     exact = bool(system.springs_only and system.exact_available)
     if needs_pilot(system):  # damped, forced, gravity, ground; long uniform chains: against the exact solution
         check_pilot(system, "bench")
-        return run_pilot_bench(system, x0, v0, t_end, dt_out, scene, config, progress, methods)
+        return run_pilot_bench(system, x0, v0, t_end, dt_out, scene, config, progress, methods, settings)
     prog = progress_reporter(progress)
     notes: list[str] = []
     prog.say(f"measuring costs and building models for {scene or 'the scene'} (t = 0 … {t_end:g})")
@@ -206,7 +208,7 @@ def run_bench(system: System, x0: np.ndarray, v0: np.ndarray, t_end: float, dt_o
         reference = ExtendedModalReference.from_system(system, x0, v0)
         spacing = dt_out
         planner = Planner.for_system(system, x0, v0, t_end, dt_out,
-                                     reference=lambda t: reference.at(t)[0])
+                                     reference=lambda t: reference.at(t)[0], settings=settings)
     else:
         lin = system.spectrum
         w = float(lin.omega_max) if lin.omega.size else 1.0
@@ -223,10 +225,11 @@ def run_bench(system: System, x0: np.ndarray, v0: np.ndarray, t_end: float, dt_o
         notes.append(f"no exact solution: error measured at the recorded steps on the grid t = k·{spacing:g} "
                      f"(steps h = j·{spacing:g} record every step, h = {spacing:g}/m every m-th)")
         planner = Planner.for_system(system, x0, v0, t_end, spacing,
-                                     reference=lambda t: reference.at(t)[0])
+                                     reference=lambda t: reference.at(t)[0], settings=settings)
     ctx = _Context(system, x0, v0, t_end, dt_out, planner, reference, exact, spacing, config, prog,
                    float(system.energy(x0[:, None], v0[:, None])[0]))
-    selected = {m for m in registry.methods(options=Options(progress=False), only=methods)}
+    selected = {m for m in registry.methods(options=Options(progress=False, settings=settings), only=methods)
+                if peer_filter(config, methods)(m)}
 
     jobs: list[Callable[[], BenchRecord]] = []
     if exact and any(m.kind is Kind.EXACT for m in selected):

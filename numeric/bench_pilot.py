@@ -18,7 +18,7 @@ import math
 import numpy as np
 
 from .bench_runs import adaptive_rtols, adaptive_sweep, energy_norm, progress_reporter, report_run, \
-    selected_in_order, timed_run
+    peer_filter, selected_in_order, timed_run
 from .bench_records import BenchConfig, BenchRecord, BenchResult
 from .plan import with_tolerance
 from .plan_pilot import REFERENCE_FLOATS, ExactReference, PilotPlanner, _reference_grid
@@ -43,7 +43,7 @@ def _record(system, method: Method, setting, dt, rtol, steps, x, v, xr, vr, timi
 
 def run_pilot_bench(system: System, x0: np.ndarray, v0: np.ndarray, t_end: float, dt_out: float,
                     scene: str = "", config: BenchConfig | None = None, progress: bool = True,
-                    methods: tuple[str, ...] | None = None) -> BenchResult:
+                    methods: tuple[str, ...] | None = None, settings: tuple = ()) -> BenchResult:
     """The work–precision sweep against the exact solution (call inside ``single_threaded_blas``)."""
     config = config or BenchConfig()
     prog = progress_reporter(progress)
@@ -51,7 +51,8 @@ def run_pilot_bench(system: System, x0: np.ndarray, v0: np.ndarray, t_end: float
     v0 = np.asarray(v0, dtype=float)
     n = system.n
     prog.say(f"calibrating the planner against the exact solution for {scene or 'the scene'} (t = 0 … {t_end:g})")
-    planner = PilotPlanner.for_system(system, x0, v0, t_end, dt_out, adaptive=False, methods=methods)
+    planner = PilotPlanner.for_system(system, x0, v0, t_end, dt_out, adaptive=False, methods=methods,
+                                       settings=settings)
     ref = ExactReference(system, x0, v0)
     records: list[BenchRecord] = []
     notes = [f"no closed-form error model for this scene: step methods are planned by pilot runs against "
@@ -83,7 +84,8 @@ def run_pilot_bench(system: System, x0: np.ndarray, v0: np.ndarray, t_end: float
     grid = _reference_grid(t_end, dt_out, n)
     xr, vr = ref.at(grid.t)
     size = max(float(np.max(np.abs(xr))), 1e-300)
-    selected = set(registry.methods(Kind.ADAPTIVE, Options(progress=False), only=methods))
+    selected = set(filter(peer_filter(config, methods), registry.methods(Kind.ADAPTIVE, Options(progress=False),
+                                                                         only=methods)))
     for m in selected_in_order(selected, Kind.ADAPTIVE):
         if m.refusal(system):
             continue

@@ -141,6 +141,13 @@ def _cheapest(records, accuracy: float, key: str, pick: Callable[[BenchRecord], 
     return min(ok, key=lambda r: getattr(r, key)) if ok else None
 
 
+def _compiled_peer(records, acc: float, best) -> dict:
+    """The fastest ``dop853-compiled`` run reaching ``acc`` and ``best``'s speed-up over it (None without it)."""
+    peer = _cheapest(records, acc, "seconds", lambda r: r.method == registry.COMPILED_PEER)
+    return {"dop853_compiled_seconds": peer and peer.seconds,
+            "compiled_ratio": peer.seconds / best.seconds if peer and best else None}
+
+
 def targets(records: tuple[BenchRecord, ...], exact: bool) -> dict:
     """The issue's targets from the records.
 
@@ -159,7 +166,7 @@ def targets(records: tuple[BenchRecord, ...], exact: bool) -> dict:
             ratio = dop.seconds / best.seconds if best and dop else None
             rows.append({"accuracy": acc, "fastest": best and best.method, "fastest_setting": best and best.setting,
                          "fastest_seconds": best and best.seconds, "dop853_setting": dop and dop.setting,
-                         "dop853_seconds": dop and dop.seconds, "speedup": ratio,
+                         "dop853_seconds": dop and dop.seconds, "speedup": ratio, **_compiled_peer(records, acc, best),
                          "met": bool(ratio is not None and ratio >= LINEAR_TARGET_RATIO)})
         return {"kind": "fastest vs dop853 (seconds)", "required": LINEAR_TARGET_RATIO, "rows": rows}
     for acc in NONLINEAR_TARGET_ACCURACIES:
@@ -174,7 +181,7 @@ def targets(records: tuple[BenchRecord, ...], exact: bool) -> dict:
                      "dop853_force_evals": dop_e and dop_e.force_evals, "evals_ratio": re_,
                      "best_seconds_run": best_s and f"{best_s.method} {best_s.setting}",
                      "best_seconds": best_s and best_s.seconds, "dop853_seconds": dop_s and dop_s.seconds,
-                     "seconds_ratio": rs,
+                     "seconds_ratio": rs, **_compiled_peer(records, acc, best_s),
                      "met": bool(re_ is not None and rs is not None and re_ >= NONLINEAR_TARGET_RATIO
                                  and rs >= NONLINEAR_TARGET_RATIO)})
     return {"kind": "best fixed-step integrator vs dop853 (force evaluations and seconds)",

@@ -39,19 +39,32 @@ def report_run(bar: Reporter, rec: BenchRecord) -> None:
               f"{rec.force_evals:>9} evals")
 
 
+def peer_filter(config: BenchConfig, methods) -> Callable[[Method], bool]:
+    """Which methods a bench runs beside the named ones: a quick bench (tests) leaves out the compiled
+    DOP853 peer unless it is named (its first compile costs more than the whole quick sweep)."""
+    return lambda m: not (config.quick and methods is None and m.name == registry.COMPILED_PEER)
+
+
 def timed_run(method: Method, system: System, x0: np.ndarray, v0: np.ndarray, grid: Grid, budget: float):
-    """:func:`~numeric.timing.measure` of one run through the protocol (its result: the recorded run)."""
-    return measure(lambda: record(method, system, x0, v0, grid), budget=budget)
+    """:func:`~numeric.timing.measure` of one run through the protocol (its result: the recorded run).
+
+    The warm-up is the same method on the first few steps of the grid: it compiles (or loads) a
+    compiled loop, so no compile time enters a timing, however long the run."""
+    short = Grid(grid.h, min(grid.steps, 2 * grid.record_every), grid.record_every)
+    return measure(lambda: record(method, system, x0, v0, grid), budget=budget,
+                   warmup=lambda: record(method, system, x0, v0, short))
 
 
 def selected_in_order(selected: set, kind: Kind) -> list[Method]:
     """The selected methods of one kind, in the registry's order."""
-    return [m for m in registry.methods(kind, Options(progress=False)) if m in selected]
+    order = registry.names(kind)
+    return sorted((m for m in selected if m.kind is kind), key=lambda m: order.index(m.name))
 
 
 def adaptive_rtols(method: Method, config: BenchConfig) -> tuple[float, ...]:
-    """The tolerances an adaptive method sweeps: the reference method (DOP853) gets the finer list."""
-    return config.dop853_rtols if method == registry.method(registry.REFERENCE_ADAPTIVE) else config.rtols
+    """The tolerances an adaptive method sweeps: DOP853 and its compiled peer get the finer list."""
+    peers = (registry.REFERENCE_ADAPTIVE, registry.COMPILED_PEER)
+    return config.dop853_rtols if method.name in peers else config.rtols
 
 
 def adaptive_sweep(method: Method, rtols, cap: int, run: Callable[[float], BenchRecord], notes: list[str],

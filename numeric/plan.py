@@ -135,12 +135,25 @@ class Plan:
 
 @dataclass(frozen=True)
 class StepCost:
-    """Measured cost of a step method through the driver: ``setup + per_step · steps`` seconds."""
+    """Measured cost of a step method through the path its run takes: ``setup + per_step · steps`` seconds.
+
+    On a small ``[masses]`` scene a run of at least ``compiled_from`` steps takes the compiled loop
+    (:func:`numeric.compiled.run.route`); its cost is ``compiled()`` → ``(per_step, setup)``, measured on
+    first need (a plan whose runs are all short compiles nothing) and kept.
+    """
 
     per_step: float
     setup: float
+    compiled: Callable[[], tuple[float, float]] | None = field(default=None, compare=False, repr=False)
+    compiled_from: float = math.inf
+    _measured: dict = field(default_factory=dict, compare=False, repr=False)
 
     def __call__(self, steps: int) -> float:
+        if self.compiled is not None and steps >= self.compiled_from:
+            if "compiled" not in self._measured:
+                self._measured["compiled"] = self.compiled()
+            per_step, setup = self._measured["compiled"]
+            return setup + per_step * steps
         return self.setup + self.per_step * steps
 
 
@@ -153,13 +166,44 @@ class AdaptiveLaw:
     seconds_per_eval: float
 
 
+def _two_runs(method: Method, system: System, x0: np.ndarray, v0: np.ndarray, h: float, short: int, long: int,
+              budget: float, compiled: bool = False) -> tuple[float, float]:
+    """``(per_step, setup)`` from timed runs of ``short`` and ``long`` steps (``compiled``: after a warm-up
+    run of two steps that compiles or loads the loop)."""
+    warm = (lambda: record(method, system, x0, v0, Grid(h, 2))) if compiled else None  # compiles, untimed
+    t_short = measure(lambda: record(method, system, x0, v0, Grid(h, short)), budget=budget, warmup=warm).seconds
+    t_long = measure(lambda: record(method, system, x0, v0, Grid(h, long)), budget=budget, warmup=warm).seconds
+    per_step = max((t_long - t_short) / (long - short), t_long / long * 0.5)
+    return per_step, max(t_short - per_step * short, 0.0)
+
+
+#: Steps of the two timed runs of a compiled loop (a step costs tens of ns there, not µs).
+COMPILED_PROBE = (2_000, 20_000)
+
+
 def measure_step_cost(method: Method, system: System, x0: np.ndarray, v0: np.ndarray, h: float,
                       short: int = 32, long: int = 288, budget: float = 0.05) -> StepCost:
-    """Seconds per step and set-up of a step method on this system, from two timed runs."""
-    t_short = measure(lambda: record(method, system, x0, v0, Grid(h, short)), budget=budget).seconds
-    t_long = measure(lambda: record(method, system, x0, v0, Grid(h, long)), budget=budget).seconds
-    per_step = max((t_long - t_short) / (long - short), t_long / long * 0.5)
-    return StepCost(per_step, max(t_short - per_step * short, 0.0))
+    """Seconds per step and set-up of a step method on this system, from two timed runs of the NumPy
+    driver; where long runs take a compiled loop, the loop's own cost too (measured on first need,
+    compiled outside the timing: :class:`StepCost`)."""
+    from .compiled import run as compiled_run
+
+    per_step, setup = _two_runs(method, system, x0, v0, h, short, long, budget)
+    loop_of = getattr(method, "compiled_loop", None)
+    if loop_of is None or np.ndim(x0) != 1:
+        return StepCost(per_step, setup)
+    with compiled_run.eager():
+        loop = loop_of(system, method.integrator(system), Grid(h, long))
+    if loop is None:
+        return StepCost(per_step, setup)
+    stages = max(method.traits.evals_per_step, 1.0)
+    start = 0.0 if compiled_run.ready(system, loop) else compiled_run.COMPILE_MIN_EVALS / stages
+
+    def compiled() -> tuple[float, float]:
+        with compiled_run.eager():  # the probes are short: take the loop (its warm-up call compiles it)
+            return _two_runs(method, system, x0, v0, h, *COMPILED_PROBE, budget, compiled=True)
+
+    return StepCost(per_step, setup, compiled, start)
 
 
 def exact_method(source: SpectrumSource = SpectrumSource.SVD) -> Method:
@@ -250,7 +294,7 @@ class Planner(Horizon):
 
     @classmethod
     def for_system(cls, system: System, x0: np.ndarray, v0: np.ndarray, t_end: float, dt_out: float,
-                   adaptive: bool = True, reference: Callable | None = None) -> "Planner":
+                   adaptive: bool = True, reference: Callable | None = None, settings: tuple = ()) -> "Planner":
         """Measure costs and build the models (call inside :func:`~numeric.timing.single_threaded_blas`).
 
         Parameters
@@ -259,6 +303,8 @@ class Planner(Horizon):
             ``reference(t) -> x (S, N)`` at multiples ``t`` of ``dt_out``, for the pilot runs
             (adaptive methods; step methods on a nonlinear scene). Default: the exact modal
             solution (linear scenes) or DOP853 at rtol 1e-13 (others).
+        settings : tuple of (str, float), optional
+            Method settings (HHT's ``alpha``: :attr:`~numeric.run.protocol.Options.settings`), checked by the caller.
         """
         if system.n > MAX_MASSES:
             raise RunRefused(f"plan and bench use the dense modes of the chain: at most {MAX_MASSES} masses "
@@ -270,7 +316,7 @@ class Planner(Horizon):
         exact = bool(system.springs_only and system.exact_available)
         steps_, responses, costs, props = [], {}, {}, []
         h_probe = min(dt_out, 0.5 / max(model.omega_max, 1e-300))
-        for m in registry.methods(Kind.STEP, Options(progress=False)):
+        for m in registry.methods(Kind.STEP, Options(progress=False, settings=settings)):
             if m.refusal(system):
                 continue
             if not math.isfinite(m.traits.order):
@@ -308,7 +354,7 @@ class Planner(Horizon):
         laws = {}
         if adaptive:
             for m in registry.methods(Kind.ADAPTIVE):
-                if m.refusal(system) is None:
+                if m.refusal(system) is None and m.name != registry.COMPILED_PEER:  # a benchmark peer only
                     laws[m] = calibrate_adaptive(m, system, x0, v0, t_pilot, dt_out, reference)
         planner = cls(float(t_end), float(dt_out), system.n, model, exact, tuple(steps_), responses, costs,
                       tuple(props), laws, modal_seconds)

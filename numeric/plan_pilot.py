@@ -177,10 +177,15 @@ def _pilot_law(system: System, method: Method, ref: ExactReference, x0, v0, t_en
         steps = (grid.steps // j) * mm
         if level >= 2 and steps * n * stages > 4 * PILOT_WORK:
             break
-        tr = record(method, system, x0, v0, Grid(h, steps, mm))
+        try:
+            tr = record(method, system, x0, v0, Grid(h, steps, mm))
+        except RunRefused as exc:  # an implicit step's Newton iterations at the first, largest step: try h/2
+            if pilots or getattr(exc, "quantity", None) != "dt":
+                raise
+            continue
         err = max(float(np.max(np.abs(tr.x - x_ref[::j][: tr.x.shape[0]]))), 1e-300)
         pilots.append((h, err))
-        if level == 0:
+        if len(pilots) == 1:
             continue
         (ha, ea), (hb, eb) = pilots[-2], pilots[-1]
         if eb <= 10 * roundoff_floor(size, stages, steps):  # on the rounding floor: the slope says nothing
@@ -221,14 +226,16 @@ class PilotPlanner(Horizon):
 
     @classmethod
     def for_system(cls, system: System, x0: np.ndarray, v0: np.ndarray, t_end: float, dt_out: float,
-                   adaptive: bool = True, methods: tuple[str, ...] | None = None) -> "PilotPlanner":
+                   adaptive: bool = True, methods: tuple[str, ...] | None = None,
+                   settings: tuple = ()) -> "PilotPlanner":
+        """Pilot runs and costs of every method (``settings``: method settings such as HHT's alpha)."""
         check_pilot(system, "plan")
         x0 = np.asarray(x0, dtype=float)
         v0 = np.asarray(v0, dtype=float)
         ref = ExactReference(system, x0, v0)
         w_max = system.omega_max
         laws, costs = {}, {}
-        quiet = Options(progress=False)
+        quiet = Options(progress=False, settings=settings)
         for m in registry.methods(Kind.STEP, quiet, only=methods):
             if not math.isfinite(m.traits.order) or m.refusal(system):
                 continue  # the propagators (expm, chebyshev) integrate springs only
@@ -251,7 +258,7 @@ class PilotPlanner(Horizon):
                 return ref.at(t)[0]
 
             for m in registry.methods(Kind.ADAPTIVE, quiet, only=methods):
-                if m.refusal(system) is None:
+                if m.refusal(system) is None and m.name != registry.COMPILED_PEER:  # a benchmark peer only
                     laws_a[m] = calibrate_adaptive(m, system, x0, v0, g.t_end, g.h, reference, scale=size)
         return cls(float(t_end), float(dt_out), system.n, w_max, laws, costs, laws_a, exact_seconds,
                    exact_error, ref.description, ref.exact)

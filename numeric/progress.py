@@ -95,6 +95,7 @@ class Reporter:
         self.shown = False  # something was printed
         self.open_line = False  # a terminal line awaits its newline
         self.done = 0
+        self.finished = False  # the final line (done = total) was written
 
     def _text(self, done: int | None) -> str:
         elapsed = time.monotonic() - self.t0
@@ -115,6 +116,8 @@ class Reporter:
         finished = self.total is not None and done is not None and done >= self.total
         if now - self.t0 < self.quiet and not (finished and self.shown):
             return
+        if finished and self.finished:  # the final line once, however often the end is reported
+            return
         every = self.interval if self.interval is not None else (TTY_INTERVAL if self.tty else PLAIN_INTERVAL)
         if now - self.last < every and not finished:
             return
@@ -126,6 +129,7 @@ class Reporter:
             else:
                 self.stream.write(f"{self.prefix}: {self._text(done)}\n")
             self.shown = True
+            self.finished = finished
             if finished:
                 self.close()
             self.stream.flush()

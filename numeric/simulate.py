@@ -94,10 +94,18 @@ class Run(Recorded):
 
 
 def _methods(system: System, names: list[str], options: Options) -> list[Method]:
-    """The named methods, every one checked against the system before anything runs."""
+    """The named methods, every one checked against the system before anything runs.
+
+    numba is imported here (when installed), outside every method's clock: its import (about a second)
+    is the process's cost, not the first compiled method's, whose printed time it used to be.
+    """
     chosen = [registry.method(name, options) for name in names]
     for m in chosen:
         m.check(system)
+    if options.compiled:
+        from .fast_kernels import available
+
+        available()
     return chosen
 
 

@@ -69,6 +69,36 @@ def _chain_damped(scene: Scene, model):
     return damped_rows(el.masses, el.spring_ends, el.stiffness, el.damper_ends, el.damping)
 
 
+def _chain_participation(scene: Scene, model):
+    """Γⱼ, Mⱼ* and mass-normalised shapes of an open chain with a wall end or ``[ground]`` whose modes are
+    all listed (at most ``MAX_MODES_LISTED`` masses), from the spring-factor SVD (:mod:`numeric.spectrum`;
+    Γ by compensated sums; the sign of each shape: its first non-negligible component positive, as ``rsa``);
+    else None."""
+    from .derive import participation as part
+    from .derive.chain import MAX_MODES_LISTED
+
+    if not part.chain_applies(model) or scene.chain.n > MAX_MODES_LISTED or "ring" in (scene.chain.left,
+                                                                                        scene.chain.right):
+        return None
+    import numpy as np
+
+    from .numeric.elements import Elements
+    from .numeric.spectrum import spectrum
+
+    el = Elements.from_system(_system(scene)[0])
+    spec = spectrum(el.masses, el.spring_ends, el.stiffness)
+    phi = spec.shapes
+    first = np.argmax(np.abs(phi) > 1e-12 * np.max(np.abs(phi), axis=0, keepdims=True), axis=0)
+    phi = phi * np.where(phi[first, np.arange(phi.shape[1])] < 0, -1.0, 1.0)[None, :]
+    m = np.asarray(el.masses, dtype=float)
+    total = math.fsum(m)
+    if spec.rigid:  # a free-free chain: r = 1 is its rigid mode, so Γ = (√M, 0, ..., 0) exactly by structure
+        gamma = [math.sqrt(total)] + [0.0] * (phi.shape[1] - 1)
+    else:
+        gamma = [math.fsum(m * phi[:, j]) for j in range(phi.shape[1])]
+    return part.from_values(spec.omega2, gamma, phi.T, total, "spring-factor SVD (float64, compensated sums)")
+
+
 @dataclass(frozen=True)
 class Modes:
     """A scene's equations of motion and normal modes.
@@ -94,7 +124,7 @@ class Modes:
             from .derive.chain import chain_report
 
             return chain_report(self.model, self.modes, _chain_omega2(self.scene, self.modes),
-                                _chain_damped(self.scene, self.model))[1]
+                                _chain_damped(self.scene, self.model), self.participation)[1]
         from .derive.report import modes_json
 
         return modes_json(self.model, self.modes)
@@ -105,7 +135,7 @@ class Modes:
             from .derive.chain import chain_report
 
             return chain_report(self.model, self.modes, _chain_omega2(self.scene, self.modes),
-                                _chain_damped(self.scene, self.model))[0]
+                                _chain_damped(self.scene, self.model), self.participation)[0]
         from .derive.report import render_text
 
         return render_text(self.model, self.modes)
@@ -138,12 +168,15 @@ class Modes:
         """Modal participation in the ground direction (Γⱼ, Mⱼ*, fractions, mass-normalised shapes).
 
         A :class:`springchain.derive.participation.Participation` (values settled to float64 on the
-        accurate route, closed forms where they exist); None for ``[chain]`` scenes and for scenes
-        whose supports cannot move (no wall, no ``[ground]``).
+        accurate route, closed forms where they exist; values only for open ``[chain]`` scenes of at most
+        40 masses); None for scenes whose supports cannot move (no wall, no ``[ground]``), rings and
+        longer chains.
         """
         from .derive import participation as part
 
-        if self.chain or not part.applies(self.model):
+        if self.chain:
+            return _chain_participation(self.scene, self.model)
+        if not part.applies(self.model):
             return None
         return part.participation(self.model, self.modes)
 
@@ -388,6 +421,18 @@ def _check_settings(chosen, options) -> None:
                              quantity=key)
 
 
+def _method_settings(alpha: float | None, names=None) -> tuple:
+    """The run's method settings (HHT's ``alpha``) as :attr:`Options.settings`, checked once for
+    simulate, plan and bench: out of range, or taken by none of ``names`` (default: every method), refused."""
+    from .numeric.run import registry
+    from .numeric.run.protocol import Options
+
+    options = Options(progress=False, settings={} if alpha is None else {"alpha": alpha})
+    chosen = [registry.method(name, options) for name in (names or registry.names())]  # refuses a bad value
+    _check_settings(chosen, options)
+    return options.settings
+
+
 def _grid_settings(sc: Scene, dt, steps, record_every) -> tuple[float, int, int]:
     """The run's step, steps and recording stride: the arguments, else the scene's; refused when not
     a finite dt > 0 and whole numbers > 0."""
@@ -435,9 +480,17 @@ def _spring_arrays(system, x: dict) -> dict:
     return out
 
 
-def _kept(sc: Scene, system, names, dt, steps, record_every, options, out, figures, springs=False):
+def _notes_array(notes: list[str]) -> dict:
+    """``{"notes": array of str}`` for the NPZ when there are notes (the float64-limit line), else {}."""
+    import numpy as np
+
+    return {"notes": np.array(notes, dtype=str)} if notes else {}
+
+
+def _kept(sc: Scene, system, names, dt, steps, record_every, options, out, figures, springs=False, notes=()):
     """An in-memory run; the NPZ (and figures) written into ``out`` when given; with ``springs`` the
-    drift, spring-force and base-shear arrays of every method among its NPZ arrays."""
+    drift, spring-force and base-shear arrays of every method among its NPZ arrays, with ``notes``
+    a ``notes`` array of str (the float64-limit line, also in the summary)."""
     from .numeric.absolute import absolute_npz_arrays
     from .numeric.compare import compare
     from .numeric.progress import phase
@@ -451,6 +504,7 @@ def _kept(sc: Scene, system, names, dt, steps, record_every, options, out, figur
     extra = absolute_npz_arrays(system, t, x, v)
     if springs:
         extra.update(_spring_arrays(system, x))
+    extra.update(_notes_array(list(notes)))
     npz, figs = None, ()
     if out is not None:
         from .numeric.npz import save_npz
@@ -543,7 +597,7 @@ def simulate(scene: str | Path | Scene, methods: list[str] | None = None, dt: fl
     for name in methods or ():  # refusals before any work: their one line stands alone
         registry.entry(name)  # unknown names: one line naming the accepted ones
     # refuses an unknown spectrum source, and settings out of range (the methods check them when made)
-    options = Options(rtol, atol, spectrum, progress, {} if alpha is None else {"alpha": alpha})
+    options = Options(rtol, atol, spectrum, progress, _method_settings(alpha))
     for name in methods or ():
         registry.method(name, options)  # before any derivation
     with phase("loading the generated module (deriving it if not cached)", enabled=progress):
@@ -552,21 +606,23 @@ def simulate(scene: str | Path | Scene, methods: list[str] | None = None, dt: fl
     if not methods:  # a default Verlet that would be unstable at this dt gives way to the exact method
         names, notes = sim.unstable_defaults(system, sim.default_methods(system), dt)
     _check_settings([registry.method(name, options) for name in names], options)
+    limits = sim.float64_limits(system, names, steps * dt)  # one line where float64 cannot follow
     t0 = time.perf_counter()
     if system.chain:
         summary, t, x, v, extra, npz, figs = _streamed(sc, system, names, dt, steps, record_every, out, figures,
                                                        options)
-        if springs:  # from the frames read back; the NPZ rewritten with them (temp file + rename)
+        if springs or limits:  # from the frames read back; the NPZ rewritten with them (temp file + rename)
             from .numeric.npz import save_npz
 
-            extra.update(_spring_arrays(system, x))
+            extra.update(_spring_arrays(system, x) if springs else {})
+            extra.update(_notes_array(limits))
             save_npz(npz, t, x, v, extra)
     else:
         summary, t, x, v, extra, npz, figs = _kept(sc, system, names, dt, steps, record_every, options, out, figures,
-                                                   springs)
+                                                   springs, limits)
     if modal_energy:
         summary["modal_energy"], figs = _modal_energies(sc, system, t, x, v, extra, npz, figs, figures, progress)
-    notes = notes + sim.float64_limits(system, names, steps * dt)  # one line where float64 cannot follow
+    notes = notes + limits
     summary.update({"scene": sc.name, "module": origin, "dt": dt, "steps": steps, "t_end": steps * dt,
                     "npz": None if npz is None else str(npz), "figures": [str(p) for p in figs],
                     "methods_that_apply": sim.applicable(system),
@@ -590,7 +646,7 @@ def _horizon(sc: Scene, t_end: float | None) -> float:
     return t_end if t_end is not None else sc.dt * sc.steps
 
 
-def plan(scene: str | Path | Scene, tol: float, t_end: float | None = None):
+def plan(scene: str | Path | Scene, tol: float, t_end: float | None = None, *, alpha: float | None = None):
     """The cheapest method and step (or tolerance) to keep the largest position error below ``tol``.
 
     Parameters
@@ -600,6 +656,8 @@ def plan(scene: str | Path | Scene, tol: float, t_end: float | None = None):
         Largest position error allowed over ``t = 0 ... t_end``.
     t_end : float, optional
         Horizon (default: the scene's ``dt·steps``).
+    alpha : float, optional
+        HHT-α's α for the method ``hht`` (−1/3 ≤ α ≤ 0; default −0.05), as in :func:`simulate`.
 
     Returns
     -------
@@ -612,6 +670,7 @@ def plan(scene: str | Path | Scene, tol: float, t_end: float | None = None):
 
     if not (isinstance(tol, float | int) and math.isfinite(tol) and tol > 0):
         raise RunRefused(f"tol {tol!r}: accepted: a finite number > 0", quantity="tol")
+    settings = _method_settings(alpha)
     sc = load(scene)
     _check_motion(sc, "plan")
     system, _ = _system(sc)
@@ -622,7 +681,7 @@ def plan(scene: str | Path | Scene, tol: float, t_end: float | None = None):
         # nonlinear (cubic, potential) scenes: against a tight DOP853 reference
         pilot = needs_pilot(system) or tight_reference_applies(system)
         planner = (PilotPlanner if pilot else Planner).for_system(
-            system, sc.x0, sc.v0, _horizon(sc, t_end), sc.dt * sc.record_every)
+            system, sc.x0, sc.v0, _horizon(sc, t_end), sc.dt * sc.record_every, settings=settings)
         try:
             return planner.plan(tol)
         except ValueError as exc:
@@ -630,8 +689,10 @@ def plan(scene: str | Path | Scene, tol: float, t_end: float | None = None):
 
 
 def bench(scene: str | Path | Scene = "seed", t_end: float | None = None, *, quick: bool = False,
-          methods: list[str] | None = None, progress: bool = False):
+          methods: list[str] | None = None, progress: bool = False, alpha: float | None = None):
     """Work-precision benchmark: every method's error against an exact reference, and its cost.
+
+    ``alpha``: HHT-α's α for the method ``hht`` (as in :func:`simulate`).
 
     Returns
     -------
@@ -645,6 +706,7 @@ def bench(scene: str | Path | Scene = "seed", t_end: float | None = None, *, qui
     from .numeric.bench import BenchConfig, run_bench, with_derive_seconds
     from .numeric.timing import single_threaded_blas
 
+    settings = _method_settings(alpha, methods)
     sc = load(scene)
     _check_motion(sc, "bench")
     system, _ = _system(sc)
@@ -658,7 +720,7 @@ def bench(scene: str | Path | Scene = "seed", t_end: float | None = None, *, qui
 
     with single_threaded_blas(), eager(not quick):  # the full bench compiles its loops once (a warm-up)
         result = run_bench(system, sc.x0, sc.v0, _horizon(sc, t_end), sc.dt * sc.record_every, sc.name,
-                           config, progress=progress, methods=tuple(methods or ()) or None)
+                           config, progress=progress, methods=tuple(methods or ()) or None, settings=settings)
     return with_derive_seconds(result, derive_seconds)
 
 

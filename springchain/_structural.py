@@ -69,6 +69,13 @@ def read_record(path: str | Path, key: str = "RECORD"):
     from .numeric.response_spectrum import Record
 
     p = resolve_csv(path).resolve()
+    if not p.exists():  # not a scene's table: say what a RECORD may be (a path, or a bundled record)
+        from ._scenes import bundled_scene_dir
+
+        bundled = ", ".join(sorted(f.stem for f in bundled_scene_dir().glob("*.csv")))
+        raise SceneError(str(path), key, f"{str(path)!r}: no such file, and not a bundled record; accepted: "
+                                         f"a CSV file with a header line 't,a' (rows of two numbers, times "
+                                         f"strictly increasing) or a bundled record ({bundled})")
     table = read_table(str(p), key, p.name, "a")
     return Record(table.t, table.y, p.stem)
 

@@ -215,7 +215,7 @@ def cmd_bench(args) -> int:
     from .numeric.bench import markdown_table, write_outputs
 
     result = bench(args.scene or "seed", args.t_end, quick=args.quick, methods=args.method,
-                   progress=not args.no_progress)
+                   progress=not args.no_progress, alpha=args.alpha)
     paths = write_outputs(result, Path(args.out))
     if args.json:
         print(_dumps(result.as_json(), indent=1))
@@ -235,7 +235,7 @@ def cmd_plan(args) -> int:
     from ._api import load, plan
 
     scene = load(args.scene)
-    result = plan(scene, args.tol, args.t_end)
+    result = plan(scene, args.tol, args.t_end, alpha=args.alpha)
     if args.json:
         print(_dumps(result.as_json(), indent=2))
         return 0
@@ -488,8 +488,13 @@ def _add_simulate(sub) -> None:
     s.add_argument("--json", action="store_true", help="print a JSON summary instead of text")
     s.add_argument("--springs", action="store_true",
                    help="add drift_<method>, spring_force_<method> (S x springs) and base_shear_<method> (S) to the NPZ")
-    s.add_argument("--alpha", type=_number("--alpha", float, math.isfinite, "a finite number"), metavar="A",
-                   help="HHT-alpha's alpha for --method hht, -1/3 <= A <= 0: more numerical damping of high "
+    _alpha(s)
+
+
+def _alpha(p) -> None:
+    """``--alpha`` (HHT-alpha's setting), the same for simulate, plan and bench."""
+    p.add_argument("--alpha", type=_number("--alpha", float, math.isfinite, "a finite number"), metavar="A",
+                   help="HHT-alpha's alpha for the method hht, -1/3 <= A <= 0: more numerical damping of high "
                         "modes the more negative (default: -0.05)")
 
 
@@ -505,6 +510,7 @@ def _add_bench(sub) -> None:
                         "error-vs-horizon study runs only with the default)")
     _out(b, DEFAULT_BENCH_OUT)
     b.add_argument("--json", action="store_true", help="print the records and targets as JSON")
+    _alpha(b)
     _no_progress(b)
 
 
@@ -514,6 +520,7 @@ def _add_plan(sub) -> None:
     _scene(pl)
     pl.add_argument("--tol", type=_positive_float("--tol"), required=True, help="largest position error allowed")
     pl.add_argument("--t-end", type=_positive_float("--t-end"), help="horizon T (default: the scene's dt x steps)")
+    _alpha(pl)
     _json(pl)
 
 

@@ -16,6 +16,7 @@
 from __future__ import annotations
 
 import json
+import os
 import tomllib
 from pathlib import Path
 
@@ -89,6 +90,9 @@ def scene_toml(name: str, parameters: dict, *, masses: dict | None = None, sprin
 
 
 #: The initial state of the chain test scenes: the lowest wall-wall mode's shape, at rest.
+#: Scale of the ``slow`` tests (``SPRINGCHAIN_SLOW_BUDGET``, default 1: the bounded form CI runs).
+SLOW_BUDGET = float(os.environ.get("SPRINGCHAIN_SLOW_BUDGET", "1"))
+
 CHAIN_INITIAL = {"x": "0.01*sin(pi*(i + 1)/(n + 1))", "v": "0"}
 
 

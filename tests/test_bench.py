@@ -50,7 +50,7 @@ def test_quick_bench_records(quick_bench):
     assert data["derive_seconds"] > 0
     assert "extended precision" in data["reference"]
     methods = {r["method"] for r in records}
-    assert methods == {"modal", *INTEGRATORS, *ADAPTIVE}
+    assert methods == {"modal", *INTEGRATORS, *ADAPTIVE} - {"dop853-compiled"}  # a quick bench: no compiled peer
     for r in records:
         assert FIELDS <= set(r)
         assert math.isfinite(r["error"]) and r["error"] > 0  # float64 never matches the 80-bit reference exactly

@@ -85,18 +85,40 @@ def test_compiled_loop_agrees_with_numpy_driver(systems, scene, method):
 
 @pytest.mark.parametrize("scene", ["everything", "springy"])
 @pytest.mark.parametrize("method", IMPLICIT_METHODS, ids=lambda m: m.name)
-def test_implicit_steps_take_the_numpy_driver(systems, scene, method):
-    """Newmark/HHT solve with the system's operators: no compiled loop, the same frames either way."""
+def test_implicit_steps_compiled_agree_with_numpy(systems, scene, method):
+    """Newmark/HHT run their whole loop compiled (dense LU once, Newton on cubic springs): the same frames
+    and the same force evaluations as the NumPy driver, to rounding."""
     system = systems[scene]
     if method.refusal(system):
         pytest.skip(method.refusal(system))
-    grid = Grid(0.01, 200, 7)
-    assert method.compiled_loop(system, method.integrator(system), grid) is None
+    grid = Grid(0.05, 400, 7)
+    assert method.compiled_loop(system, method.integrator(system), grid) == "newmark_loop"
     x0, v0 = _state(system.n)
     on = record(method, system, x0, v0, grid)
     off = record(method.with_options(Options(compiled=False)), system, x0, v0, grid)
-    assert np.abs(on.x - off.x).max() <= 1e-14 * np.abs(off.x).max()
+    scale = max(np.abs(off.x).max(), np.abs(off.v).max())
+    assert np.abs(on.x - off.x).max() <= 1e-12 * scale
+    assert np.abs(on.v - off.v).max() <= 1e-12 * scale
+    if system.linear:
+        assert on.force_evals == off.force_evals
+    else:  # Newton's stop at the rounding level may take one iteration more or less on a step
+        assert abs(on.force_evals - off.force_evals) <= 0.01 * off.force_evals
     assert np.abs(on.x[-1] - x0).max() > 1e-3
+
+
+def test_hht_alpha_reaches_the_compiled_loop(systems):
+    """HHT's alpha (a run setting) changes the compiled run as it changes the NumPy one."""
+    system = systems["springy"]
+    x0, v0 = _state(system.n)
+    grid = Grid(0.2, 300, 10)
+    runs = {}
+    for alpha in (-0.05, -0.3):
+        hht = registry.method("hht", Options(settings=(("alpha", alpha),), progress=False))
+        on = record(hht, system, x0, v0, grid)
+        off = record(hht.with_options(Options(compiled=False, settings=(("alpha", alpha),))), system, x0, v0, grid)
+        assert np.abs(on.x - off.x).max() <= 1e-12 * np.abs(off.x).max()
+        runs[alpha] = on.x
+    assert np.abs(runs[-0.05] - runs[-0.3]).max() > 1e-4
 
 
 def test_tables_fall_back_to_numpy(scene_from_text, tmp_path):
@@ -181,3 +203,79 @@ def test_compiled_rkn_pairs_agree_with_numpy(systems, name):
     slow = method.with_options(Options(compiled=False)).solve(system, x0, v0, t, 1e-10, 1e-12)
     assert np.abs(fast.x - slow.x).max() <= 1e-8 * np.abs(slow.x).max()
     assert abs(fast.force_evals - slow.force_evals) <= 0.1 * slow.force_evals
+
+
+def test_compiled_dop853_dense_output_matches_scipy(systems):
+    """dop853-compiled records like solve_ivp(t_eval=...): SciPy's dense output, the same evaluations."""
+    from scipy.integrate import solve_ivp
+
+    system = systems["everything"]
+    n = system.n
+    x0, v0 = _state(n, seed=5)
+    Ad = system.damping_rate_matrix()
+    acc, ext = system.acceleration_fn, system.external_fn
+
+    def rhs(t, y):
+        return np.concatenate([y[n:], acc(y[:n]) + Ad @ y[n:] + np.reshape(ext(t), -1)])
+
+    t = np.linspace(0.0, 15.0, 301)
+    method = registry.method("dop853-compiled", Options(rtol=1e-9, atol=1e-12, progress=False))
+    assert method.refusal(system) is None
+    run = record(method, system, x0, v0, Grid(t[1] - t[0], 300))
+    sol = solve_ivp(rhs, (0.0, 15.0), np.concatenate([x0, v0]), method="DOP853", t_eval=run.t, rtol=1e-9, atol=1e-12)
+    assert run.force_evals == sol.nfev
+    np.testing.assert_allclose(run.x, sol.y[:n].T, rtol=0, atol=1e-10)
+    np.testing.assert_allclose(run.v, sol.y[n:].T, rtol=0, atol=1e-10)
+    assert np.abs(run.x[-1] - x0).max() > 1e-2
+
+
+def test_compiled_dop853_refuses_what_it_cannot_compile(scene_from_text, tmp_path):
+    from helpers import write_scene
+
+    from springchain.derive.scene import load_scene
+
+    text = scene_toml("tab2", {"m": 1.0, "k": 1.0}, masses={"a": "m", "b": "m"},
+                      springs=[{"between": ["a", "b"], "k": "k"}], forces=[{"on": "a", "table": "f.csv"}])
+    path = write_scene(tmp_path, "tab2", text, {"f.csv": "t,f\n0,0\n1,1\n2,0\n"})
+    system = system_of(load_scene(path))[1]
+    why = registry.method("dop853-compiled").refusal(system)
+    assert why and "dop853" in why
+
+
+POTENTIALS = scene_toml(
+    "potmix", {"m": 1.0, "k": 1.0, "alpha": 0.25, "a": 1.0, "b": 1.7, "D": 2.0, "w": 1.3, "g": 0.3,
+               "eps": 0.5, "r0": 1.1},
+    masses={"p": "m", "q": "2*m", "r": "m", "s": "1.5*m"},
+    springs=[{"between": ["wall", "p"], "potential": "a/b*exp(-b*d) + a*d"},
+             {"between": ["p", "q"], "potential": "D*(1 - exp(-w*d))**2"},
+             {"between": ["q", "r"], "potential": "k*d**2/2 + alpha*d**3/3"},
+             {"between": ["r", "s"], "k": "k"},
+             {"between": ["s", "wall"], "potential": "eps*((r0/(r0 + d))**12 - 2*(r0/(r0 + d))**6)"}],
+    tables={"gravity": {"g": "g"}})
+
+
+def test_potential_scenes_get_a_scalar_force(scene_from_text):
+    """Toda, Morse, FPUT and Lennard-Jones springs (with a plain spring and gravity): scalar_force equals
+    the NumPy acceleration on random states, down to extensions of 1e-9 (the same stable forms), and the
+    compiled loops agree with the NumPy driver."""
+    module, system = system_of(scene_from_text(POTENTIALS, "potmix.toml"))
+    assert system.has("scalar_force") and route(system, registry.method("verlet").integrator(system), 10)
+    rng = np.random.default_rng(11)
+    p = np.array([float(system.params[q]) for q in module.PARAMETERS])
+    x_eq = np.asarray(module.equilibrium(**module.DEFAULTS))
+    worst = 0.0
+    for _ in range(200):
+        x = x_eq + rng.uniform(-0.3, 0.3, system.n) * 10.0 ** rng.uniform(-9, 0)
+        out = np.empty(system.n)
+        module.scalar_force(x, 0.0, out, p)
+        ref = system.acceleration_fn(x[:, None])[:, 0]
+        worst = max(worst, float(np.max(np.abs(out - ref)) / np.max(np.abs(ref))))
+    assert worst <= 1e-14
+    x0, v0 = x_eq + 0.2 * rng.standard_normal(system.n), 0.2 * rng.standard_normal(system.n)
+    for name in ("verlet", "blanes-moan6", "rk4"):
+        m = registry.method(name, Options(progress=False))
+        grid = Grid(0.01, 500, 5)
+        on = record(m, system, x0, v0, grid)
+        off = record(m.with_options(Options(compiled=False, progress=False)), system, x0, v0, grid)
+        assert np.abs(on.x - off.x).max() <= 1e-12 * np.abs(off.x).max()
+        assert np.abs(on.x[-1] - x0).max() > 1e-2

@@ -74,7 +74,7 @@ def slope(hs, errs):
 def test_tables_name_every_method():
     assert set(INTEGRATORS) == {"verlet", "verlet-kahan", "yoshida4", "blanes-moan4", "blanes-moan6",
                                 "kahan-li8", "rk4", "expm", "chebyshev", "newmark", "newmark-linear", "hht"}
-    assert set(ADAPTIVE) == {"rk45", "dop853", "lsoda", "dprkn6", "dprkn8", "dprkn12"}
+    assert set(ADAPTIVE) == {"rk45", "dop853", "dop853-compiled", "lsoda", "dprkn6", "dprkn8", "dprkn12"}
     for name, cls in {**INTEGRATORS, **ADAPTIVE}.items():
         assert cls.name == name
         assert isinstance(cls.symplectic, bool) and cls.order > 0

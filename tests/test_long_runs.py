@@ -15,7 +15,6 @@
 
 from __future__ import annotations
 
-import os
 
 import numpy as np
 import pytest
@@ -28,7 +27,7 @@ from springchain.numeric.modal import ModalSolution
 from springchain.numeric.spectrum import free_pieces, spectrum, stiffness_matrix
 
 EPS = np.finfo(float).eps
-BUDGET = float(os.environ.get("SPRINGCHAIN_SLOW_BUDGET", "1"))
+from helpers import SLOW_BUDGET as BUDGET  # noqa: E402
 
 
 def graded_free_scene():

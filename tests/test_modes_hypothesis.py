@@ -37,7 +37,7 @@ from modes_reference import reference, rel_err, scene_text, shape_err
 
 RTOL = 1e-13
 DPS = 130
-BUDGET = float(os.environ.get("SPRINGCHAIN_SLOW_BUDGET", "1"))
+from helpers import SLOW_BUDGET as BUDGET  # noqa: E402
 #: Parameter names drawn for masses and springs; several clash with SymPy's namespace.
 MASS_NAMES = ["m", "M", "E", "I", "S", "mu", "beta"]
 STIFF_NAMES = ["k", "kappa", "Q", "N", "O", "gamma", "zeta"]

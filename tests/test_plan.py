@@ -136,7 +136,11 @@ def test_below_rounding_floor_is_unreachable(planner):
         planner.plan(1e-17)
     plan = planner.plan(1e-12)  # the exact methods reach it, Verlet's steps would drown in rounding
     assert "verlet" in {c.name for c in plan.unreachable}
-    assert plan.recommended.name in {"modal", "expm"}
+    # the exact methods, or a high-order step method whose compiled loop is cheaper still (plan times
+    # the path a run takes: on this 3-mass scene, the compiled loop from its threshold on)
+    rec = plan.recommended
+    assert rec.reachable and rec.predicted_error <= 1e-12
+    assert rec.name in {"modal", "expm"} or rec.name in {"blanes-moan6", "kahan-li8", "yoshida4", "blanes-moan4"}
 
 
 # -- error models -----------------------------------------------------------------------------------------

@@ -24,7 +24,13 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from types import ModuleType
 
+from . import implicit_loops as _implicit
 from . import loops as _template
+
+#: The templates the compiled file holds, in order (each defines LOOPS and HELPERS).
+_TEMPLATES = (_template, _implicit)
+#: Scalar helpers a potential's ``scalar_force`` may call (derive.law_helpers), compiled with it.
+_LAW_HELPERS = ("_expm1mx_s", "_log1pmx_s")
 
 #: What the compiled file appends to the template and the module's function.
 _TAIL = """
@@ -58,9 +64,15 @@ def source_of(module: ModuleType) -> str:
     import numba
 
     body = inspect.getsource(module.scalar_force) + "\n\n" + inspect.getsource(module._scalar_force_terms)
-    binds = "\n".join(f"{name} = _numba.njit(cache=True)({name})" for name in _template.HELPERS + _template.LOOPS)
+    laws = [name for name in _LAW_HELPERS if hasattr(module, name)]  # a potential's scalar helpers
+    if laws:
+        body += (f"\n\n_EXPM1MX_COEFFICIENTS = {tuple(getattr(module, '_EXPM1MX_COEFFICIENTS', ()))!r}\n\n"
+                 + "\n\n".join(inspect.getsource(getattr(module, name)) for name in laws))
+    binds = "\n".join(f"{name} = _numba.njit(cache=True)({name})"
+                      for name in [n for t in _TEMPLATES for n in t.HELPERS + t.LOOPS] + laws)
     return (f"# compiled loops of scene {module.SCENE!r} (numba {numba.__version__}); written by "
-            f"springchain.numeric.compiled.cache, do not edit\n" + inspect.getsource(_template)
+            f"springchain.numeric.compiled.cache, do not edit\n"
+            + "\n\n".join(inspect.getsource(t) for t in _TEMPLATES)
             + "\n\nimport numpy as _np\n\n\n" + body + _TAIL.format(binds=binds))
 
 

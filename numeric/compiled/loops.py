@@ -191,11 +191,14 @@ def _rhs(y, t, p, Ad, out, f):
     _total(f, y[n:], Ad, out[n:])
 
 
-def dop853_loop(x0, v0, p, t0, t_end, rtol, atol, Ad, A, B, C, E3, E5, ts, max_steps):
+def dop853_loop(x0, v0, p, t0, t_end, rtol, atol, Ad, A, B, C, E3, E5, ts, max_steps, t_eval, xs, vs, D):
     """SciPy's DOP853 (``scipy.integrate.DOP853``: its tableau, initial step, error norm and step
     control, step for step) on the first-order system; the accepted step ends go into ``ts``
-    (up to ``max_steps``). Returns ``(x, v, accepted, evaluations)``, or accepted = -1 when the step
-    size fell below SciPy's minimum."""
+    (up to ``max_steps``). Frames at the increasing times ``t_eval`` (S,) (empty: none) go into
+    ``xs``, ``vs`` (S, N) through SciPy's dense output (``solve_ivp(t_eval=...)``: three more stages
+    of the extended tableau ``A``, ``C`` (16,) and ``D`` (4, 16), on the steps that hold an output
+    time, counted in the evaluations). Returns ``(x, v, accepted, evaluations)``, or accepted = -1
+    when the step size fell below SciPy's minimum."""
     n = x0.shape[0]
     m = 2 * n
     y = np.empty(m)
@@ -203,7 +206,10 @@ def dop853_loop(x0, v0, p, t0, t_end, rtol, atol, Ad, A, B, C, E3, E5, ts, max_s
     y[n:] = v0
     f = np.empty(m)
     g = np.empty(n)
-    K = np.empty((13, m))
+    K = np.empty((16, m))
+    F = np.empty((7, m))
+    yo = np.empty(m)
+    row = 0
     _rhs(y, t0, p, Ad, f, g)
     evals = 1
     span = abs(t_end - t0)
@@ -295,6 +301,9 @@ def dop853_loop(x0, v0, p, t0, t_end, rtol, atol, Ad, A, B, C, E3, E5, ts, max_s
             else:
                 h_abs *= max(0.2, 0.9 * err ** expo)
                 rejected = True
+        if row < t_eval.shape[0] and t_eval[row] <= t_new:
+            row = _dop853_dense(y, yn, f, K, t, h, p, Ad, A, C, D, g, ys, F, yo, t_eval, row, xs, vs)
+            evals += 3
         t = t_new
         for r in range(m):
             y[r] = yn[r]
@@ -303,6 +312,48 @@ def dop853_loop(x0, v0, p, t0, t_end, rtol, atol, Ad, A, B, C, E3, E5, ts, max_s
             ts[accepted] = t
         accepted += 1
     return y[:n].copy(), y[n:].copy(), accepted, evals
+
+
+def _dop853_dense(y, yn, f, K, t, h, p, Ad, A, C, D, g, ys, F, yo, t_eval, row, xs, vs):
+    """SciPy's DOP853 dense output on the accepted step ``t … t + h`` (``y`` → ``yn``, ``K[0]`` = f at t,
+    ``K[12]`` at t + h): stages 13–15, the interpolant's rows ``F`` (7, 2N), and the frames at every
+    ``t_eval[row:]`` inside the step (Dop853DenseOutput's Horner form). Returns the next row."""
+    m = y.shape[0]
+    n = m // 2
+    for s in range(13, 16):
+        for r in range(m):
+            acc = 0.0
+            for q in range(s):
+                acc += K[q, r] * A[s, q]
+            ys[r] = y[r] + acc * h
+        _rhs(ys, t + C[s] * h, p, Ad, K[s], g)
+    for r in range(m):
+        dy = yn[r] - y[r]
+        F[0, r] = dy
+        F[1, r] = h * K[0, r] - dy
+        F[2, r] = 2.0 * dy - h * (K[12, r] + K[0, r])
+        for i in range(4):
+            acc = 0.0
+            for q in range(16):
+                acc += D[i, q] * K[q, r]
+            F[3 + i, r] = h * acc
+    t_new = t + h
+    while row < t_eval.shape[0] and t_eval[row] <= t_new:
+        x = (t_eval[row] - t) / h
+        for r in range(m):
+            acc = 0.0
+            for i in range(7):
+                acc += F[6 - i, r]
+                if i % 2 == 0:
+                    acc *= x
+                else:
+                    acc *= 1.0 - x
+            yo[r] = acc + y[r]
+        for r in range(n):
+            xs[row, r] = yo[r]
+            vs[row, r] = yo[n + r]
+        row += 1
+    return row
 
 
 def _rkn_norm(dx, dv, sx, sv):
@@ -424,4 +475,4 @@ def rkn_loop(x0, v0, p, t_eval, rtol, atol, c, A, b, bp, e, ep, fsal, q_hat, ord
 #: The loops the compiled file exports (compiled with numba, cached on disk).
 LOOPS = ("verlet_loop", "kahan_verlet_loop", "splitting_loop", "rk4_loop", "dop853_loop", "rkn_loop")
 #: The helpers the loops call (compiled too).
-HELPERS = ("_half_damp", "_store", "_total", "_rhs", "_rkn_norm")
+HELPERS = ("_half_damp", "_store", "_total", "_rhs", "_rkn_norm", "_dop853_dense")

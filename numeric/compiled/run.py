@@ -142,12 +142,14 @@ def compile_seconds() -> float:
 
 
 def dop853(system: System, x0: np.ndarray, v0: np.ndarray, t_end: float, rtol: float, atol: float,
-           max_steps: int = 0):
+           max_steps: int = 0, t_eval: np.ndarray | None = None):
     """SciPy's DOP853 compiled: ``(x, v, step_ends, evaluations)`` at ``t_end`` from t = 0.
 
     Same tableau (``scipy.integrate._ivp.dop853_coefficients``), initial step, error norm and
     step control as ``scipy.integrate.solve_ivp(method="DOP853")`` on ``y = (x, v)``; ``step_ends``
-    (shape (min(accepted, max_steps),)) are the accepted steps' end times.
+    (shape (min(accepted, max_steps),)) are the accepted steps' end times. With ``t_eval`` (S,)
+    (increasing, in [0, t_end]) ``x``, ``v`` are the frames there, shape (S, N), from SciPy's dense
+    output as ``solve_ivp(..., t_eval=t_eval)`` computes them; else the state at ``t_end`` (N,).
     """
     from scipy.integrate._ivp import dop853_coefficients as dc
 
@@ -160,15 +162,20 @@ def dop853(system: System, x0: np.ndarray, v0: np.ndarray, t_end: float, rtol: f
     c = compiled(system.module)
     Ad = system.damping_rate_matrix()
     Ad = np.zeros((0, 0)) if Ad is None else np.ascontiguousarray(Ad, dtype=float)
-    s = dc.N_STAGES
     ts = np.empty(max(int(max_steps), 1))
+    te = np.zeros(0) if t_eval is None else np.ascontiguousarray(t_eval, dtype=np.float64)
+    xs = np.empty((te.shape[0], n))
+    vs = np.empty_like(xs)
     args = (np.ascontiguousarray(x0, dtype=float).reshape(n), np.ascontiguousarray(v0, dtype=float).reshape(n),
             parameter_vector(system), 0.0, float(t_end), float(rtol), float(atol), Ad,
-            np.ascontiguousarray(dc.A[:s, :s]), np.ascontiguousarray(dc.B), np.ascontiguousarray(dc.C[:s]),
-            np.ascontiguousarray(dc.E3), np.ascontiguousarray(dc.E5), ts, int(max_steps))
+            np.ascontiguousarray(dc.A), np.ascontiguousarray(dc.B), np.ascontiguousarray(dc.C),
+            np.ascontiguousarray(dc.E3), np.ascontiguousarray(dc.E5), ts, int(max_steps), te, xs, vs,
+            np.ascontiguousarray(dc.D))
     x, v, accepted, evals = timed_first_call(c, "dop853_loop", *args)
     if accepted < 0:
         raise RunRefused("compiled DOP853: the step size fell below the minimum", quantity="rtol")
+    if t_eval is not None:
+        x, v = xs, vs
     return x, v, ts[:min(accepted, max_steps)], int(evals)
 
 

@@ -41,6 +41,9 @@ class AdaptiveRun(Method):
         return self.implementation
 
     def refusal(self, system: System) -> str | None:
+        own = getattr(self.solver_class, "refusal", None)  # a compiled peer: the scenes it compiles
+        if own is not None and own(system):
+            return own(system)
         if system.damped and not self.solver_class.supports_damping:
             return ("a Runge–Kutta–Nyström pair integrates x'' = f(t, x) and this scene has dampers; "
                     "use dop853, rk45 or lsoda")
@@ -55,6 +58,8 @@ class AdaptiveRun(Method):
     def solve(self, system: System, x0: np.ndarray, v0: np.ndarray, t: np.ndarray, rtol: float, atol: float):
         """The solver's result on ``t`` (:class:`~numeric.integrators.ivp.AdaptiveResult`), no recorder.
         The RKN pairs run compiled on small ``[masses]`` scenes (:func:`numeric.compiled.run.rkn`)."""
+        if getattr(self.solver_class, "needs_system", False):  # dop853-compiled (numeric.compiled.peer)
+            return self.solver_class().run_system(system, x0, v0, t, rtol, atol)
         table = getattr(self.solver_class, "table", None)
         if table is not None and self.options.compiled and np.ndim(x0) == 1 and not system.chain \
                 and not system.damped:

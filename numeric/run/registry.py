@@ -95,9 +95,9 @@ _TABLE: dict[str, Entry] = {e.name: e for e in (
         "newmark-linear": "newmark:NewmarkLinear",
         "hht": "newmark:HHTAlpha",
     }, runner=".run.implicit:ImplicitStep"),
+    *_integrators(Kind.ADAPTIVE, {"rk45": "ivp:RK45", "dop853": "ivp:DOP853"}),
+    Entry("dop853-compiled", Kind.ADAPTIVE, ".compiled.peer:CompiledDOP853"),
     *_integrators(Kind.ADAPTIVE, {
-        "rk45": "ivp:RK45",
-        "dop853": "ivp:DOP853",
         "lsoda": "ivp:LSODA",
         "dprkn6": "dprkn6:DPRKN6",
         "dprkn8": "dprkn8:DPRKN8",
@@ -110,6 +110,8 @@ EXACT = "modal"
 #: The default step method, and the reference adaptive method of plans, benches and references.
 DEFAULT_STEP = "verlet"
 REFERENCE_ADAPTIVE = "dop853"
+#: SciPy's DOP853 compiled (numeric.compiled.peer): bench's second peer, compiled against compiled.
+COMPILED_PEER = "dop853-compiled"
 #: The step method of the benchmark's grid reference (eighth order, symplectic).
 REFERENCE_STEP = "kahan-li8"
 
