@@ -177,19 +177,24 @@ def _stencil_body(c: _Context) -> list[str]:
         out += ["        _shape = (-1,) + (1,) * (numpy.ndim(_y) - 1)",
                 "        _ks, _inv_m = _ks1.reshape(_shape), _inv_m1.reshape(_shape)"]
         out += ["        _k3s = _k3s1.reshape(_shape)"] if cubic else []
-    out += ["        _f = numpy.empty(numpy.shape(_y))", "        _d = _y[1:] - _y[:-1]",
-            "        _s = _ks * _d" + cube("_k3s", "_d"), "        _f[:-1] = _s", "        _f[-1] = 0.0",
-            "        _f[1:] -= _s"]
-    if ch.left is End.WALL:
-        out.append("        _f[0] -= _k_left * _y[0]" + cube("_k3_left", "_y[0]"))
-    if ch.right is End.WALL:
-        out.append("        _f[-1] -= _k_right * _y[-1]" + cube("_k3_right", "_y[-1]"))
-    if ch.left is End.RING:
-        out += ["        _dr = _y[0] - _y[-1]", "        _sr = _k_right * _dr" + cube("_k3_right", "_dr"),
-                "        _f[-1] += _sr", "        _f[0] -= _sr"]
-    out.append("        _f *= _inv_m")
-    out += ["        _f += _g_acc"] if c.model.g is not None else []
-    return out + ["        return _f"]
+    return out + _stencil_lines(c, tension="_ks * _d" + cube("_k3s", "_d"),
+                                left="_f[0] -= _k_left * _y[0]" + cube("_k3_left", "_y[0]"),
+                                right="_f[-1] -= _k_right * _y[-1]" + cube("_k3_right", "_y[-1]"),
+                                ring="_k_right * _dr" + cube("_k3_right", "_dr"), inv_m="_f *= _inv_m")
+
+
+def _stencil_lines(c: _Context, tension: str, left: str, right: str, ring: str, inv_m: str) -> list[str]:
+    """The stencil's statements from its spring terms: ``tension`` of the links (of ``_d``), the wall
+    statements ``left`` and ``right``, the ring's closing tension ``ring`` (of ``_dr``), the 1/m
+    statement ``inv_m``; then gravity and the return."""
+    ch = c.chain
+    out = ["_f = numpy.empty(numpy.shape(_y))", "_d = _y[1:] - _y[:-1]", "_s = " + tension, "_f[:-1] = _s",
+           "_f[-1] = 0.0", "_f[1:] -= _s"]
+    out += [left] if ch.left is End.WALL else []
+    out += [right] if ch.right is End.WALL else []
+    out += ["_dr = _y[0] - _y[-1]", "_sr = " + ring, "_f[-1] += _sr", "_f[0] -= _sr"] if ch.left is End.RING else []
+    out += [inv_m] + (["_f += _g_acc"] if c.model.g is not None else []) + ["return _f"]
+    return ["        " + line for line in out]
 
 
 def _law_stencil_body(c: _Context) -> list[str]:
@@ -200,19 +205,11 @@ def _law_stencil_body(c: _Context) -> list[str]:
     def tension(d: str, index: str) -> str:
         return chain_tension_code(c.model, c.kw, d, index)
 
-    out = ["        _f = numpy.empty(numpy.shape(_y))", "        _d = _y[1:] - _y[:-1]",
-           "        _s = " + tension("_d", "i.reshape((-1,) + (1,) * (numpy.ndim(_y) - 1))"),
-           "        _f[:-1] = _s", "        _f[-1] = 0.0", "        _f[1:] -= _s"]
-    if ch.left is End.WALL:
-        out.append("        _f[0] -= " + tension("_y[0]", "-1.0"))
-    if ch.right is End.WALL:
-        out.append("        _f[-1] += " + tension("-_y[-1]", "n - 1.0"))
-    if ch.left is End.RING:
-        out += ["        _dr = _y[0] - _y[-1]", "        _sr = " + tension("_dr", "n - 1.0"),
-                "        _f[-1] += _sr", "        _f[0] -= _sr"]
-    out.append("        _f *= _inv_m" if ch.uniform else "        _f *= _inv_m1.reshape((-1,) + (1,) * (numpy.ndim(_y) - 1))")
-    out += ["        _f += _g_acc"] if c.model.g is not None else []
-    return out + ["        return _f"]
+    column = "(-1,) + (1,) * (numpy.ndim(_y) - 1)"  # per-mass values broadcast against (n,) or (n, ...)
+    return _stencil_lines(c, tension=tension("_d", f"i.reshape({column})"),
+                          left="_f[0] -= " + tension("_y[0]", "-1.0"),
+                          right="_f[-1] += " + tension("-_y[-1]", "n - 1.0"), ring=tension("_dr", "n - 1.0"),
+                          inv_m="_f *= _inv_m" if ch.uniform else f"_f *= _inv_m1.reshape({column})")
 
 
 def _acceleration(c: _Context) -> list[str]:

@@ -28,7 +28,9 @@ import sympy as sp
 from .printing import latex, sstr
 from .accurate import MAX_MPMATH_MODES, NotAccurate, _eig_dynamical, _mp, exact_values, value
 from .model import Model
+from .model_cache import cached_on
 from .modes import ModeSet
+from .pieces import pieces
 from .work import WorkCapExceeded, check, ops
 
 #: Two successive precisions agreeing to this relative difference settle a float64 value.
@@ -76,22 +78,7 @@ def _values(model: Model) -> dict:
 
 def _pieces(model: Model) -> list[list[int]]:
     """Mass indices of the pieces joined by springs or dashpots (walls join nothing)."""
-    n = model.scene.n
-    parent = list(range(n))
-
-    def root(i: int) -> int:
-        while parent[i] != i:
-            parent[i] = parent[parent[i]]
-            i = parent[i]
-        return i
-
-    for a, b, *_ in list(model.springs) + list(model.dampers):  # one pass over elements, not masses
-        if a >= 0 and b >= 0:
-            parent[root(a)] = root(b)
-    groups: dict[int, list[int]] = {}
-    for i in range(n):
-        groups.setdefault(root(i), []).append(i)
-    return list(groups.values())
+    return pieces(model.scene.n, ((a, b) for a, b, *_ in [*model.springs, *model.dampers]))
 
 
 def _eig_by_piece(masses: list, springs: list, pieces: list[list[int]], dps: int):
@@ -422,11 +409,7 @@ def damped_modes(model: Model, modes: ModeSet | None) -> DampedModes:
     ``modes`` (the closed-form modes) gives the closed forms of ζ; None for the numbers only.
     Cached on the model (one computation per report).
     """
-    cache = model.__dict__.setdefault("_damped_modes", {})
-    key = modes is not None
-    if key not in cache:
-        cache[key] = _damped_modes(model, modes)
-    return cache[key]
+    return cached_on(model, "_damped_modes", modes is not None, lambda: _damped_modes(model, modes))
 
 
 def _settled_rows(model: Model) -> tuple[list[tuple], bool]:

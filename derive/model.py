@@ -16,6 +16,7 @@ from functools import cached_property
 import sympy as sp
 
 from .errors import SceneError
+from .pieces import pieces
 from .potential import D, SpringLaw, linear_law
 from .scene import WALL, Scene
 
@@ -396,22 +397,7 @@ class Model:
     @cached_property
     def components(self) -> list[list[int]]:
         """Connected pieces of the spring graph (masses linked by springs), in mass order."""
-        n = self.scene.n
-        parent = list(range(n))
-
-        def find(i):
-            while parent[i] != i:
-                parent[i] = parent[parent[i]]
-                i = parent[i]
-            return i
-
-        for a, b, *_ in self.springs:
-            if a != WALL and b != WALL:
-                parent[find(a)] = find(b)
-        groups: dict[int, list[int]] = {}
-        for i in range(n):
-            groups.setdefault(find(i), []).append(i)
-        return sorted(groups.values())
+        return pieces(self.scene.n, ((a, b) for a, b, *_ in self.springs))
 
     @cached_property
     def free_components(self) -> list[list[int]]:

@@ -31,6 +31,7 @@ from .printing import latex
 
 from .accurate import MAX_MPMATH_MODES, NotAccurate, _eig_dynamical, exact_values, value
 from .model import Model
+from .model_cache import cached_on
 from .modes import ModeSet
 from .work import ops
 from .scene import WALL
@@ -261,11 +262,7 @@ def participation(model: Model, modes: ModeSet | None) -> Participation:
 
     Cached on the model (one computation per report).
     """
-    cache = model.__dict__.setdefault("_participation", {})
-    key = modes is not None
-    if key not in cache:
-        cache[key] = _participation(model, modes)
-    return cache[key]
+    return cached_on(model, "_participation", modes is not None, lambda: _participation(model, modes))
 
 
 def _participation(model: Model, modes: ModeSet | None) -> Participation:

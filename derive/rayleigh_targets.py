@@ -32,6 +32,7 @@ from .printing import latex
 
 from .accurate import MAX_MPMATH_MODES, _eig_dynamical, exact_values, value
 from .errors import SceneError
+from .model_cache import cached_on
 
 #: The model's symbols for the coefficients (non-ASCII: no parameter can take these names).
 ALPHA = sp.Symbol("α_R", nonnegative=True)
@@ -215,11 +216,7 @@ def model_fit(model, mode_set) -> RayleighFit | None:
     t = getattr(model, "rayleigh_targets", None)
     if t is None:
         return None
-    cache = model.__dict__.setdefault("_rayleigh_fit", {})
-    key = mode_set is not None
-    if key not in cache:
-        cache[key] = fit(model, mode_set, *t)
-    return cache[key]
+    return cached_on(model, "_rayleigh_fit", mode_set is not None, lambda: fit(model, mode_set, *t))
 
 
 def text_lines(f: RayleighFit) -> list[str]:

@@ -32,6 +32,7 @@ from .expr import CONSTANTS, Expr, Num, accepted_form
 from .expr_tree import RESERVED_FUNCTIONS
 from .expr import parse_expression
 from .scene_loader import _CHUNK, Loader, did_you_mean
+from .pieces import pieces
 from .damping import DampingModel, parse_damping
 from .loads import FORCE_KEYS, Force, Ground, TableForce, parse_forces, parse_ground  # noqa: F401
 from .scene_edit import DICT_FILE, from_dict
@@ -539,19 +540,8 @@ def _initial_state(ld: Loader, n: int, chain: bool, pnames: frozenset[str], env:
 
 def _free_pieces(n: int, springs) -> int:
     """Connected pieces of the spring graph with no spring to a wall (one rigid-body mode each)."""
-    parent = list(range(n))
-
-    def find(i):
-        while parent[i] != i:
-            parent[i] = parent[parent[i]]
-            i = parent[i]
-        return i
-
-    for s in springs:
-        if WALL not in (s.a, s.b):
-            parent[find(s.a)] = find(s.b)
-    walled = {find(i) for s in springs for i in (s.a, s.b) if WALL in (s.a, s.b) and i != WALL}
-    return len({find(i) for i in range(n)} - walled)
+    walled = {i for s in springs if WALL in (s.a, s.b) for i in (s.a, s.b) if i != WALL}
+    return sum(1 for piece in pieces(n, ((s.a, s.b) for s in springs)) if walled.isdisjoint(piece))
 
 
 def _chain(ld: Loader, pnames: frozenset[str], env: dict) -> Chain:

@@ -36,7 +36,30 @@ from sympy.codegen.cfunctions import expm1, log1p
 MAX_FACTORED_POWER = 4
 
 
-class expm1mx(sp.Function):
+class _MinusIdentity(sp.Function):
+    """``f(z) − z`` for an mpmath function ``f`` with ``f(0) = 0`` and ``f'(0) = 1`` (second order
+    at 0): zero at 0 by SymPy's automatic simplification, evaluated in mpmath with guard digits."""
+
+    #: The mpmath function f (a name, so mpmath is imported only when evaluating).
+    _mpmath_f = ""
+
+    @classmethod
+    def eval(cls, z):  # SymPy's Function hook for automatic simplification; no text is evaluated
+        if z.is_zero:
+            return sp.Integer(0)
+
+    def _eval_evalf(self, prec):
+        import mpmath
+
+        z = self.args[0].evalf(prec)
+        if not z.is_Number:
+            return None
+        with mpmath.workprec(prec + 20):
+            v = getattr(mpmath, self._mpmath_f)(mpmath.mpf(z._mpf_)) - mpmath.mpf(z._mpf_)
+        return sp.Float(v, precision=prec)
+
+
+class expm1mx(_MinusIdentity):
     """``expm1mx(z) = exp(z) − 1 − z`` (second order at 0), evaluated without cancellation.
 
     Generated modules print it as a private helper (``_expm1mx``: a series for |z| < 1/2,
@@ -44,56 +67,28 @@ class expm1mx(sp.Function):
     """
 
     nargs = 1
+    _mpmath_f = "expm1"
 
     def fdiff(self, argindex=1):
         return expm1(self.args[0])
 
-    @classmethod
-    def eval(cls, z):  # SymPy's Function hook for automatic simplification; no text is evaluated
-        if z.is_zero:
-            return sp.Integer(0)
-
     def _eval_rewrite_as_exp(self, z, **kwargs):
         return sp.exp(z) - 1 - z
 
-    def _eval_evalf(self, prec):
-        import mpmath
 
-        z = self.args[0].evalf(prec)
-        if not z.is_Number:
-            return None
-        with mpmath.workprec(prec + 20):
-            v = mpmath.expm1(mpmath.mpf(z._mpf_)) - mpmath.mpf(z._mpf_)
-        return sp.Float(v, precision=prec)
-
-
-class log1pmx(sp.Function):
+class log1pmx(_MinusIdentity):
     """``log1pmx(z) = log(1 + z) − z`` (second order at 0), evaluated without cancellation
     (generated modules: the private helper ``_log1pmx``)."""
 
     nargs = 1
+    _mpmath_f = "log1p"
 
     def fdiff(self, argindex=1):
         z = self.args[0]
         return -z / (1 + z)
 
-    @classmethod
-    def eval(cls, z):  # SymPy's Function hook for automatic simplification; no text is evaluated
-        if z.is_zero:
-            return sp.Integer(0)
-
     def _eval_rewrite_as_log(self, z, **kwargs):
         return sp.log(1 + z) - z
-
-    def _eval_evalf(self, prec):
-        import mpmath
-
-        z = self.args[0].evalf(prec)
-        if not z.is_Number:
-            return None
-        with mpmath.workprec(prec + 20):
-            v = mpmath.log1p(mpmath.mpf(z._mpf_)) - mpmath.mpf(z._mpf_)
-        return sp.Float(v, precision=prec)
 
 
 #: The second-order helpers and the private names generated code calls them by.

@@ -15,6 +15,7 @@ import numpy as np
 from ..generated.contract import MAX_DENSE, End
 from .files import atomic_path
 from .plots import new_figure
+from .spectrum import pieces
 
 #: Largest number of points drawn for a chain profile (the chain is decimated to this).
 MAX_PROFILE_POINTS = 1000
@@ -64,25 +65,6 @@ PIECE_GAP = 1.5
 GROUND_Y = -0.45
 
 
-def _pieces(n: int, ends: np.ndarray) -> list[list[int]]:
-    """Masses of each piece (joined by springs between masses), in mass order, pieces by first mass."""
-    parent = list(range(n))
-
-    def root(a: int) -> int:
-        while parent[a] != a:
-            parent[a] = parent[parent[a]]
-            a = parent[a]
-        return a
-
-    for a, b in ends:
-        if a >= 0 and b >= 0:
-            parent[root(int(a))] = root(int(b))
-    groups: dict[int, list[int]] = {}
-    for i in range(n):
-        groups.setdefault(root(i), []).append(i)
-    return sorted(groups.values(), key=lambda g: g[0])
-
-
 def layout(n: int, spring_ends) -> tuple[np.ndarray, list[tuple[int, int, str, float]]]:
     """Where to draw masses and walls so that every piece is drawn as it is connected.
 
@@ -106,7 +88,7 @@ def layout(n: int, spring_ends) -> tuple[np.ndarray, list[tuple[int, int, str, f
     rest = np.zeros(n)
     walls: list[tuple[int, int, str, float]] = []
     cursor = 0.0
-    for piece in _pieces(n, ends):
+    for piece in (idx.tolist() for idx in pieces(n, ends)):  # in mass order, pieces by first mass
         first, last = piece[0], piece[-1]
         todo = {m: list(wall_springs.get(m, ())) for m in piece}
         left = todo[first].pop(0) if todo[first] else None

@@ -3,11 +3,12 @@ evaluated on the records (see :mod:`springchain.numeric.bench` for what is measu
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from typing import Callable
 
 import numpy as np
 
+from .array_record import array_record
 from .run import registry
 from .run.protocol import Kind
 
@@ -94,7 +95,7 @@ class BenchConfig:
                    horizons_model=(1e2, 1e4, 1e6), horizon_eval_cap=5_000, horizon_dop853_cap=1e2)
 
 
-@dataclass(frozen=True)
+@array_record
 class HorizonCurve:
     """Error against horizon for one method at one setting.
 
@@ -105,11 +106,11 @@ class HorizonCurve:
 
     method: str
     setting: str
-    measured_t: np.ndarray = field(repr=False)
-    measured_error: np.ndarray = field(repr=False)
-    measured_energy: np.ndarray = field(repr=False)
-    model_t: np.ndarray = field(repr=False)
-    model_error: np.ndarray = field(repr=False)
+    measured_t: np.ndarray
+    measured_error: np.ndarray
+    measured_energy: np.ndarray
+    model_t: np.ndarray
+    model_error: np.ndarray
     model_label: str = ""
 
 

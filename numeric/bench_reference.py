@@ -8,6 +8,7 @@ from typing import Callable
 
 import numpy as np
 
+from .array_record import array_record
 from .run import registry
 from .run.grid import Grid
 from .run.protocol import Options, Recorded
@@ -16,7 +17,7 @@ from .system import System
 
 
 # -- references ----------------------------------------------------------------------------------
-@dataclass(frozen=True)
+@array_record
 class ExtendedModalReference:
     """The exact solution of an undamped linear chain in extended precision.
 
@@ -37,10 +38,10 @@ class ExtendedModalReference:
     description : str
     """
 
-    omega: np.ndarray = field(repr=False)
-    shapes: np.ndarray = field(repr=False)
-    q0: np.ndarray = field(repr=False)
-    p0: np.ndarray = field(repr=False)
+    omega: np.ndarray
+    shapes: np.ndarray
+    q0: np.ndarray
+    p0: np.ndarray
     description: str = ""
 
     @classmethod

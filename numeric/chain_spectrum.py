@@ -99,10 +99,8 @@ def bidiagonal_factor(masses: np.ndarray, ends: np.ndarray, k: np.ndarray) -> Bi
 
     Parameters
     ----------
-    masses : ndarray, shape (n,)
-    ends : ndarray of int, shape (S, 2)
-        Spring ends, -1 for a wall.
-    k : ndarray, shape (S,)
+    masses, ends, k : ndarray, shapes (n,), (S, 2) of int, (S,)
+        The springs of an open chain, as :func:`.spectrum.spectrum` takes them.
     """
     m = np.asarray(masses, dtype=float)
     n = int(m.shape[0])

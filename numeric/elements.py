@@ -10,14 +10,15 @@ their dashpots (α·m to the ground, β·k beside each spring), so ``rayleigh`` 
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import field
 
 import numpy as np
 
+from .array_record import array_record
 from .system import System
 
 
-@dataclass(frozen=True)
+@array_record
 class Elements:
     """Masses, springs, dashpots and damping models of a linear scene.
 
@@ -35,11 +36,11 @@ class Elements:
         Modal damping ratios in ascending ω (rigid modes included).
     """
 
-    masses: np.ndarray = field(repr=False)
-    spring_ends: np.ndarray = field(repr=False)
-    stiffness: np.ndarray = field(repr=False)
-    damper_ends: np.ndarray = field(repr=False)
-    damping: np.ndarray = field(repr=False)
+    masses: np.ndarray
+    spring_ends: np.ndarray
+    stiffness: np.ndarray
+    damper_ends: np.ndarray
+    damping: np.ndarray
     rayleigh: tuple | None = None
     modal_zeta: np.ndarray | None = field(default=None, repr=False)
 

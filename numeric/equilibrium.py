@@ -28,14 +28,15 @@ with an exactly zero pivot); the deformation is defined up to a translation of t
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 import numpy as np
 
-from .spectrum import free_pieces, laplacian_parts
+from .array_record import array_record
+from .spectrum import eliminate, free_pieces, laplacian_parts
 
 
-@dataclass(frozen=True)
+@array_record
 class Equilibrium:
     """The static response to a constant load.
 
@@ -47,8 +48,8 @@ class Equilibrium:
         The uniform acceleration of each free piece (the same value on all its masses; 0 elsewhere).
     """
 
-    x: np.ndarray = field(repr=False)
-    acceleration: np.ndarray = field(repr=False)
+    x: np.ndarray
+    acceleration: np.ndarray
 
 
 @dataclass(frozen=True)
@@ -74,18 +75,11 @@ def _factor(n: int, ends: np.ndarray, k: np.ndarray) -> _Factor:
         if not score[p] <= n:
             break  # the rest are last masses of free pieces (zero pivots): held
         dp = float(d[p])
-        nb = np.flatnonzero(W[p])
-        w = W[p, nb]
+        nb, w = eliminate(W, wall, p, dp)
         alive[p] = False
         order.append(p)
         pivots.append(dp)
         couplings.append((nb, w / dp))
-        W[p, :] = 0.0
-        W[:, p] = 0.0
-        if nb.size:
-            W[np.ix_(nb, nb)] += np.outer(w, w / dp)
-            W[nb, nb] = 0.0
-            wall[nb] += w * (wall[p] / dp)
     return _Factor(order, pivots, couplings)
 
 
@@ -105,10 +99,8 @@ def equilibrium(masses: np.ndarray, ends: np.ndarray, k: np.ndarray, loads: list
 
     Parameters
     ----------
-    masses : ndarray, shape (N,)
-    ends : ndarray of int, shape (S, 2)
-        Spring ends, -1 for a wall.
-    k : ndarray, shape (S,)
+    masses, ends, k : ndarray, shapes (N,), (S, 2) of int, (S,)
+        The springs, as :func:`.spectrum.spectrum` takes them.
     loads : list of ndarray, shape (N,)
         Constant forces (gravity, constant forces, the ground's constant −m·a_g), kept apart so
         that their positive and negative entries are summed separately.

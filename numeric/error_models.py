@@ -56,11 +56,12 @@ as a calibrated model, not a closed form.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from functools import cached_property
 
 import numpy as np
 
+from .array_record import array_record
 from .integrators.base import Integrator, Problem
 
 EPS = float(np.finfo(float).eps)
@@ -130,7 +131,7 @@ def _cos_taylor(n: int) -> np.ndarray:
     return c
 
 
-@dataclass(frozen=True)
+@array_record
 class OscillatorResponse:
     """A one-step method's exact action on ``q̈ = −ω²q``, as polynomials in ``z = ωh``.
 
@@ -156,10 +157,10 @@ class OscillatorResponse:
     symplectic: bool
     stages: float
     stability_limit: float
-    xx: np.ndarray = field(repr=False)
-    xv: np.ndarray = field(repr=False)
-    vx: np.ndarray = field(repr=False)
-    vv: np.ndarray = field(repr=False)
+    xx: np.ndarray
+    xv: np.ndarray
+    vx: np.ndarray
+    vv: np.ndarray
 
     @classmethod
     def from_integrator(cls, integrator: Integrator) -> "OscillatorResponse":
@@ -294,7 +295,7 @@ class OscillatorResponse:
         return np.where(small, 0.0, s), np.where(small, 0.0, r)
 
 
-@dataclass(frozen=True)
+@array_record
 class LinearChainModel:
     """The initial condition of an undamped linear chain in modal coordinates.
 
@@ -309,10 +310,10 @@ class LinearChainModel:
         Initial modal displacement and ``q̇0/ω`` (both in modal length units).
     """
 
-    omega: np.ndarray = field(repr=False)
-    shapes: np.ndarray = field(repr=False)
-    q0: np.ndarray = field(repr=False)
-    g0: np.ndarray = field(repr=False)
+    omega: np.ndarray
+    shapes: np.ndarray
+    q0: np.ndarray
+    g0: np.ndarray
 
     @classmethod
     def from_spectrum(cls, spectrum, x0: np.ndarray, v0: np.ndarray) -> "LinearChainModel":

@@ -38,6 +38,7 @@ import scipy.linalg
 
 from ..generated.contract import MAX_DENSE, End
 from .errors import RunRefused
+from .frf_dense import MPMATH_MAX_MASSES, dense_chunk
 from .system import System
 
 #: Resonances refined (the lowest in range); long chains have more modes than any grid.
@@ -53,8 +54,8 @@ SILENT_GAP = 1e-2
 UNDAMPED_ZETA = 1e-9
 #: Largest ring solved by the certified modal route of :mod:`numeric.frf_dense` (the tridiagonal
 #: solve with a Sherman–Morrison corner loses κ·ε: 1e-9 N/m next to 1e3 N/m springs): the rings
-#: whose every frequency it certifies or settles in mpmath (``frf_dense.MPMATH_MAX_MASSES``).
-RING_DENSE = 24
+#: whose every frequency it certifies or settles in mpmath.
+RING_DENSE = MPMATH_MAX_MASSES
 #: Element contrast (largest over smallest spring, dashpot or mass) of a longer ring above which an
 #: uncertified frequency is refused; below it the refined tridiagonal value is returned.
 RING_CONTRAST = 1e6
@@ -62,8 +63,6 @@ RING_CONTRAST = 1e6
 RING_CERTIFIED = 1e-10
 #: Refinement steps of a long ring's solve (residuals from the elements) before it is refused.
 REFINE_RING = 3
-#: Frequencies solved at once by the dense path (bounds the (W, N, N) stack to ~32 MB).
-_DENSE_BYTES = 32 * 2**20
 
 
 @dataclass(frozen=True)
@@ -180,7 +179,7 @@ def receptance(op: Operator, omega: np.ndarray, input: int, output: int, certify
     n = op.n
     M = np.diag(op.masses)
     out = np.empty(omega.shape[0], dtype=complex)
-    chunk = max(1, _DENSE_BYTES // (16 * n * n))
+    chunk = dense_chunk(n)
     rhs = np.zeros((n, 1), dtype=complex)
     rhs[input] = 1.0
     for lo in range(0, omega.shape[0], chunk):  # chunks of frequencies, not a loop over masses

@@ -25,14 +25,14 @@ closing spring makes a loop) goes through the tridiagonal solve of :mod:`numeric
 from __future__ import annotations
 
 import functools
-from dataclasses import dataclass, field
 
 import numpy as np
 
+from .array_record import array_record
 from .errors import RunRefused
 
 
-@dataclass(frozen=True)
+@array_record
 class ChainElements:
     """An open chain as impedances: per mass (n,) and per link between p−1 and p (index p, shape (n,); p = 0 unused).
 
@@ -44,11 +44,11 @@ class ChainElements:
         Spring and dashpot constants between masses p−1 and p (entry 0 is 0).
     """
 
-    mass: np.ndarray = field(repr=False)
-    ground_k: np.ndarray = field(repr=False)
-    ground_c: np.ndarray = field(repr=False)
-    link_k: np.ndarray = field(repr=False)
-    link_c: np.ndarray = field(repr=False)
+    mass: np.ndarray
+    ground_k: np.ndarray
+    ground_c: np.ndarray
+    link_k: np.ndarray
+    link_c: np.ndarray
 
     @property
     def n(self) -> int:

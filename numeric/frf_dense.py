@@ -27,11 +27,12 @@ on springs 1e-9 … 1e9, 150 % at 1e12 in the issue that asked for this.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import field
 from fractions import Fraction
 
 import numpy as np
 
+from .array_record import array_record
 from .elements import Elements, incidence, modal_damping
 from .errors import RunRefused
 from .spectrum import spectrum, stiffness_matrix
@@ -48,7 +49,7 @@ MPMATH_MAX_MASSES = 24
 MP_AGREE = 1e-15
 #: Highest mpmath precision tried (decimal digits).
 MP_MAX_DPS = 1000
-#: Frequencies solved at once by the dense solve (bounds the (W, N, N) stack to ~32 MB).
+#: Bytes of the (W, N, N) complex stack of frequencies solved at once by a dense solve (~32 MB).
 _DENSE_BYTES = 32 * 2**20
 _EPS = float(np.finfo(float).eps)
 
@@ -61,7 +62,12 @@ def _stamp(n: int, ends: np.ndarray, values: np.ndarray, absolute: bool) -> np.n
     return B.T @ (np.asarray(values, dtype=float)[:, None] * B)
 
 
-@dataclass(frozen=True)
+def dense_chunk(n: int) -> int:
+    """Frequencies solved at once by a dense solve of ``n`` masses (bounds the stack by :data:`_DENSE_BYTES`)."""
+    return max(1, _DENSE_BYTES // (16 * n * n))
+
+
+@array_record
 class DenseReceptance:
     """Certified receptances of one ``[masses]`` scene (see the module docstring).
 
@@ -69,13 +75,13 @@ class DenseReceptance:
     """
 
     el: Elements = field(repr=False)
-    omega_n: np.ndarray = field(repr=False)
-    shapes: np.ndarray = field(repr=False)
-    G: np.ndarray = field(repr=False)
-    K: np.ndarray = field(repr=False)
-    K_abs: np.ndarray = field(repr=False)
-    C: np.ndarray = field(repr=False)
-    C_abs: np.ndarray = field(repr=False)
+    omega_n: np.ndarray
+    shapes: np.ndarray
+    G: np.ndarray
+    K: np.ndarray
+    K_abs: np.ndarray
+    C: np.ndarray
+    C_abs: np.ndarray
 
     @classmethod
     def from_elements(cls, el: Elements) -> "DenseReceptance":
@@ -111,7 +117,7 @@ class DenseReceptance:
             q = b / (d + 1j * omega[:, None] * np.diag(G)[None, :])
             return q @ Phi.T
         out = np.empty((omega.shape[0], n), dtype=complex)
-        chunk = max(1, _DENSE_BYTES // (16 * n * n))
+        chunk = dense_chunk(n)
         for lo in range(0, omega.shape[0], chunk):  # chunks of frequencies, not a loop over masses
             w = omega[lo:lo + chunk]
             Z = 1j * w[:, None, None] * G[None]

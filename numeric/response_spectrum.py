@@ -36,10 +36,11 @@ from __future__ import annotations
 
 import functools
 import math
-from dataclasses import dataclass, field
+from dataclasses import field
 
 import numpy as np
 
+from .array_record import array_record
 from .errors import RunRefused
 
 #: Least samples per natural period (record steps are split into equal sub-steps to reach it).
@@ -57,7 +58,7 @@ DEFAULT_PERIODS = (0.02, 10.0, 100)
 DEFAULT_ZETA = 0.05
 
 
-@dataclass(frozen=True)
+@array_record
 class Record:
     """An accelerogram: ``a_g`` linear between rows, zero outside.
 
@@ -70,8 +71,8 @@ class Record:
     name : str
     """
 
-    t: np.ndarray = field(repr=False)
-    a: np.ndarray = field(repr=False)
+    t: np.ndarray
+    a: np.ndarray
     name: str = "record"
 
     def __post_init__(self):
@@ -95,7 +96,7 @@ class Record:
         return h if np.max(np.abs(np.diff(self.t) - h)) <= 1e-9 * h else None
 
 
-@dataclass(frozen=True)
+@array_record
 class ResponseSpectrum:
     """Spectral ordinates of one record.
 
@@ -110,9 +111,9 @@ class ResponseSpectrum:
     record : Record
     """
 
-    periods: np.ndarray = field(repr=False)
-    zeta: np.ndarray = field(repr=False)
-    sd: np.ndarray = field(repr=False)
+    periods: np.ndarray
+    zeta: np.ndarray
+    sd: np.ndarray
     record: Record = field(repr=False)
 
     @property

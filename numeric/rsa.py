@@ -22,10 +22,11 @@ from __future__ import annotations
 
 import enum
 import math
-from dataclasses import dataclass, field
+from dataclasses import field
 
 import numpy as np
 
+from .array_record import array_record
 from .elements import Elements
 from .errors import RunRefused
 from .modal_exact import MP_MAX_MASSES, ExactModes, exact_modes
@@ -72,7 +73,7 @@ def combine(peaks: np.ndarray, how: Combination, rho: np.ndarray | None = None) 
     return np.sqrt(np.maximum(quad, 0.0)).reshape(R.shape[1:])
 
 
-@dataclass(frozen=True)
+@array_record
 class ModalProperties:
     """The elastic modes of a system as RSA needs them.
 
@@ -90,10 +91,10 @@ class ModalProperties:
         None on the float route (more than ``MP_MAX_MASSES`` masses, or repeated frequencies).
     """
 
-    omega: np.ndarray = field(repr=False)
-    zeta: np.ndarray = field(repr=False)
-    gamma: np.ndarray = field(repr=False)
-    shapes: np.ndarray = field(repr=False)
+    omega: np.ndarray
+    zeta: np.ndarray
+    gamma: np.ndarray
+    shapes: np.ndarray
     total_mass: float = 0.0
     proportional: bool = True
     exact: ExactModes | None = field(default=None, repr=False)
@@ -152,7 +153,7 @@ class ModalProperties:
         return cls(omega, zeta, gamma, phi, float(math.fsum(m)), proportional)
 
 
-@dataclass(frozen=True)
+@array_record
 class RSAResult:
     """Peak modal responses and their SRSS and CQC combinations.
 
@@ -176,12 +177,12 @@ class RSAResult:
     """
 
     modes: ModalProperties
-    sd: np.ndarray = field(repr=False)
-    displacement: np.ndarray = field(repr=False)
-    drift: np.ndarray = field(repr=False)
-    spring_force: np.ndarray = field(repr=False)
-    base_shear: np.ndarray = field(repr=False)
-    rho: np.ndarray = field(repr=False)
+    sd: np.ndarray
+    displacement: np.ndarray
+    drift: np.ndarray
+    spring_force: np.ndarray
+    base_shear: np.ndarray
+    rho: np.ndarray
     spectrum: str = ""
 
     @property

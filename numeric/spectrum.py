@@ -233,19 +233,46 @@ def stiffness_factor(masses: np.ndarray, ends: np.ndarray, k: np.ndarray) -> np.
             break  # every remaining mass is the last of a free piece: exact zero pivots
         dp = d[p]
         alive[p] = False
-        nb = np.flatnonzero(W[p])  # remaining neighbours (eliminated rows and columns are zero)
-        w = W[p, nb]
+        nb, w = eliminate(W, wall, p, dp)
         F[p, cols] = np.sqrt(dp) / root_m[p]
         F[nb, cols] = -(w / np.sqrt(dp)) / root_m[nb]
         cols += 1
-        W[p, :] = 0.0
-        W[:, p] = 0.0
-        if nb.size:
-            W[nb[:, None], nb] += np.outer(w, w / dp)
-            W[nb, nb] = 0.0
-            wall[nb] += w * (wall[p] / dp)
-            d[nb] = wall[nb] + W[nb].sum(axis=1)
+        d[nb] = wall[nb] + W[nb].sum(axis=1)
     return F[:, :cols]
+
+
+def eliminate(W: np.ndarray, wall: np.ndarray, p: int, dp: float) -> tuple[np.ndarray, np.ndarray]:
+    """Eliminate mass ``p`` (pivot ``dp``) from the Laplacian parts, in place and subtraction-free.
+
+    The Schur complement of a Laplacian is a Laplacian: the neighbours ``i, j`` of ``p`` gain the
+    coupling ``w_i w_j / dp`` and the wall term ``w_i · wall_p / dp``, sums of positive numbers.
+
+    Parameters
+    ----------
+    W : ndarray, shape (N, N)
+        Couplings between masses (zero diagonal, zero rows and columns of eliminated masses).
+    wall : ndarray, shape (N,)
+        Springs to the walls.
+    p : int
+    dp : float
+        The pivot ``wall_p + Σ_j W_pj`` (> 0).
+
+    Returns
+    -------
+    nb : ndarray of int, shape (B,)
+        The neighbours of ``p`` still in the elimination.
+    w : ndarray, shape (B,)
+        Their couplings to ``p`` before the elimination.
+    """
+    nb = np.flatnonzero(W[p])  # remaining neighbours (eliminated rows and columns are zero)
+    w = W[p, nb]
+    W[p, :] = 0.0
+    W[:, p] = 0.0
+    if nb.size:
+        W[nb[:, None], nb] += np.outer(w, w / dp)  # (basic broadcast index: cheaper than np.ix_ at small N)
+        W[nb, nb] = 0.0
+        wall[nb] += w * (wall[p] / dp)
+    return nb, w
 
 
 #: Up to this many masses the pieces are found by label propagation on the spring list (a few
@@ -269,15 +296,27 @@ def _small_components(n: int, a: np.ndarray, b: np.ndarray) -> tuple[int, np.nda
     return int(roots.shape[0]), labels
 
 
+def _components(n: int, ends: np.ndarray) -> tuple[int, np.ndarray]:
+    """The number of connected pieces (springs between masses join, walls join nothing) and each
+    mass's piece label, shape (N,)."""
+    inner = (ends[:, 0] >= 0) & (ends[:, 1] >= 0)
+    if n <= SMALL_PIECES:
+        return _small_components(n, ends[inner, 0], ends[inner, 1])
+    graph = coo_matrix((np.ones(int(inner.sum())), (ends[inner, 0], ends[inner, 1])), shape=(n, n))
+    count, labels = connected_components(graph, directed=False)
+    return int(count), labels
+
+
+def pieces(n: int, ends: np.ndarray) -> list[np.ndarray]:
+    """Index arrays (ascending) of every connected piece, the pieces ordered by their first mass."""
+    count, labels = _components(n, _ends(ends))
+    return sorted((np.flatnonzero(labels == c) for c in range(count)), key=lambda idx: int(idx[0]))
+
+
 def free_pieces(n: int, ends: np.ndarray) -> list[np.ndarray]:
     """Index arrays of the connected pieces with no spring to a wall."""
     ends = _ends(ends)
-    inner = (ends[:, 0] >= 0) & (ends[:, 1] >= 0)
-    if n <= SMALL_PIECES:
-        count, labels = _small_components(n, ends[inner, 0], ends[inner, 1])
-    else:
-        graph = coo_matrix((np.ones(int(inner.sum())), (ends[inner, 0], ends[inner, 1])), shape=(n, n))
-        count, labels = connected_components(graph, directed=False)
+    count, labels = _components(n, ends)
     walled = np.zeros(count, dtype=bool)
     one = (ends[:, 0] >= 0) != (ends[:, 1] >= 0)
     touched = np.where(ends[one, 0] >= 0, ends[one, 0], ends[one, 1])
@@ -358,11 +397,9 @@ def spectrum(masses: np.ndarray, ends: np.ndarray, k: np.ndarray) -> Spectrum:
 
     Parameters
     ----------
-    masses : ndarray, shape (N,)
-    ends : ndarray of int, shape (S, 2)
-        Spring ends, -1 for a wall.
-    k : ndarray, shape (S,)
-        Spring constants.
+    masses, ends, k : ndarray, shapes (N,), (S, 2) of int, (S,)
+        The masses, each spring's two ends (mass indices, -1 for a wall) and the spring constants:
+        the ``masses``, ``spring_ends`` and ``stiffness`` of :class:`~.elements.Elements`.
 
     Returns
     -------

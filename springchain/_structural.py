@@ -269,10 +269,10 @@ def response_spectrum(record, zeta=0.05, periods=None) -> SpectrumResult:
         A CSV file with the header ``t,a`` (seconds, m/s²; the ``[ground]`` table format) or the
         name of a bundled record (``"quake-record"``), a
         :class:`~springchain.numeric.response_spectrum.Record`, or two arrays.
-    zeta : float or sequence of float
-        Damping ratios, 0 <= ζ < 1 (default 0.05).
-    periods : sequence of float, optional
-        Natural periods [s] (default: 100 log-spaced from 0.02 to 10 s).
+    zeta, periods
+        Damping ratios and natural periods [s], as
+        :func:`springchain.numeric.response_spectrum.response_spectrum` takes them (default: ζ = 0.05
+        at 100 periods log-spaced from 0.02 to 10 s).
 
     Returns
     -------

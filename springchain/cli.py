@@ -7,6 +7,7 @@ SymPy is imported only by the subcommands that derive.
 from __future__ import annotations
 
 import argparse
+import inspect
 import math
 import sys
 import time
@@ -98,6 +99,11 @@ def _apply_set(args) -> None:
 
 # -- commands: parse, call the API, print -------------------------------------------------------
 def cmd_derive(args) -> int:
+    """generate NumPy modules from scenes
+
+    Derive each scene and write DIR/<name>.py (plain NumPy, deterministic). With no SCENE: every bundled
+    scene. --check compares with the same DIR.
+    """
     from ._api import generate
 
     results = generate(args.scene, args.out, check=args.check)
@@ -110,6 +116,10 @@ def cmd_derive(args) -> int:
 
 
 def cmd_modes(args) -> int:
+    """print equations of motion and closed-form normal modes
+
+    Print the Lagrangian derivation and the normal modes of a scene.
+    """
     from ._api import modes
 
     m = modes(args.scene)
@@ -146,6 +156,11 @@ def _print_simulation(result) -> None:
 
 
 def cmd_simulate(args) -> int:
+    """simulate a scene with exact and numerical methods
+
+    Run the chosen methods from the scene's initial state and write DIR/<name>.npz (t, x_<method>,
+    v_<method>) and PNG figures: positions, velocities, method - exact, energy.
+    """
     from ._api import simulate
 
     try:
@@ -166,6 +181,12 @@ def cmd_simulate(args) -> int:
 
 
 def cmd_run(args) -> int:
+    """the main job on the bundled reference scene
+
+    Derive the bundled reference scene (masses m, 3m, m; springs k), print its equations and closed-form
+    modes, check the checked-in generated module is fresh, simulate with the exact modal solution and
+    velocity Verlet, and write figures.
+    """
     from ._api import generate, load, modes, simulate
     from ._modules import generated_dir
     from ._scenes import display_path, resolve
@@ -183,6 +204,13 @@ def cmd_run(args) -> int:
 
 
 def cmd_bench(args) -> int:
+    """work-precision benchmark of every method (figures and a table)
+
+    Sweep the step of every fixed-step method and the tolerance of the adaptive ones, measure the
+    largest position error against an exact (extended-precision) or very accurate reference, count force
+    evaluations and time each run (min of repeats, single-threaded BLAS). Writes bench-<scene>.md,
+    .json, a work-precision figure and an error-vs-horizon figure.
+    """
     from ._api import bench
     from .numeric.bench import markdown_table, write_outputs
 
@@ -199,6 +227,11 @@ def cmd_bench(args) -> int:
 
 
 def cmd_plan(args) -> int:
+    """cheapest method and step to reach a tolerance
+
+    Predict, from closed-form error models and measured costs, the step (or tolerance) each method needs
+    to keep the largest position error below TOL over the horizon, and recommend the cheapest.
+    """
     from ._api import load, plan
 
     scene = load(args.scene)
@@ -223,6 +256,13 @@ def cmd_plan(args) -> int:
 
 
 def cmd_scaling(args) -> int:
+    """setup-vs-step cost from N = 3 to 10^6, and the symbolic cost
+
+    Time the exact solution's set-up (dense, tridiagonal, transform) against one Verlet step (NumPy
+    stencil, fused) and the 32-byte-per-mass memory floor for chains of N masses; the crossover horizon;
+    and derive + codegen time against sympy's LagrangesMethod. Writes DIR/scaling.{json,md,png} and
+    DIR/symbolic-cost.{json,md,png}; progress on stderr.
+    """
     from ._api import scaling
 
     result = scaling(args.max_n, args.symbolic_max_n, args.out)
@@ -236,6 +276,14 @@ def cmd_scaling(args) -> int:
 
 
 def cmd_sweep(args) -> int:
+    """ensembles and parameter studies on Dask (parquet, summary, figures)
+
+    Draw S realisations of a scene (parameters with --vary, per-mass or per-spring disorder of [chain]
+    scenes with --disorder), compute every realisation's omega^2 (and, for chains, participation ratios
+    and inverse localisation lengths) as Dask tasks of B realisations, and write DIR/sweep.parquet (one
+    part per batch), DIR/summary.json and figures. DIST: uniform(a, b), normal(mu, sigma), lognormal(mu,
+    sigma) or grid(a, b, n). Re-running into the same DIR resumes.
+    """
     from ._sweep import sweep
 
     result = sweep(args.scene, vary=args.vary or (), disorder=args.disorder or (), samples=args.samples,
@@ -255,6 +303,14 @@ def cmd_sweep(args) -> int:
 
 
 def cmd_frf(args) -> int:
+    """frequency response X_out/F_in: Bode figure, JSON, transfer function
+
+    The receptance H(iw) = X_out / F_in of (K - w^2 M + i w C) X = F (a dense solve per frequency; a
+    tridiagonal one for [chain] scenes) on a log grid refined around every resonance, with the exact
+    peak of |H| of each damped one (undamped resonances are infinite: the grid stops 1e-4 short of
+    them). Prints the resonances and, for scenes of at most 6 masses, the transfer function H(s) as a
+    ratio of polynomials in s (text and LaTeX); writes the Bode figure DIR/<scene>-frf-<in>-<out>.png.
+    """
     from ._frf import frf
 
     result = frf(args.scene, args.input, args.output, args.omega_min, args.omega_max, args.points)
@@ -268,6 +324,13 @@ def cmd_frf(args) -> int:
 
 
 def cmd_animate(args) -> int:
+    """a GIF of a mode shape oscillating or of a simulated trajectory
+
+    Write DIR/<scene>-mode<J>.gif (mode J, counted from 0 in ascending frequency, rigid-body modes
+    included) or DIR/<scene>-<method>.gif (the scene simulated from its initial state by METHOD, a few
+    frames recorded). Masses are dots on a line joined by springs, displacements scaled to be visible;
+    [chain] scenes show a decimated displacement profile.
+    """
     from ._animate import animate
 
     result = animate(args.scene, mode=args.mode, method=args.method, out=args.out, frames=args.frames, fps=args.fps)
@@ -287,6 +350,14 @@ def _zeta(text):
 
 
 def cmd_spectrum(args) -> int:
+    """response spectra (SD, PSV, PSA) of an accelerogram
+
+    Displacement, pseudo-velocity and pseudo-acceleration response spectra of a ground-acceleration
+    record (CSV with header t,a in s and m/s^2, linear between rows, zero outside: the [ground] table
+    format), exact for that piecewise-linear input (closed-form one-step maps of the damped oscillator,
+    no time-stepping error; the peak between samples is refined, free vibration after the record is
+    included). Writes DIR/<record>-spectrum.png and .json.
+    """
     from ._structural import parse_periods, read_record, response_spectrum
 
     periods = parse_periods(args.periods) if args.periods else None
@@ -302,6 +373,14 @@ def cmd_spectrum(args) -> int:
 
 
 def cmd_rsa(args) -> int:
+    """response-spectrum analysis: peak floor displacements, drifts, storey shears, base shear (SRSS, CQC)
+
+    Peak modal responses of a scene (every piece tied to a wall) to a response spectrum: FILE is a
+    record (header t,a: its exact spectrum at each mode's period and damping ratio) or a design spectrum
+    (header T,Sa; s and m/s^2, linear between rows). Prints per mode T, zeta, Gamma, effective mass, SD,
+    PSA and base shear, and the floor displacements, inter-storey drifts, spring forces (storey shears)
+    and base shear combined by SRSS and by CQC (Der Kiureghian's correlation).
+    """
     from ._structural import rsa
 
     result = rsa(args.scene, args.spectrum, combine=args.combine)
@@ -311,13 +390,7 @@ def cmd_rsa(args) -> int:
 
 def add_structural_commands(sub) -> None:
     """The ``spectrum`` and ``rsa`` subcommands."""
-    sp_ = sub.add_parser("spectrum", help="response spectra (SD, PSV, PSA) of an accelerogram",
-                         description="Displacement, pseudo-velocity and pseudo-acceleration response spectra of a "
-                                     "ground-acceleration record (CSV with header t,a in s and m/s^2, linear between "
-                                     "rows, zero outside: the [ground] table format), exact for that piecewise-linear "
-                                     "input (closed-form one-step maps of the damped oscillator, no time-stepping "
-                                     "error; the peak between samples is refined, free vibration after the record "
-                                     "is included). Writes DIR/<record>-spectrum.png and .json.")
+    sp_ = _command(sub, "spectrum", cmd_spectrum)
     sp_.add_argument("record", help="the accelerogram CSV (header t,a), or a bundled record's name (quake-record)")
     sp_.add_argument("--zeta", type=_zeta, action="append", metavar="Z",
                      help="damping ratio, repeatable (default: 0.05)")
@@ -327,25 +400,25 @@ def add_structural_commands(sub) -> None:
                      help='print one JSON object {"periods", "zeta", "sd", "psv", "psa", ...} and nothing else')
     sp_.add_argument("--out", default="springchain-out", metavar="DIR",
                      help="folder for the figure and JSON file (default: %(default)s)")
-    sp_.set_defaults(func=cmd_spectrum)
-    rs = sub.add_parser("rsa", help="response-spectrum analysis: peak floor displacements, drifts, storey "
-                                    "shears, base shear (SRSS, CQC)",
-                        description="Peak modal responses of a scene (every piece tied to a wall) to a response "
-                                    "spectrum: FILE is a record (header t,a: its exact spectrum at each mode's period "
-                                    "and damping ratio) or a design spectrum (header T,Sa; s and m/s^2, linear between "
-                                    "rows). Prints per mode T, zeta, Gamma, effective mass, SD, PSA and base shear, "
-                                    "and the floor displacements, inter-storey drifts, spring forces (storey shears) "
-                                    "and base shear combined by SRSS and by CQC (Der Kiureghian's correlation).")
+    rs = _command(sub, "rsa", cmd_rsa)
     rs.add_argument("scene", help="a scene file (TOML) or the name of a bundled scene, e.g. building_quake")
     rs.add_argument("--spectrum", required=True, metavar="FILE",
                     help="record (t,a) or design spectrum (T,Sa) CSV, or a bundled record's name (quake-record)")
     rs.add_argument("--combine", choices=("cqc", "srss"), default="cqc",
                     help="the combination the result leads with (both are printed; default: %(default)s)")
     rs.add_argument("--json", action="store_true", help="print one JSON object and nothing else")
-    rs.set_defaults(func=cmd_rsa)
 
 
 # -- parser: one function per command ---------------------------------------------------------
+def _command(sub, name: str, func) -> argparse.ArgumentParser:
+    """The subcommand ``name``, run by ``func``, whose docstring is its ``--help`` text: the first line
+    the summary in ``springchain --help``, the rest the description (argparse re-wraps it)."""
+    summary, _, description = inspect.cleandoc(func.__doc__ or "").partition("\n")
+    p = sub.add_parser(name, help=summary or None, description=" ".join(description.split()) or None)
+    p.set_defaults(func=func)
+    return p
+
+
 def _scene(p, example: str = "seed") -> None:
     """The SCENE argument: a path or a bundled scene's name."""
     p.add_argument("scene", help="a scene file (TOML) or the name of a bundled scene" + (f", e.g. {example}" if example else ""))
@@ -365,45 +438,32 @@ def _no_progress(p) -> None:
 
 def _add_run(sub) -> None:
     """``springchain run``: the main job."""
-    r = sub.add_parser("run", help="the main job on the bundled reference scene",
-                       description="Derive the bundled reference scene (masses m, 3m, m; springs k), print "
-                                   "its equations and closed-form modes, check the checked-in generated "
-                                   "module is fresh, simulate with the exact modal solution and velocity "
-                                   "Verlet, and write figures.")
+    r = _command(sub, "run", cmd_run)
     r.add_argument("--out", default=DEFAULT_OUT, help="folder for figures and data (default: %(default)s)")
-    r.set_defaults(func=cmd_run)
 
 
 def _add_derive(sub) -> None:
     """``springchain derive``: write or check generated modules."""
-    d = sub.add_parser("derive", help="generate NumPy modules from scenes",
-                       description="Derive each scene and write DIR/<name>.py (plain NumPy, deterministic). "
-                                   "With no SCENE: every bundled scene. --check compares with the same DIR.")
+    d = _command(sub, "derive", cmd_derive)
     d.add_argument("scene", nargs="*", help="scene files or bundled names (default: all bundled scenes)")
     d.add_argument("--out", help="folder for the modules (default: ./generated under the current folder)")
     d.add_argument("--check", action="store_true",
                    help="write nothing; exit 1 if a module in the same folder derive writes to (--out, default "
                         "./generated) differs from a fresh render")
-    d.set_defaults(func=cmd_derive)
 
 
 def _add_modes(sub) -> None:
     """``springchain modes``: equations and modes."""
-    m = sub.add_parser("modes", help="print equations of motion and closed-form normal modes",
-                       description="Print the Lagrangian derivation and the normal modes of a scene.")
+    m = _command(sub, "modes", cmd_modes)
     _scene(m)
     g = m.add_mutually_exclusive_group()
     g.add_argument("--json", action="store_true", help="print one JSON object (see README) and nothing else")
     g.add_argument("--latex", action="store_true", help="print the derivation as LaTeX (amsmath)")
-    m.set_defaults(func=cmd_modes)
 
 
 def _add_simulate(sub) -> None:
     """``springchain simulate``: run methods."""
-    s = sub.add_parser("simulate", help="simulate a scene with exact and numerical methods",
-                       description="Run the chosen methods from the scene's initial state and write "
-                                   "DIR/<name>.npz (t, x_<method>, v_<method>) and PNG figures: positions, "
-                                   "velocities, method - exact, energy.")
+    s = _command(sub, "simulate", cmd_simulate)
     _scene(s)
     s.add_argument("--method", action="append", choices=_method_names(), metavar="NAME",
                    help=f"method to run, repeatable ({', '.join(_method_names())}; default: modal and verlet "
@@ -429,7 +489,6 @@ def _add_simulate(sub) -> None:
     s.add_argument("--springs", action="store_true",
                    help="add drift_<method>, spring_force_<method> (S x springs) and base_shear_<method> (S) to the NPZ")
     _alpha(s)
-    s.set_defaults(func=cmd_simulate)
 
 
 def _alpha(p) -> None:
@@ -441,12 +500,7 @@ def _alpha(p) -> None:
 
 def _add_bench(sub) -> None:
     """``springchain bench``: work-precision benchmark."""
-    b = sub.add_parser("bench", help="work-precision benchmark of every method (figures and a table)",
-                       description="Sweep the step of every fixed-step method and the tolerance of the adaptive "
-                                   "ones, measure the largest position error against an exact (extended-"
-                                   "precision) or very accurate reference, count force evaluations and time "
-                                   "each run (min of repeats, single-threaded BLAS). Writes bench-<scene>.md, "
-                                   ".json, a work-precision figure and an error-vs-horizon figure.")
+    b = _command(sub, "bench", cmd_bench)
     b.add_argument("scene", nargs="?", help="a scene file or bundled name (default: seed, the reference scene)")
     b.add_argument("--t-end", type=_positive_float("--t-end"),
                    help="horizon T (default: the scene's dt x steps)")
@@ -458,31 +512,21 @@ def _add_bench(sub) -> None:
     b.add_argument("--json", action="store_true", help="print the records and targets as JSON")
     _alpha(b)
     _no_progress(b)
-    b.set_defaults(func=cmd_bench)
 
 
 def _add_plan(sub) -> None:
     """``springchain plan``: the cheapest method for a tolerance."""
-    pl = sub.add_parser("plan", help="cheapest method and step to reach a tolerance",
-                        description="Predict, from closed-form error models and measured costs, the step (or "
-                                    "tolerance) each method needs to keep the largest position error below TOL "
-                                    "over the horizon, and recommend the cheapest.")
+    pl = _command(sub, "plan", cmd_plan)
     _scene(pl)
     pl.add_argument("--tol", type=_positive_float("--tol"), required=True, help="largest position error allowed")
     pl.add_argument("--t-end", type=_positive_float("--t-end"), help="horizon T (default: the scene's dt x steps)")
     _alpha(pl)
     _json(pl)
-    pl.set_defaults(func=cmd_plan)
 
 
 def _add_scaling(sub) -> None:
     """``springchain scaling``: long-chain scaling."""
-    sc = sub.add_parser("scaling", help="setup-vs-step cost from N = 3 to 10^6, and the symbolic cost",
-                        description="Time the exact solution's set-up (dense, tridiagonal, transform) against one "
-                                    "Verlet step (NumPy stencil, fused) and the 32-byte-per-mass memory floor for "
-                                    "chains of N masses; the crossover horizon; and derive + codegen time against "
-                                    "sympy's LagrangesMethod. Writes DIR/scaling.{json,md,png} and "
-                                    "DIR/symbolic-cost.{json,md,png}; progress on stderr.")
+    sc = _command(sub, "scaling", cmd_scaling)
     sc.add_argument("--max-n", type=_positive_int("--max-n"), default=1_000_000,
                     help="largest chain size (default: %(default)s)")
     sc.add_argument("--symbolic-max-n", type=int, default=40,
@@ -490,19 +534,11 @@ def _add_scaling(sub) -> None:
                          "LagrangesMethod takes ~13 s at 80; default: %(default)s)")
     sc.add_argument("--json", action="store_true", help="print one JSON object with both tables")
     _out(sc, DEFAULT_OUT)
-    sc.set_defaults(func=cmd_scaling)
 
 
 def _add_sweep(sub) -> None:
     """``springchain sweep``: Dask studies."""
-    sw = sub.add_parser("sweep", help="ensembles and parameter studies on Dask (parquet, summary, figures)",
-                        description="Draw S realisations of a scene (parameters with --vary, per-mass or "
-                                    "per-spring disorder of [chain] scenes with --disorder), compute every "
-                                    "realisation's omega^2 (and, for chains, participation ratios and inverse "
-                                    "localisation lengths) as Dask tasks of B realisations, and write "
-                                    "DIR/sweep.parquet (one part per batch), DIR/summary.json and figures. "
-                                    "DIST: uniform(a, b), normal(mu, sigma), lognormal(mu, sigma) or "
-                                    "grid(a, b, n). Re-running into the same DIR resumes.")
+    sw = _command(sub, "sweep", cmd_sweep)
     _scene(sw, "")
     sw.add_argument("--vary", action="append", metavar="NAME=DIST",
                     help="draw scene parameter NAME per sample, repeatable; grids form their product")
@@ -521,19 +557,11 @@ def _add_sweep(sub) -> None:
     _out(sw, DEFAULT_SWEEP_OUT)
     _json(sw)
     _no_progress(sw)
-    sw.set_defaults(func=cmd_sweep)
 
 
 def _add_frf(sub) -> None:
     """``springchain frf``: frequency response."""
-    fr = sub.add_parser("frf", help="frequency response X_out/F_in: Bode figure, JSON, transfer function",
-                        description="The receptance H(iw) = X_out / F_in of (K - w^2 M + i w C) X = F (a dense "
-                                    "solve per frequency; a tridiagonal one for [chain] scenes) on a log grid "
-                                    "refined around every resonance, with the exact peak of |H| of each damped "
-                                    "one (undamped resonances are infinite: the grid stops 1e-4 short of them). "
-                                    "Prints the resonances and, for scenes of at most 6 masses, the transfer "
-                                    "function H(s) as a ratio of polynomials in s (text and LaTeX); writes the "
-                                    "Bode figure DIR/<scene>-frf-<in>-<out>.png.")
+    fr = _command(sub, "frf", cmd_frf)
     _scene(fr, "building")
     fr.add_argument("--input", required=True, metavar="MASS",
                     help="the mass the unit harmonic force drives (a name; an index for [chain] scenes)")
@@ -549,17 +577,11 @@ def _add_frf(sub) -> None:
                     help='print one JSON object {"omega", "magnitude", "phase" (deg), "resonances", '
                          '"transfer_function", ...} and nothing else')
     fr.add_argument("--out", default=DEFAULT_OUT, metavar="DIR", help="folder for the Bode figure (default: %(default)s)")
-    fr.set_defaults(func=cmd_frf)
 
 
 def _add_animate(sub) -> None:
     """``springchain animate``: GIFs."""
-    an = sub.add_parser("animate", help="a GIF of a mode shape oscillating or of a simulated trajectory",
-                        description="Write DIR/<scene>-mode<J>.gif (mode J, counted from 0 in ascending "
-                                    "frequency, rigid-body modes included) or DIR/<scene>-<method>.gif (the "
-                                    "scene simulated from its initial state by METHOD, a few frames recorded). "
-                                    "Masses are dots on a line joined by springs, displacements scaled to be "
-                                    "visible; [chain] scenes show a decimated displacement profile.")
+    an = _command(sub, "animate", cmd_animate)
     _scene(an)
     what = an.add_mutually_exclusive_group()
     what.add_argument("--mode", type=_whole("--mode"), metavar="J",
@@ -571,7 +593,6 @@ def _add_animate(sub) -> None:
     an.add_argument("--fps", type=_positive_float("--fps"), default=16.0, metavar="R",
                     help="frames per second (default: %(default)g)")
     _out(an, DEFAULT_OUT, metavar="DIR")
-    an.set_defaults(func=cmd_animate)
 
 
 # -- parser ---------------------------------------------------------------------------------

@@ -68,29 +68,41 @@ class Entry:
         return _imported(self.runner)
 
 
+def _integrators(kind: Kind, targets: dict[str, str], runner: str | None = None) -> tuple[Entry, ...]:
+    """The entries of one kind of integrator: name -> ``"module:Class"`` in ``numeric.integrators``
+    (and, for step methods run by a :class:`~.step.StepMethod` subclass, that ``runner``)."""
+    return tuple(Entry(name, kind, ".integrators." + target, runner) for name, target in targets.items())
+
+
 #: Every method, in the order the command line lists them: the exact one, the fixed-step
-#: integrators, then the adaptive methods (SciPy's, then the Runge–Kutta–Nyström pairs).
+#: integrators (the implicit ones run by their own step method), then the adaptive methods
+#: (SciPy's, then the Runge–Kutta–Nyström pairs).
 _TABLE: dict[str, Entry] = {e.name: e for e in (
     Entry("modal", Kind.EXACT, ".run.exact:ExactSolution"),
-    Entry("verlet", Kind.STEP, ".integrators.verlet:VelocityVerlet"),
-    Entry("verlet-kahan", Kind.STEP, ".integrators.verlet_compensated:CompensatedVerlet"),
-    Entry("yoshida4", Kind.STEP, ".integrators.yoshida:Yoshida4"),
-    Entry("blanes-moan4", Kind.STEP, ".integrators.blanes_moan4:BlanesMoan4"),
-    Entry("blanes-moan6", Kind.STEP, ".integrators.blanes_moan6:BlanesMoan6"),
-    Entry("kahan-li8", Kind.STEP, ".integrators.kahan_li:KahanLi8"),
-    Entry("rk4", Kind.STEP, ".integrators.rk4:RK4"),
-    Entry("expm", Kind.STEP, ".integrators.expm:MatrixExponential"),
-    Entry("chebyshev", Kind.STEP, ".integrators.chebyshev:ChebyshevPropagator"),
-    Entry("newmark", Kind.STEP, ".integrators.newmark:NewmarkAverage", ".run.implicit:ImplicitStep"),
-    Entry("newmark-linear", Kind.STEP, ".integrators.newmark:NewmarkLinear", ".run.implicit:ImplicitStep"),
-    Entry("hht", Kind.STEP, ".integrators.newmark:HHTAlpha", ".run.implicit:ImplicitStep"),
-    Entry("rk45", Kind.ADAPTIVE, ".integrators.ivp:RK45"),
-    Entry("dop853", Kind.ADAPTIVE, ".integrators.ivp:DOP853"),
+    *_integrators(Kind.STEP, {
+        "verlet": "verlet:VelocityVerlet",
+        "verlet-kahan": "verlet_compensated:CompensatedVerlet",
+        "yoshida4": "yoshida:Yoshida4",
+        "blanes-moan4": "blanes_moan4:BlanesMoan4",
+        "blanes-moan6": "blanes_moan6:BlanesMoan6",
+        "kahan-li8": "kahan_li:KahanLi8",
+        "rk4": "rk4:RK4",
+        "expm": "expm:MatrixExponential",
+        "chebyshev": "chebyshev:ChebyshevPropagator",
+    }),
+    *_integrators(Kind.STEP, {
+        "newmark": "newmark:NewmarkAverage",
+        "newmark-linear": "newmark:NewmarkLinear",
+        "hht": "newmark:HHTAlpha",
+    }, runner=".run.implicit:ImplicitStep"),
+    *_integrators(Kind.ADAPTIVE, {"rk45": "ivp:RK45", "dop853": "ivp:DOP853"}),
     Entry("dop853-compiled", Kind.ADAPTIVE, ".compiled.peer:CompiledDOP853"),
-    Entry("lsoda", Kind.ADAPTIVE, ".integrators.ivp:LSODA"),
-    Entry("dprkn6", Kind.ADAPTIVE, ".integrators.dprkn6:DPRKN6"),
-    Entry("dprkn8", Kind.ADAPTIVE, ".integrators.dprkn8:DPRKN8"),
-    Entry("dprkn12", Kind.ADAPTIVE, ".integrators.dprkn12:DPRKN12"),
+    *_integrators(Kind.ADAPTIVE, {
+        "lsoda": "ivp:LSODA",
+        "dprkn6": "dprkn6:DPRKN6",
+        "dprkn8": "dprkn8:DPRKN8",
+        "dprkn12": "dprkn12:DPRKN12",
+    }),
 )}
 
 #: The exact method's name (the default runs pair it with a step method).
