@@ -99,14 +99,19 @@ def _kick_end_impl(x, v, a, i, nb, n, im, k, k3, kl, kr, k3l, k3r, left, right, 
     for b in range(nb):
         A = mi * (_spring(x, i, b, nb, n, k, k3, kl, kr, k3l, k3r, left, right)
                   - _spring(x, i - 1, b, nb, n, k, k3, kl, kr, k3l, k3r, left, right))
-        e = i * nb + b
-        if mode == _VERLET:
-            v[e] = v[e] + c * (a[e] + A)
-            a[e] = A
-        elif mode == _LEAPFROG:
-            v[e] = v[e] + c * A
-        else:
-            a[e] = A
+        _apply(v, a, i * nb + b, A, c, mode)
+
+
+def _apply_impl(v, a, e, A, c, mode):
+    """What a kick does with element e's acceleration A: Verlet's v += c(a + A), a = A; leapfrog's
+    v += c·A; a force evaluation's a = A."""
+    if mode == _VERLET:
+        v[e] = v[e] + c * (a[e] + A)
+        a[e] = A
+    elif mode == _LEAPFROG:
+        v[e] = v[e] + c * A
+    else:
+        a[e] = A
 
 
 def _kick_flat_impl(xm, xc, xp, vv, aa, ku, kd, cu, cd, mm, c, mode):
@@ -144,14 +149,7 @@ def _kick_row_batch_impl(x, v, a, i, nb, mi, ku, kd, cu, cd, c, mode):
         e = base + b
         d1 = x[e + nb] - x[e]
         d0 = x[e] - x[e - nb]
-        A = mi * (_cubic(ku * d1, cu, 0, d1) - _cubic(kd * d0, cd, 0, d0))
-        if mode == _VERLET:
-            v[e] = v[e] + c * (a[e] + A)
-            a[e] = A
-        elif mode == _LEAPFROG:
-            v[e] = v[e] + c * A
-        else:
-            a[e] = A
+        _apply(v, a, e, mi * (_cubic(ku * d1, cu, 0, d1) - _cubic(kd * d0, cd, 0, d0)), c, mode)
 
 
 def _kick_rows_impl(x, v, a, r0, r1, nb, n, im, k, k3, kl, kr, k3l, k3r, left, right, c, mode):
@@ -284,7 +282,7 @@ def _stream_impl(x, v, c):
 
 
 # jitted versions (set by _compiled(); the implementations call these names)
-_spring = _kick_end = _kick_flat = _kick_row_batch = _kick_rows = _drift_rows = _leapfrog_pair = None
+_spring = _apply = _kick_end = _kick_flat = _kick_row_batch = _kick_rows = _drift_rows = _leapfrog_pair = None
 
 
 def _numba_cache_present() -> bool:
@@ -366,7 +364,7 @@ def _compiled():
                                    stream=jit(_stream_impl))
 
 
-_INNER = ("_spring", "_kick_end", "_kick_flat", "_kick_row_batch", "_kick_rows", "_drift_rows", "_leapfrog_pair")
+_INNER = ("_spring", "_apply", "_kick_end", "_kick_flat", "_kick_row_batch", "_kick_rows", "_drift_rows", "_leapfrog_pair")
 
 
 @functools.lru_cache(maxsize=1)

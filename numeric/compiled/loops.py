@@ -270,13 +270,7 @@ def dop853_loop(x0, v0, p, t0, t_end, rtol, atol, Ad, A, B, C, E3, E5, ts, max_s
             h_abs = abs(h)
             for r in range(m):
                 K[0, r] = f[r]
-            for s in range(1, 12):
-                for r in range(m):
-                    acc = 0.0
-                    for q in range(s):
-                        acc += K[q, r] * A[s, q]
-                    ys[r] = y[r] + acc * h
-                _rhs(ys, t + C[s] * h, p, Ad, K[s], g)
+            _rk_stages(y, ys, K, A, C, t, h, p, Ad, g, 1, 12)
             for r in range(m):
                 acc = 0.0
                 for q in range(12):
@@ -324,19 +318,26 @@ def dop853_loop(x0, v0, p, t0, t_end, rtol, atol, Ad, A, B, C, E3, E5, ts, max_s
     return y[:n].copy(), y[n:].copy(), accepted, evals
 
 
-def _dop853_dense(y, yn, f, K, t, h, p, Ad, A, C, D, g, ys, F, yo, t_eval, row, xs, vs):
-    """SciPy's DOP853 dense output on the accepted step ``t … t + h`` (``y`` → ``yn``, ``K[0]`` = f at t,
-    ``K[12]`` at t + h): stages 13–15, the interpolant's rows ``F`` (7, 2N), and the frames at every
-    ``t_eval[row:]`` inside the step (Dop853DenseOutput's Horner form). Returns the next row."""
+def _rk_stages(y, ys, K, A, C, t, h, p, Ad, g, first, last):
+    """Stages ``first … last-1`` of an explicit Runge–Kutta tableau (A, C): ``K[s] = f(t + C_s h,
+    y + h Σ_q A[s, q] K[q])`` (``ys`` the work row)."""
     m = y.shape[0]
-    n = m // 2
-    for s in range(13, 16):
+    for s in range(first, last):
         for r in range(m):
             acc = 0.0
             for q in range(s):
                 acc += K[q, r] * A[s, q]
             ys[r] = y[r] + acc * h
         _rhs(ys, t + C[s] * h, p, Ad, K[s], g)
+
+
+def _dop853_dense(y, yn, f, K, t, h, p, Ad, A, C, D, g, ys, F, yo, t_eval, row, xs, vs):
+    """SciPy's DOP853 dense output on the accepted step ``t … t + h`` (``y`` → ``yn``, ``K[0]`` = f at t,
+    ``K[12]`` at t + h): stages 13–15, the interpolant's rows ``F`` (7, 2N), and the frames at every
+    ``t_eval[row:]`` inside the step (Dop853DenseOutput's Horner form). Returns the next row."""
+    m = y.shape[0]
+    n = m // 2
+    _rk_stages(y, ys, K, A, C, t, h, p, Ad, g, 13, 16)
     for r in range(m):
         dy = yn[r] - y[r]
         F[0, r] = dy
@@ -485,4 +486,4 @@ def rkn_loop(x0, v0, p, t_eval, rtol, atol, c, A, b, bp, e, ep, fsal, q_hat, ord
 #: The loops the compiled file exports (compiled with numba, cached on disk).
 LOOPS = ("verlet_loop", "kahan_verlet_loop", "splitting_loop", "rk4_loop", "dop853_loop", "rkn_loop")
 #: The helpers the loops call (compiled too).
-HELPERS = ("_half_damp", "_store", "_total", "_rhs", "_rkn_norm", "_dop853_dense")
+HELPERS = ("_half_damp", "_store", "_total", "_rhs", "_rkn_norm", "_rk_stages", "_dop853_dense")
