@@ -28,6 +28,7 @@ import sympy as sp
 
 from .accurate import MAX_MPMATH_MODES, exact_values, numeric_modes, spring_factor_modes, value
 from .model import Model
+from .pieces import pieces
 from .work import MAX_DET_TERMS, WorkCapExceeded, check, det_terms_bound
 
 #: Largest block (after rigid modes and mirror symmetry) whose determinant is expanded symbolically.
@@ -76,24 +77,10 @@ def _rigid_shapes(model: Model) -> list[tuple[sp.Expr, ...]]:
 
 
 def _pieces(model: Model) -> list[list[int]]:
-    """Index sets of the decoupled pieces of ``K`` and ``M`` (connected by non-zero entries)."""
+    """Index sets of the decoupled pieces of ``K`` and ``M`` (joined by non-zero off-diagonal entries)."""
     n = model.scene.n
-    parent = list(range(n))
-
-    def find(i):
-        while parent[i] != i:
-            parent[i] = parent[parent[i]]
-            i = parent[i]
-        return i
-
-    for i in range(n):
-        for j in range(i + 1, n):
-            if model.K[i, j] != 0 or model.M[i, j] != 0:
-                parent[find(i)] = find(j)
-    groups: dict[int, list[int]] = {}
-    for i in range(n):
-        groups.setdefault(find(i), []).append(i)
-    return sorted(groups.values())
+    return pieces(n, ((i, j) for i in range(n) for j in range(i + 1, n)
+                      if model.K[i, j] != 0 or model.M[i, j] != 0))
 
 
 def _mirror(model: Model, piece: list[int]) -> list[int] | None:

@@ -316,3 +316,53 @@ def test_stamped_euler_lagrange_equals_differentiating_L_and_R(name):
         want = ddt + sp.diff(p, model.t) - sp.diff(L, model.x[i]) + sp.diff(R, model.v[i]) - Q[i]
         assert sp.expand(got - want) == 0, (name, i)
     assert model.M == sp.diag(*[sp.diff(model.T, v, 2) for v in model.v])
+
+
+def test_two_walled_pieces_get_closed_forms_piece_by_piece(scene_from_text):
+    """Two pieces (wall–x0–x1, wall–x2–x3) with eight distinct parameters: each piece is its own block,
+    so every ω² is a closed form, an exact eigenpair, and its shape is confined to its piece (was: the
+    whole 4×4 block, whose quartic split into two quadratics, and an inverse modulo one of them that
+    ran for > 10 min in SymPy's gcd)."""
+    from springchain._modules import derive
+
+    text = """name = "pieces2"
+[parameters]
+m0 = 1.0
+m1 = 1.0
+m2 = 1.0
+m3 = 2.0
+k0 = 1.0
+k1 = 1.0
+k2 = 3.0
+k3 = 1.0
+[masses]
+x0 = "m0"
+x1 = "m1"
+x2 = "m2"
+x3 = "m3"
+[[springs]]
+between = ["wall", "x0"]
+k = "k0"
+[[springs]]
+between = ["x0", "x1"]
+k = "k1"
+[[springs]]
+between = ["wall", "x2"]
+k = "k2"
+[[springs]]
+between = ["x2", "x3"]
+k = "k3"
+"""
+    d = derive(scene_from_text(text, "pieces2.toml"))
+    model, modes = d.model, d.modes
+    assert modes.closed_form
+    flat = _flat_modes(modes)
+    assert len(flat) == 4
+    for w2, shape in flat:
+        assert _matrix_is_zero((model.K - w2 * model.M) * shape)
+        moved = {i for i in range(4) if shape[i] != 0}
+        assert moved <= {0, 1} or moved <= {2, 3}, moved
+    p = {name: model.params[name] for name in ("m0", "m1", "k0", "k1")}
+    first = [w2 for w2, s in flat if s[0] != 0]
+    assert len(first) == 2
+    assert _is_zero(first[0] * first[1] - p["k0"] * p["k1"] / (p["m0"] * p["m1"]))
