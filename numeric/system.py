@@ -184,7 +184,7 @@ class System:
         conserves it: its potential is part of the energy)."""
         return not (self.damped or self.forced)
 
-    @property
+    @cached_property
     def no_exact_solution(self) -> str | None:
         """Why no exact solution applies (None when one does): the one wording of the reason.
 
