@@ -325,34 +325,12 @@ def test_two_walled_pieces_get_closed_forms_piece_by_piece(scene_from_text):
     ran for > 10 min in SymPy's gcd)."""
     from springchain._modules import derive
 
-    text = """name = "pieces2"
-[parameters]
-m0 = 1.0
-m1 = 1.0
-m2 = 1.0
-m3 = 2.0
-k0 = 1.0
-k1 = 1.0
-k2 = 3.0
-k3 = 1.0
-[masses]
-x0 = "m0"
-x1 = "m1"
-x2 = "m2"
-x3 = "m3"
-[[springs]]
-between = ["wall", "x0"]
-k = "k0"
-[[springs]]
-between = ["x0", "x1"]
-k = "k1"
-[[springs]]
-between = ["wall", "x2"]
-k = "k2"
-[[springs]]
-between = ["x2", "x3"]
-k = "k3"
-"""
+    from helpers import scene_toml
+
+    params = {"m0": 1.0, "m1": 1.0, "m2": 1.0, "m3": 2.0, "k0": 1.0, "k1": 1.0, "k2": 3.0, "k3": 1.0}
+    springs = [{"between": list(ends), "k": k}
+               for ends, k in ((("wall", "x0"), "k0"), (("x0", "x1"), "k1"), (("wall", "x2"), "k2"), (("x2", "x3"), "k3"))]
+    text = scene_toml("pieces2", params, masses={f"x{i}": f"m{i}" for i in range(4)}, springs=springs)
     d = derive(scene_from_text(text, "pieces2.toml"))
     model, modes = d.model, d.modes
     assert modes.closed_form
