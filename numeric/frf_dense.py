@@ -240,26 +240,36 @@ def _mp(v, mpmath):
     return mpmath.mpf(f.numerator) / f.denominator
 
 
-def _mp_modal_damping(el: Elements, mpmath):
-    """C of modal damping at the current precision (mpmath ``eigsy`` of D assembled exactly)."""
+def mp_modes(el: Elements, mpmath) -> tuple[list, list[list]]:
+    """λ = ω² ascending and the physical M-orthonormal shapes φⱼ = M^-1/2 eⱼ (one list per mode), from
+    ``mpmath.eigsy`` of D = M^-1/2 K M^-1/2 assembled exactly from the elements at the current precision."""
     n = el.n
-    r = [1 / mpmath.sqrt(_mp(m, mpmath)) for m in el.masses]
+    r = [1 / mpmath.sqrt(_mp(m, mpmath)) for m in el.masses.tolist()]
     D = mpmath.zeros(n, n)
     for (a, b), k in zip(el.spring_ends.tolist(), el.stiffness.tolist()):
+        if a == b:
+            continue
+        k = _mp(k, mpmath)
         for i, si in ((a, 1), (b, -1)):
             for j, sj in ((a, 1), (b, -1)):
                 if i >= 0 and j >= 0:
-                    D[i, j] += si * sj * _mp(k, mpmath) * r[i] * r[j]
-    w2, E = mpmath.eigsy(D)
-    order = sorted(range(n), key=lambda j: w2[j])
+                    D[i, j] += si * sj * k * r[i] * r[j]
+    lam, E = mpmath.eigsy(D)
+    order = sorted(range(n), key=lambda j: lam[j])
+    return [lam[j] for j in order], [[E[i, j] * r[i] for i in range(n)] for j in order]
+
+
+def _mp_modal_damping(el: Elements, mpmath):
+    """C = M Φ diag(2ζⱼωⱼ) Φᵀ M of modal damping at the current precision (:func:`mp_modes`)."""
+    n = el.n
+    lam, shapes = mp_modes(el, mpmath)
+    m = [_mp(v, mpmath) for v in el.masses.tolist()]
     C = mpmath.zeros(n, n)
-    for pos, j in enumerate(order):
-        wj = mpmath.sqrt(max(w2[j], 0))
-        g = 2 * _mp(el.modal_zeta[pos], mpmath) * wj
+    for pos, (lj, phi) in enumerate(zip(lam, shapes)):
+        g = 2 * _mp(el.modal_zeta[pos], mpmath) * mpmath.sqrt(max(lj, 0))
         if g == 0:
             continue
-        phi = [E[i, j] / r[i] for i in range(n)]  # physical, M-orthonormal
-        mphi = [_mp(el.masses[i], mpmath) * phi[i] for i in range(n)]
+        mphi = [m[i] * phi[i] for i in range(n)]
         for a in range(n):
             for b in range(n):
                 C[a, b] += g * mphi[a] * mphi[b]

@@ -29,12 +29,12 @@ falls back to the float route and says so.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
 
 import numpy as np
 
+from .array_record import array_record
 from .elements import Elements
-from .frf_dense import _mp
+from .frf_dense import _mp, mp_modes
 
 #: Largest scene whose modal quantities are computed in mpmath (cost measured in the README's rsa section).
 MP_MAX_MASSES = 24
@@ -50,7 +50,7 @@ DIGITS = 30
 LEVELS = 3
 
 
-@dataclass(frozen=True)
+@array_record
 class ExactModes:
     """Per-mode quantities of the elastic modes, each correctly rounded from extended precision.
 
@@ -70,14 +70,14 @@ class ExactModes:
         The precision that settled.
     """
 
-    omega: np.ndarray = field(repr=False)
-    gamma: np.ndarray = field(repr=False)
-    zeta: np.ndarray = field(repr=False)
-    base: np.ndarray = field(repr=False)
-    shapes: np.ndarray = field(repr=False)
-    displacement: np.ndarray = field(repr=False)
-    drift: np.ndarray = field(repr=False)
-    force: np.ndarray = field(repr=False)
+    omega: np.ndarray
+    gamma: np.ndarray
+    zeta: np.ndarray
+    base: np.ndarray
+    shapes: np.ndarray
+    displacement: np.ndarray
+    drift: np.ndarray
+    force: np.ndarray
     proportional: bool = True
     digits: int = 0
 
@@ -86,26 +86,13 @@ def _at(el: Elements, dps: int) -> dict:
     """Every quantity of :class:`ExactModes` as mpmath numbers at ``dps`` digits (lists per mode)."""
     import mpmath
 
-    n = el.n
     with mpmath.workdps(dps):
         mp = lambda v: _mp(v, mpmath)
         m = [mp(v) for v in el.masses.tolist()]
-        s = [1 / mpmath.sqrt(v) for v in m]
         springs = [(a, b, mp(k)) for (a, b), k in zip(el.spring_ends.tolist(), el.stiffness.tolist())]
-        D = mpmath.zeros(n, n)
-        for a, b, k in springs:  # the spring's stamp k·bbᵀ, scaled by M^-1/2 on both sides
-            if a == b:
-                continue
-            for p, sp in ((a, 1), (b, -1)):
-                for q, sq in ((a, 1), (b, -1)):
-                    if p >= 0 and q >= 0:
-                        D[p, q] += sp * sq * k * s[p] * s[q]
-        lam, E = mpmath.eigsy(D)
-        order = sorted(range(n), key=lambda j: lam[j])
-        lam = [lam[j] for j in order]
+        lam, shapes = mp_modes(el, mpmath)
         phi = []
-        for j in order:
-            col = [E[i, j] * s[i] for i in range(n)]
+        for col in shapes:
             big = max(abs(c) for c in col)
             first = next(c for c in col if abs(c) > mpmath.mpf("1e-12") * big)
             phi.append([-c for c in col] if first < 0 else col)

@@ -555,3 +555,35 @@ def test_exact_run_past_float64_limits_says_so(tmp_path, capsys):
     assert sc.simulate(short, methods=["modal"], out=tmp_path / "s").summary["notes"] == []
     with np.load(tmp_path / "s" / "lim.npz") as data:  # (the scene keeps its name)
         assert "notes" not in data.files
+
+
+def test_extended_precision_receptance_with_modal_damping_and_unequal_masses():
+    """The mpmath fallback of the certified frf (frf_dense.mp_receptance) with modal damping on masses ≠ 1,
+    against C = MΦ diag(2ζω) ΦᵀM and Z = K − ω²M + iωC built here in mpmath from the numbers (was: MΦ taken
+    as M^{3/2}e, so H was wrong wherever the fallback ran on such a scene)."""
+    import mpmath
+
+    from springchain.numeric.elements import Elements
+    from springchain.numeric.frf_dense import mp_receptance
+
+    m, k, zeta = [2.0, 5.0, 0.5], [3.0, 1.5, 40.0], [0.05, 0.1, 0.02]
+    ends = np.array([[-1, 0], [0, 1], [1, 2]])
+    el = Elements(np.array(m), ends, np.array(k), np.zeros((0, 2), dtype=np.intp), np.zeros(0), None,
+                  np.array(zeta))
+    omegas = np.array([0.3, 0.9, 1.7, 9.0])
+    got = mp_receptance(el, omegas, 0, 2)
+    with mpmath.workdps(40):
+        M = mpmath.diag(m)
+        K = mpmath.matrix([[k[0] + k[1], -k[1], 0], [-k[1], k[1] + k[2], -k[2]], [0, -k[2], k[2]]])
+        s = [1 / mpmath.sqrt(v) for v in m]  # D = M^-1/2 K M^-1/2 = E diag(ω²) Eᵀ, Φ = M^-1/2 E
+        w2, E = mpmath.eigsy(mpmath.matrix([[K[i, j] * s[i] * s[j] for j in range(3)] for i in range(3)]))
+        order = sorted(range(3), key=lambda j: w2[j])
+        Phi = mpmath.matrix([[E[i, j] * s[i] for j in order] for i in range(3)])
+        w2 = [w2[j] for j in order]
+        G = mpmath.diag([2 * mpmath.mpf(z) * mpmath.sqrt(v) for z, v in zip(zeta, w2)])
+        C = M * Phi * G * Phi.T * M
+        want = []
+        for w in omegas.tolist():
+            Z = K - w * w * M + mpmath.mpc(0, w) * C
+            want.append(complex(mpmath.lu_solve(Z, mpmath.matrix([1, 0, 0]))[2]))
+    np.testing.assert_allclose(got, np.array(want), rtol=1e-13)
