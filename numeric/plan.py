@@ -353,8 +353,8 @@ class Planner(Horizon):
                     return cache[key]
         laws = {}
         if adaptive:
-            for m in registry.methods(Kind.ADAPTIVE):
-                if m.refusal(system) is None and m.name != registry.COMPILED_PEER:  # a benchmark peer only
+            for m in registry.planned(Kind.ADAPTIVE):
+                if m.refusal(system) is None:
                     laws[m] = calibrate_adaptive(m, system, x0, v0, t_pilot, dt_out, reference)
         planner = cls(float(t_end), float(dt_out), system.n, model, exact, tuple(steps_), responses, costs,
                       tuple(props), laws, modal_seconds)

@@ -257,8 +257,8 @@ class PilotPlanner(Horizon):
             def reference(t):
                 return ref.at(t)[0]
 
-            for m in registry.methods(Kind.ADAPTIVE, quiet, only=methods):
-                if m.refusal(system) is None and m.name != registry.COMPILED_PEER:  # a benchmark peer only
+            for m in registry.planned(Kind.ADAPTIVE, quiet, only=methods):
+                if m.refusal(system) is None:
                     laws_a[m] = calibrate_adaptive(m, system, x0, v0, g.t_end, g.h, reference, scale=size)
         return cls(float(t_end), float(dt_out), system.n, w_max, laws, costs, laws_a, exact_seconds,
                    exact_error, ref.description, ref.exact)

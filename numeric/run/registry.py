@@ -158,6 +158,16 @@ def methods(kind: Kind | None = None, options: Options = Options(),
     return tuple(method(name, options) for name in names(kind) if not only or name in only)
 
 
+#: Benchmark peers: ``bench`` times them beside the others, ``plan`` never proposes them.
+PEERS_ONLY = frozenset({COMPILED_PEER})
+
+
+def planned(kind: Kind | None = None, options: Options = Options(),
+            only: Collection[str] | None = None) -> tuple[Method, ...]:
+    """:func:`methods` that ``plan`` may propose (the benchmark peers left out)."""
+    return tuple(m for m in methods(kind, options, only) if m.name not in PEERS_ONLY)
+
+
 def register(name: str, kind: Kind, target: str | type, runner: str | type | None = None) -> None:
     """Add a method (an extension's integrator, and for a step method the class that runs it); its
     name must be new."""
@@ -182,4 +192,5 @@ def registered(name: str, kind: Kind, target: str | type) -> Iterator[None]:
 
 
 __all__ = ["Entry", "EXACT", "DEFAULT_STEP", "REFERENCE_ADAPTIVE", "REFERENCE_STEP", "names", "entry",
-           "implementation", "classes", "method", "methods", "register", "unregister", "registered"]
+           "implementation", "classes", "method", "methods", "planned", "PEERS_ONLY", "COMPILED_PEER", "register",
+           "unregister", "registered"]
