@@ -320,7 +320,7 @@ def _scalar_tension_lines(model, c: _Context) -> tuple[list[str], list[str]]:
     NumPy ``spring_tensions``), then ``_out[i] = (Σ ±_t<j> + m_i g) / m_i``; and the scalar helpers they call."""
     from .law_helpers import SCALAR
     from .potential import D
-    from .potential_code import dense_law_exprs, helpers_needed
+    from .potential_code import dense_law_exprs, scalar_helper_names
 
     tensions = dense_law_exprs(model)[0]
     lines = []
@@ -339,7 +339,7 @@ def _scalar_tension_lines(model, c: _Context) -> tuple[list[str], list[str]]:
             sums[b] -= tj
     gravity = model.force_expressions(Effect.GRAVITY)
     lines += [f"    _out[{i}] = {c.p((s + g) / m)}" for i, (s, g, m) in enumerate(zip(sums, gravity, model.masses))]
-    return lines, sorted(SCALAR[h] for h in helpers_needed(tensions))
+    return lines, scalar_helper_names(tensions)
 
 
 def _incidence_lines(c: _Context, arg: str, ends: str, constants: str, *, cubic: bool,

@@ -195,7 +195,19 @@ def chain_law_lines(model, sig: str) -> list[str]:
              '    """Static equilibrium x_eq, shape (n,): 0 (every chain springchain accepts is at rest there)."""',
              "    return numpy.zeros(n)"]
     lines += helper_lines([energy, force])
+    scalar = scalar_helper_names([force])
+    if scalar:  # the fused kernels call the tension on one float (numeric.potential_law)
+        from .law_helpers import helper_source
+
+        lines += ["", "", *helper_source(scalar).rstrip("\n").split("\n")]
     return lines
+
+
+def scalar_helper_names(exprs) -> list[str]:
+    """The scalar forms (``_expm1mx_s``, ...) of the helpers ``exprs`` call."""
+    from .law_helpers import SCALAR
+
+    return sorted(SCALAR[h] for h in helpers_needed(exprs))
 
 
 def chain_tension_code(model, kw: str, d: str, index: str) -> str:
@@ -205,4 +217,4 @@ def chain_tension_code(model, kw: str, d: str, index: str) -> str:
 
 
 __all__ = ["dense_law_lines", "dense_acceleration_lines", "dense_energy_lines", "dense_spring_constant_lines",
-           "chain_law_lines", "chain_tension_code", "helper_lines"]
+           "chain_law_lines", "chain_tension_code", "helper_lines", "scalar_helper_names"]

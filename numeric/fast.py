@@ -47,7 +47,7 @@ from ..generated.contract import End
 from .system import interface
 from .errors import RunRefused
 from .fast_coefficients import ChainCoefficients
-from .fast_kernels import BLOCK_ELEMENTS, _compiled, _compiled_for_laws, _Mode, available, stream_update
+from .fast_kernels import BLOCK_ELEMENTS, _compiled, _Mode, available, stream_update
 
 
 class Backend(enum.Enum):
@@ -127,7 +127,8 @@ class FusedVerlet:
         return self.acceleration(x)
 
     def _kernels(self):
-        k = _compiled_for_laws() if self.coefficients.law is not None else _compiled()
+        law = self.coefficients.law
+        k = _compiled() if law is None else law.kernels
         return k.force, k.sweep, k.half_kick
 
     # -- building blocks ------------------------------------------------------------------

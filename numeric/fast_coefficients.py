@@ -36,10 +36,10 @@ class ChainCoefficients:
         Their cubic coefficients (0 if absent or linear).
     uniform : bool
         Coefficients independent of the index (arrays of length 1).
-    law : callable or None
-        A spring potential's tension V'(d), compiled by numba with the parameters bound
-        (:func:`numeric.potential_law.compiled_law`); then ``k`` holds the stiffness V''(0) (for the
-        ω_max bound) and the kernels get the law in place of k d + k3 d³. None otherwise.
+    law : numeric.potential_law.CompiledLaw or None
+        A spring potential's kernels and parameter values (:func:`numeric.potential_law.compiled_law`);
+        then ``k`` holds the stiffness V''(0) (for the ω_max bound) and the law's kernels take the
+        parameter values in k3's place (V'(d) instead of k d + k3 d³). None otherwise.
     """
 
     n: int
@@ -131,7 +131,8 @@ class ChainCoefficients:
         if self.law is not None:  # the law is the whole tension: linear coefficients 0, the law in k3's place
             im = float(self.inv_mass[0]) if self.uniform else self.inv_mass
             k = 0.0 if self.uniform else np.zeros_like(self.k)
-            return (self.n, im, k, self.law, 0.0, 0.0, self.law, self.law, self.left.code, self.right.code)
+            c = self.law.args
+            return (self.n, im, k, c, 0.0, 0.0, c, c, self.left.code, self.right.code)
         if self.uniform:
             im, k = float(self.inv_mass[0]), float(self.k[0])
             k3 = None if self.k3 is None else float(self.k3[0])

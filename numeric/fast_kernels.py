@@ -60,9 +60,15 @@ def _rows(c, a, b):
 
 
 def _cubic(s, c, i, d):
-    """``s + c_i d³``, ``s`` when c is None (a linear chain), ``s + c(d)`` when c is a compiled spring law
-    (numba overload)."""
+    """``s + c_i d³``, ``s`` when c is None (a linear chain), ``s + _law(d, *c)`` when c is a tuple: the
+    parameter values of a spring potential (numba overload)."""
     return s if c is None else s + _at(c, i) * d * d * d
+
+
+#: A spring potential's tension V'(d, *parameters), compiled. None here: the copy of this module that
+#: :mod:`numeric.potential_law` writes for a law binds it (its kernels are then called with the
+#: parameter values as the cubic coefficients).
+_law = None
 
 
 def _scalar(c):
@@ -337,8 +343,8 @@ def _compiled():
     def _cubic_ol(s, c, i, d):
         if isinstance(c, (types.NoneType, types.Omitted)):
             return lambda s, c, i, d: s
-        if isinstance(c, types.Dispatcher):  # a spring potential's compiled tension V'(d) (s is 0 then)
-            return lambda s, c, i, d: s + c(d)
+        if isinstance(c, types.BaseTuple):  # a spring potential's parameters (s is 0 then)
+            return lambda s, c, i, d: s + _law(d, *c)
         if is_array(c):
             return lambda s, c, i, d: s + c[i] * d * d * d
         return lambda s, c, i, d: s + c * d * d * d
@@ -365,35 +371,6 @@ def _compiled():
 
 
 _INNER = ("_spring", "_apply", "_kick_end", "_kick_flat", "_kick_row_batch", "_kick_rows", "_drift_rows", "_leapfrog_pair")
-
-
-@functools.lru_cache(maxsize=1)
-def _compiled_for_laws():
-    """The same kernels compiled without numba's disk cache, for chains whose spring law is itself a
-    compiled function (:mod:`numeric.potential_law`).
-
-    A signature holding a function's type cannot be pickled once that function is gone, so a cached
-    specialisation would corrupt numba's cache index for every later process; these live in the
-    process only. The implementations are rebound (``types.FunctionType``, no exec) to a copy of this
-    module's globals in which the inner kernels are the uncached ones.
-    """
-    import types as pytypes
-
-    import numba
-
-    _compiled()  # registers the overloads
-    g = dict(globals())
-
-    def rebind(fn):
-        return pytypes.FunctionType(fn.__code__, g, fn.__name__, fn.__defaults__, fn.__closure__)
-
-    def jit(fn):
-        return numba.njit(cache=False)(rebind(fn))
-
-    for name in _INNER:
-        g[name] = jit(globals()[name + "_impl"])
-    return pytypes.SimpleNamespace(force=jit(_force_impl), sweep=jit(_sweep_impl), half_kick=jit(_half_kick_impl),
-                                   stream=jit(_stream_impl))
 
 
 def stream_update(x: np.ndarray, v: np.ndarray, c: float = 1e-12) -> None:

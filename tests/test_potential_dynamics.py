@@ -11,7 +11,11 @@ substituting it into the equations of motion with SymPy).
 
 from __future__ import annotations
 
+import json
 import math
+import os
+import subprocess
+import sys
 
 import numpy as np
 import pytest
@@ -113,18 +117,46 @@ def test_law_kernel_equals_numpy_stencil(law, scene_from_text, import_source, mo
             assert np.allclose(xs, xp, rtol=1e-14, atol=1e-15) and np.allclose(vs, vp, rtol=1e-13, atol=1e-15)
 
 
-def test_law_kernels_stay_out_of_numbas_disk_cache():
-    """Kernels specialised on a compiled law are never written to numba's cache: their signature holds a
-    function type, which cannot be pickled once the function is gone (a later run's cache index broke)."""
+def test_law_kernels_are_cached_on_disk_once_per_law(tmp_path):
+    """A spring potential's kernels live in a file of their own (``<cache>/compiled/law_<hash>.py``) with
+    the law bound inside: a second process loads them from numba's disk cache and compiles nothing, and
+    another parameter set of the same law uses the same file (the values are run-time arguments)."""
     from springchain.numeric import fast_kernels
 
     if not fast_kernels.available():
         pytest.skip("numba is not installed")
-    ns = fast_kernels._compiled_for_laws()
-    inner = ns.sweep.py_func.__globals__
-    for d in (ns.force, ns.sweep, ns.half_kick, *(inner[name] for name in fast_kernels._INNER)):
-        assert type(d._cache).__name__ == "NullCache", d
-    assert inner is not vars(fast_kernels)  # the cached kernels of linear chains are untouched
+    env = {**os.environ, "SPRINGCHAIN_CACHE": str(tmp_path / "cache"), "OPENBLAS_NUM_THREADS": "1"}
+    runs = [json.loads(subprocess.run([sys.executable, "-c", _LAW_CHILD], env=env, capture_output=True,
+                                      text=True, check=True).stdout.strip().splitlines()[-1]) for _ in range(2)]
+    assert runs[0]["misses"] > 0 and runs[0]["files"] == 1, runs[0]
+    assert runs[1]["misses"] == 0 and runs[1]["hits"] > 0 and runs[1]["files"] == 1, runs[1]
+    assert runs[0]["x"] == runs[1]["x"]
+    assert runs[0]["x"] != runs[0]["x_other"]  # the second parameter set is a different motion
+
+
+_LAW_CHILD = """
+import json, os, pathlib
+import numpy as np
+from springchain.numeric.fast import Backend, FusedVerlet
+from springchain._modules import load_module
+from springchain._scenes import resolve
+from springchain.derive.scene import load_scene
+
+module, _ = load_module(load_scene(resolve("toda")))
+x = 0.1 * np.sin(np.arange(module.N, dtype=float))
+runs = []
+for params in (None, {"a": 2.0}):
+    fused = FusedVerlet.from_module(module, params, module.N, 0.05, Backend.NUMBA)
+    s = [x.copy(), np.zeros_like(x), fused.force(x.copy())]
+    fused.advance(*s, 50)
+    runs.append(float(s[0].sum()))
+k = fused.coefficients.law.kernels
+stats = [d.stats for d in (k.force, k.sweep, k.half_kick)]
+files = list((pathlib.Path(os.environ["SPRINGCHAIN_CACHE"]) / "compiled").glob("law_*.py"))
+print(json.dumps({"misses": sum(sum(s.cache_misses.values()) for s in stats),
+                  "hits": sum(sum(s.cache_hits.values()) for s in stats),
+                  "files": len(files), "x": runs[0], "x_other": runs[1]}))
+"""
 
 
 def test_energy_bounded_over_a_million_steps(scene_from_text, import_source):
@@ -302,3 +334,27 @@ def test_simulate_cli_modal_energy(tmp_path, capsys):
     assert (tmp_path / "toda-modal-energy.png").exists()
     data = np.load(tmp_path / "toda.npz")
     assert data["modal_energy_verlet"].shape == (5, 128)
+
+
+def test_a_tension_that_calls_a_helper_compiles_with_its_scalar_form(import_source):
+    """A tension that calls ``_expm1mx`` (array form in the module) runs in the law file through the
+    scalar form the module carries: the compiled force equals the NumPy formula on a free chain."""
+    from springchain.derive.law_helpers import helper_source
+    from springchain.generated.contract import End
+    from springchain.numeric.fast_kernels import available
+    from springchain.numeric.potential_law import compiled_law
+
+    if not available():
+        pytest.skip("numba is not installed")
+    src = ("import numpy as _np\nSCENE = 'helper_law'\nPARAMETERS = ('a',)\n\n\n"
+           "def spring_force(_d, a):\n    return a * _d + _expm1mx(_d)\n\n\n"
+           + helper_source({"_expm1mx", "_expm1mx_s"}))
+    mod = import_source(src, "helper_law")
+    law = compiled_law(mod, {"a": 2.0})
+    x = np.array([0.3, -0.2, 0.9, 0.1, -0.7])
+    a = np.empty_like(x)
+    free = End.FREE.code
+    law.kernels.force(x, a, 1, 5, 1.0, 0.0, law.args, 0.0, 0.0, law.args, law.args, free, free)
+    t = mod.spring_force(np.diff(x), 2.0)
+    expected = np.concatenate([[0.0], t]) * -1 + np.concatenate([t, [0.0]])
+    assert np.allclose(a, expected, rtol=1e-14, atol=1e-16)

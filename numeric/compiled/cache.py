@@ -124,22 +124,32 @@ def compiled(module: ModuleType) -> Compiled:
     if key in _LOADED:
         _BY_MODULE[id(module)] = (module, _LOADED[key])
         return _LOADED[key]
+    mod, path = load_text(text, f"sc_{key}")
+    _LOADED[key] = Compiled(mod, path)
+    _BY_MODULE[id(module)] = (module, _LOADED[key])
+    return _LOADED[key]
+
+
+def load_text(text: str, stem: str) -> tuple[ModuleType, Path]:
+    """Write ``text`` to ``<cache>/compiled/<stem>.py`` (once: through a temporary file and a rename) and
+    import it under a private module name, so numba's disk cache sits next to it.
+
+    ``stem`` must name the text's content (a hash of it): a file is never rewritten.
+    """
     root = cache_root()
     root.mkdir(parents=True, exist_ok=True)
-    path = root / f"sc_{key}.py"
+    path = root / f"{stem}.py"
     if not path.exists():
         fd, tmp = tempfile.mkstemp(dir=root, suffix=".tmp")
         with os.fdopen(fd, "w") as fh:
             fh.write(text)
         os.replace(tmp, path)
-    name = f"_springchain_compiled_{key}"
+    name = f"_springchain_compiled_{stem}"
     spec = importlib.util.spec_from_file_location(name, path)
     mod = importlib.util.module_from_spec(spec)
     sys.modules[name] = mod
     spec.loader.exec_module(mod)
-    _LOADED[key] = Compiled(mod, path)
-    _BY_MODULE[id(module)] = (module, _LOADED[key])
-    return _LOADED[key]
+    return mod, path
 
 
 def timed_first_call(c: Compiled, name: str, *args):
@@ -153,4 +163,4 @@ def timed_first_call(c: Compiled, name: str, *args):
     return disp(*args)
 
 
-__all__ = ["Compiled", "compiled", "available", "cache_root", "source_of", "timed_first_call"]
+__all__ = ["Compiled", "compiled", "available", "cache_root", "load_text", "source_of", "timed_first_call"]
