@@ -323,7 +323,8 @@ def _damping_ratios(model: ChainModel, records: list[dict], damped) -> str:
                 "state matrix is used up to 60 masses)")
     if unresolved:
         return (f"damping ratios of {unresolved} modes not given: their decay rate is below 1e-10 of what "
-                "float64 resolves in the modal damping (modes all but confined away from every dashpot)")
+                "float64 resolves in the modal damping (modes all but confined away from every dashpot), and "
+                "extended precision did not settle it (it is tried up to 12 masses)")
     return ""
 
 

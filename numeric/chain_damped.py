@@ -13,9 +13,11 @@ masses, as :mod:`derive.damping_report` does for ``[masses]`` scenes past mpmath
    light ζ of a low mode is not lost in ε·ω_max; modes of a piece the dashpots do not touch (a zero row of G) are undamped by
    structure, ζ = 0 exactly.
 
-ω_n = |λ|, ζ = σ/ω_n, NaN where σ is below 1e-10 of its float64 resolution (:data:`RESOLVED`: a
-mode all but confined away from every dashpot at a contrast of 1e10, ζ = 1e-34 — said, not
-printed); rigid modes have ζ None; an overdamped pair (two real eigenvalues r₁, r₂)
+ω_n = |λ|, ζ = σ/ω_n. Where σ is below 1e-10 of its float64 resolution (:data:`RESOLVED`: a mode
+all but confined away from every dashpot at a contrast of 1e10, ζ = 1e-34; or a light mode beside a
+heavy dashpot, whose ε‖G‖ is large), a chain of at most :data:`MP_MAX` masses takes ζ from the state
+matrix's eigenvalues in mpmath, settled by doubling the digits; what stays unsettled, or a longer
+chain's, is NaN (said, not printed); rigid modes have ζ None; an overdamped pair (two real eigenvalues r₁, r₂)
 gives ω_n = √(r₁r₂), ζ = −(r₁ + r₂)/(2ω_n), ω_d = 0. Longer chains are the caller's to refuse
 (a Rayleigh-only chain has ζ_j = α/(2ω_j) + βω_j/2 in closed form at any length).
 """
@@ -31,6 +33,10 @@ RESOLVED = 1e10 * 64
 #: Largest state (2N) whose eigenpairs are refined in extended precision (Python-level mpmath
 #: residuals: 8 s at 40 states); larger ones keep LAPACK's values with the floor widened to ε‖A‖.
 REFINE_MAX_STATES = 24
+#: Chains of at most this many masses get the ζ float64 leaves unresolved from mpmath (2N states).
+MP_MAX = 12
+#: The most digits that settling tries (40, 80, 160, 320).
+MP_MAX_DIGITS = 320
 _EPS = float(np.finfo(float).eps)
 
 
@@ -89,7 +95,61 @@ def damped_rows(masses: np.ndarray, spring_ends: np.ndarray, stiffness: np.ndarr
             wn = float(np.sqrt(r1 * r2))
             rows.append((wn, float(-(r1 + r2) / (2 * wn)), 0.0))
     rows.sort(key=lambda r: r[0])
-    return rows[:n]
+    rows = rows[:n]
+    if el.n <= MP_MAX and any(z is not None and z != z for _, z, _ in rows):
+        rows = _settle_unresolved(el, rows)
+    return rows
+
+
+def _mp_eigenvalues(el, dps: int) -> list:
+    """Eigenvalues of the state matrix ``[[0, I], [−D, −M^-1/2 C M^-1/2]]`` assembled exactly from the
+    elements (float inputs read as exact rationals) and solved by mpmath at ``dps`` digits."""
+    import mpmath
+
+    from .frf_dense import _mp
+
+    n = el.n
+    with mpmath.workdps(dps):
+        r = [1 / mpmath.sqrt(_mp(m, mpmath)) for m in el.masses.tolist()]
+        A = mpmath.zeros(2 * n, 2 * n)
+        for i in range(n):
+            A[i, n + i] = 1
+        for ends, values, col in ((el.spring_ends, el.stiffness, 0), (el.damper_ends, el.damping, n)):
+            for (a, b), k in zip(ends.tolist(), values.tolist()):
+                if a == b:
+                    continue
+                k = _mp(k, mpmath)
+                for i, si in ((a, 1), (b, -1)):
+                    for j, sj in ((a, 1), (b, -1)):
+                        if i >= 0 and j >= 0:
+                            A[n + i, col + j] -= si * sj * k * r[i] * r[j]
+        return list(mpmath.eig(A, left=False, right=False))
+
+
+def _settle_unresolved(el, rows: list[tuple]) -> list[tuple]:
+    """Rows whose ζ float64 leaves unresolved (NaN) get it from the state matrix's eigenvalues in mpmath
+    at doubling precision (40 … :data:`MP_MAX_DIGITS` digits): the eigenvalue nearest the row's
+    ``ω_n, ω_d``, accepted once two precisions agree on ζ to 1e-20 relative; else it stays NaN."""
+    import mpmath
+
+    def zeta_of(lam, wn, wd):
+        v = min((v for v in lam if v.imag > 0), key=lambda v: abs(complex(v) - complex(-0.0, wd)) / wn,
+                default=None)
+        return None if v is None else -v.real / abs(v)
+
+    todo = [k for k, (_, z, _) in enumerate(rows) if z is not None and z != z]
+    prev, dps = None, 40
+    while todo and dps <= MP_MAX_DIGITS:
+        lam = _mp_eigenvalues(el, dps)
+        now = {k: zeta_of(lam, rows[k][0], rows[k][2]) for k in todo}
+        if prev is not None:
+            for k in list(todo):
+                a, b = now[k], prev[k]
+                if a is not None and b is not None and a > 0 and abs(a - b) <= mpmath.mpf("1e-20") * abs(a):
+                    rows[k] = (rows[k][0], float(a), rows[k][2])
+                    todo.remove(k)
+        prev, dps = now, 2 * dps
+    return rows
 
 
 __all__ = ["DENSE_MAX", "damped_rows"]

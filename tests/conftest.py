@@ -1,8 +1,8 @@
 """Shared fixtures for the springchain test suite.
 
 * matplotlib is forced to the non-interactive Agg backend before anything imports it;
-* ``SPRINGCHAIN_CACHE`` points at a per-session temporary folder, so no test writes
-  into the user's cache (and a subprocess started by a test inherits it); ``fresh_cache``
+* ``SPRINGCHAIN_CACHE`` points at a temporary folder of the run (shared by its xdist workers), so no
+  test writes into the user's cache (and a subprocess started by a test inherits it); ``fresh_cache``
   gives one test a cache of its own;
 * a hypothesis profile ``ci`` (no deadline, a moderate number of examples) is
   registered and loaded unless ``HYPOTHESIS_PROFILE`` names another one;
@@ -51,8 +51,14 @@ REFERENCE_STEPS = 1000
 
 @pytest.fixture(scope="session", autouse=True)
 def _session_cache(tmp_path_factory):
-    """Per-session SPRINGCHAIN_CACHE (restored afterwards)."""
-    cache = tmp_path_factory.mktemp("springchain-cache")
+    """Per-run SPRINGCHAIN_CACHE (restored afterwards), one for all pytest-xdist workers of the run: a
+    scene's module is derived and its compiled loops are compiled once, not once per worker (every
+    file in it is written through a temporary file and a rename, numba's cache files too)."""
+    if os.environ.get("PYTEST_XDIST_WORKER"):  # workers' base temps are folders of the run's
+        cache = tmp_path_factory.getbasetemp().parent / "springchain-cache"
+        cache.mkdir(exist_ok=True)
+    else:
+        cache = tmp_path_factory.mktemp("springchain-cache")
     with pytest.MonkeyPatch.context() as mp:
         mp.setenv("SPRINGCHAIN_CACHE", str(cache))
         yield cache
