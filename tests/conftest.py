@@ -4,8 +4,9 @@
 * ``SPRINGCHAIN_CACHE`` points at a temporary folder of the run (shared by its xdist workers), so no
   test writes into the user's cache (and a subprocess started by a test inherits it); ``fresh_cache``
   gives one test a cache of its own;
-* a hypothesis profile ``ci`` (no deadline, a moderate number of examples) is
-  registered and loaded unless ``HYPOTHESIS_PROFILE`` names another one;
+* a hypothesis profile ``ci`` (no deadline, a moderate number of examples, derandomized: the
+  same draws every run) is registered and loaded unless ``HYPOTHESIS_PROFILE`` names another one
+  (``explore``: fresh random draws at each test's own example count; ``thorough``: 500 random draws);
 * fixtures for the repository root, the bundled reference scene, its checked-in
   generated module and the :class:`numeric.system.System` bound to it, plus
   helpers that build scenes from TOML text and import rendered module source (``chain_module_of``
@@ -33,11 +34,14 @@ from hypothesis import HealthCheck, settings  # noqa: E402
 
 settings.register_profile(
     "ci",
+    derandomize=True,  # the same draws every run: CI's verdict and time do not depend on luck
     deadline=None,
     max_examples=int(os.environ.get("SPRINGCHAIN_HYPOTHESIS_EXAMPLES", "25")),
     suppress_health_check=[HealthCheck.too_slow, HealthCheck.function_scoped_fixture],
 )
-settings.register_profile("thorough", deadline=None, max_examples=500)
+settings.register_profile("thorough", deadline=None, max_examples=500)  # fresh random draws each run
+settings.register_profile("explore", deadline=None,
+                          suppress_health_check=[HealthCheck.too_slow, HealthCheck.function_scoped_fixture])
 settings.load_profile(os.environ.get("HYPOTHESIS_PROFILE", "ci"))
 
 REPO_ROOT = Path(__file__).resolve().parent.parent

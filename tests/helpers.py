@@ -89,10 +89,11 @@ def scene_toml(name: str, parameters: dict, *, masses: dict | None = None, sprin
     return "\n".join(lines) + "\n"
 
 
-#: The initial state of the chain test scenes: the lowest wall-wall mode's shape, at rest.
-#: Scale of the ``slow`` tests (``SPRINGCHAIN_SLOW_BUDGET``, default 1: the bounded form CI runs).
-SLOW_BUDGET = float(os.environ.get("SPRINGCHAIN_SLOW_BUDGET", "1"))
+#: Scale of the ``slow`` tests (``SPRINGCHAIN_SLOW_BUDGET``; default 0.25: the bounded form CI runs, a
+#: quarter of the scale 1 that the README's numbers were first measured at; 2 or more: the full form).
+SLOW_BUDGET = float(os.environ.get("SPRINGCHAIN_SLOW_BUDGET", "0.25"))
 
+#: The initial state of the chain test scenes: the lowest wall-wall mode's shape, at rest.
 CHAIN_INITIAL = {"x": "0.01*sin(pi*(i + 1)/(n + 1))", "v": "0"}
 
 

@@ -47,7 +47,7 @@ def scene_text(masses, params, *, damper: bool, force: bool, gravity: bool) -> s
                       initial={"x": [0.1] + [0.0] * (n - 1), "v": [0.0] * n}, simulation={"dt": 0.01, "steps": 40})
 
 
-@settings(max_examples=25, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture,
+@settings(max_examples=12, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture,
                                                                  HealthCheck.too_slow])
 @given(masses=st.lists(st.sampled_from(MASS_POOL), min_size=1, max_size=3, unique=True),
        params=st.lists(st.sampled_from(PARAM_POOL), min_size=4, max_size=7, unique=True),
