@@ -203,12 +203,15 @@ def run_bench(system: System, x0: np.ndarray, v0: np.ndarray, t_end: float, dt_o
         return run_pilot_bench(system, x0, v0, t_end, dt_out, scene, config, progress, methods, settings)
     prog = progress_reporter(progress)
     notes: list[str] = []
+    selected = {m for m in registry.methods(options=Options(progress=False, settings=settings), only=methods)
+                if peer_filter(config, methods)(m)}
+    only = frozenset(m.name for m in selected)  # the planner models these only
     prog.say(f"measuring costs and building models for {scene or 'the scene'} (t = 0 … {t_end:g})")
     if exact:
         reference = ExtendedModalReference.from_system(system, x0, v0)
         spacing = dt_out
         planner = Planner.for_system(system, x0, v0, t_end, dt_out,
-                                     reference=lambda t: reference.at(t)[0], settings=settings)
+                                     reference=lambda t: reference.at(t)[0], settings=settings, only=only)
     else:
         lin = system.spectrum
         w = float(lin.omega_max) if lin.omega.size else 1.0
@@ -225,11 +228,9 @@ def run_bench(system: System, x0: np.ndarray, v0: np.ndarray, t_end: float, dt_o
         notes.append(f"no exact solution: error measured at the recorded steps on the grid t = k·{spacing:g} "
                      f"(steps h = j·{spacing:g} record every step, h = {spacing:g}/m every m-th)")
         planner = Planner.for_system(system, x0, v0, t_end, spacing,
-                                     reference=lambda t: reference.at(t)[0], settings=settings)
+                                     reference=lambda t: reference.at(t)[0], settings=settings, only=only)
     ctx = _Context(system, x0, v0, t_end, dt_out, planner, reference, exact, spacing, config, prog,
                    float(system.energy(x0[:, None], v0[:, None])[0]))
-    selected = {m for m in registry.methods(options=Options(progress=False, settings=settings), only=methods)
-                if peer_filter(config, methods)(m)}
 
     jobs: list[Callable[[], BenchRecord]] = []
     if exact and any(m.kind is Kind.EXACT for m in selected):

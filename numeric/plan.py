@@ -294,7 +294,8 @@ class Planner(Horizon):
 
     @classmethod
     def for_system(cls, system: System, x0: np.ndarray, v0: np.ndarray, t_end: float, dt_out: float,
-                   adaptive: bool = True, reference: Callable | None = None, settings: tuple = ()) -> "Planner":
+                   adaptive: bool = True, reference: Callable | None = None, settings: tuple = (),
+                   only: frozenset | None = None) -> "Planner":
         """Measure costs and build the models (call inside :func:`~numeric.timing.single_threaded_blas`).
 
         Parameters
@@ -305,6 +306,8 @@ class Planner(Horizon):
             solution (linear scenes) or DOP853 at rtol 1e-13 (others).
         settings : tuple of (str, float), optional
             Method settings (HHT's ``alpha``: :attr:`~numeric.run.protocol.Options.settings`), checked by the caller.
+        only : frozenset of str, optional
+            Names of the methods to measure and model (bench's selection); default every planned one.
         """
         if system.n > MAX_MASSES:
             raise RunRefused(f"plan and bench use the dense modes of the chain: at most {MAX_MASSES} masses "
@@ -317,7 +320,7 @@ class Planner(Horizon):
         steps_, responses, costs, props = [], {}, {}, []
         h_probe = min(dt_out, 0.5 / max(model.omega_max, 1e-300))
         for m in registry.methods(Kind.STEP, Options(progress=False, settings=settings)):
-            if m.refusal(system):
+            if (only is not None and m.name not in only) or m.refusal(system):
                 continue
             if not math.isfinite(m.traits.order):
                 if exact:
@@ -354,7 +357,7 @@ class Planner(Horizon):
         laws = {}
         if adaptive:
             for m in registry.planned(Kind.ADAPTIVE):
-                if m.refusal(system) is None:
+                if (only is None or m.name in only) and m.refusal(system) is None:
                     laws[m] = calibrate_adaptive(m, system, x0, v0, t_pilot, dt_out, reference)
         planner = cls(float(t_end), float(dt_out), system.n, model, exact, tuple(steps_), responses, costs,
                       tuple(props), laws, modal_seconds)
