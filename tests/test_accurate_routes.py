@@ -26,7 +26,7 @@ import accuracy_reference as ref
 from springchain.derive.damping_report import ZETA_FLOOR
 
 from helpers import SLOW_BUDGET as BUDGET  # noqa: E402
-EXAMPLES = int(os.environ.get("SPRINGCHAIN_HYPOTHESIS_EXAMPLES", "6"))
+EXAMPLES = int(os.environ.get("SPRINGCHAIN_HYPOTHESIS_EXAMPLES", "4"))
 _SETTINGS = dict(deadline=None, suppress_health_check=[HealthCheck.too_slow, HealthCheck.function_scoped_fixture])
 
 #: frf: |H| and phase within this (relative, complex) of the 60-digit solve.

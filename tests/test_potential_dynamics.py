@@ -71,10 +71,10 @@ def test_soliton_solves_the_toda_equations():
 
 
 # -- the compiled law kernels against the module's NumPy stencil ------------------------------------------
-#: The Toda law with the bundled scene's parameter names (c, kappa unused by the law): its generated
-#: spring_force is the bundled one's, so the law's compiled kernels are shared with the soliton tests.
+#: The Toda and FPUT-α laws with the bundled scenes' parameter names (c, kappa unused by the law): their
+#: generated spring_force is the bundled one's, so each law's compiled kernels are compiled once per run.
 LAWS = {"toda": ("a/b*exp(-b*d) + a*d", {"a": 1.0, "b": 1.3, "c": 32.0, "kappa": 1.0}),
-        "fput_b": ("k*d**2/2 + beta*d**4/4", {"k": 1.0, "beta": 0.7})}
+        "fput_a": ("k*d**2/2 + alpha*d**3/3", {"k": 1.0, "alpha": 0.7})}  # the bundled fput_alpha's law text
 
 
 def chain_module(scene_from_text, import_source, name, pot, params, n, left, right):
@@ -162,12 +162,12 @@ print(json.dumps({"misses": sum(sum(s.cache_misses.values()) for s in stats),
 
 
 def test_energy_bounded_over_a_million_steps(scene_from_text, import_source):
-    """Verlet (the fused law kernel) on an FPUT-β chain of 8 masses: 10⁶ steps, energy error bounded
+    """Verlet (the fused law kernel) on an FPUT-α chain of 8 masses: 10⁶ steps, energy error bounded
     at the h² level and not growing (the last tenth's largest error within 1.5 x the first tenth's)."""
     from springchain.numeric.fast import Backend, FusedVerlet, available
 
-    pot, params = LAWS["fput_b"]
-    mod = chain_module(scene_from_text, import_source, "e_fput_b", pot, params, 8, "wall", "wall")
+    pot, params = LAWS["fput_a"]
+    mod = chain_module(scene_from_text, import_source, "e_fput_a", pot, params, 8, "wall", "wall")
     backend = Backend.NUMBA if available() else Backend.NUMPY
     h = 0.1
     fv = FusedVerlet.from_module(mod, None, 8, h, backend)

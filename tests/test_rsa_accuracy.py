@@ -134,7 +134,7 @@ def test_four_masses_contrast_1e10(tmp_path):
 log_value = st.floats(-5.0, 5.0).map(lambda e: float(10.0**e))
 
 
-@settings(max_examples=25, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
+@settings(max_examples=12, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
 @given(n=st.integers(2, 6), data=st.data())
 def test_random_wall_chains(tmp_path, n, data):
     """Masses and stiffnesses over 1e-5 ... 1e5 (contrast up to 1e10), Rayleigh damping."""
