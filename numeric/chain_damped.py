@@ -106,7 +106,7 @@ def _mp_eigenvalues(el, dps: int) -> list:
     elements (float inputs read as exact rationals) and solved by mpmath at ``dps`` digits."""
     import mpmath
 
-    from .frf_dense import _mp
+    from .frf_dense import _mp, mp_stamp
 
     n = el.n
     with mpmath.workdps(dps):
@@ -114,15 +114,8 @@ def _mp_eigenvalues(el, dps: int) -> list:
         A = mpmath.zeros(2 * n, 2 * n)
         for i in range(n):
             A[i, n + i] = 1
-        for ends, values, col in ((el.spring_ends, el.stiffness, 0), (el.damper_ends, el.damping, n)):
-            for (a, b), k in zip(ends.tolist(), values.tolist()):
-                if a == b:
-                    continue
-                k = _mp(k, mpmath)
-                for i, si in ((a, 1), (b, -1)):
-                    for j, sj in ((a, 1), (b, -1)):
-                        if i >= 0 and j >= 0:
-                            A[n + i, col + j] -= si * sj * k * r[i] * r[j]
+        mp_stamp(A, el.spring_ends, el.stiffness, r, mpmath, row=n, col=0, sign=-1)
+        mp_stamp(A, el.damper_ends, el.damping, r, mpmath, row=n, col=n, sign=-1)
         return list(mpmath.eig(A, left=False, right=False))
 
 

@@ -240,20 +240,28 @@ def _mp(v, mpmath):
     return mpmath.mpf(f.numerator) / f.denominator
 
 
-def mp_modes(el: Elements, mpmath) -> tuple[list, list[list]]:
-    """λ = ω² ascending and the physical M-orthonormal shapes φⱼ = M^-1/2 eⱼ (one list per mode), from
-    ``mpmath.eigsy`` of D = M^-1/2 K M^-1/2 assembled exactly from the elements at the current precision."""
-    n = el.n
-    r = [1 / mpmath.sqrt(_mp(m, mpmath)) for m in el.masses.tolist()]
-    D = mpmath.zeros(n, n)
-    for (a, b), k in zip(el.spring_ends.tolist(), el.stiffness.tolist()):
+def mp_stamp(target, ends: np.ndarray, values: np.ndarray, r: list, mpmath, *, row: int = 0, col: int = 0,
+             sign: int = 1) -> None:
+    """Add ``sign · Σ k r_i r_j (e_a − e_b)(e_a − e_b)ᵀ`` over the elements (ends ``(a, b)``, -1 a wall; k
+    read as exact binary fractions) into ``target`` at block offset ``(row, col)``: the mass-scaled
+    M^-1/2 K M^-1/2 (or C) assembled exactly at the current precision."""
+    for (a, b), k in zip(ends.tolist(), values.tolist()):
         if a == b:
             continue
         k = _mp(k, mpmath)
         for i, si in ((a, 1), (b, -1)):
             for j, sj in ((a, 1), (b, -1)):
                 if i >= 0 and j >= 0:
-                    D[i, j] += si * sj * k * r[i] * r[j]
+                    target[row + i, col + j] += sign * si * sj * k * r[i] * r[j]
+
+
+def mp_modes(el: Elements, mpmath) -> tuple[list, list[list]]:
+    """λ = ω² ascending and the physical M-orthonormal shapes φⱼ = M^-1/2 eⱼ (one list per mode), from
+    ``mpmath.eigsy`` of D = M^-1/2 K M^-1/2 assembled exactly from the elements at the current precision."""
+    n = el.n
+    r = [1 / mpmath.sqrt(_mp(m, mpmath)) for m in el.masses.tolist()]
+    D = mpmath.zeros(n, n)
+    mp_stamp(D, el.spring_ends, el.stiffness, r, mpmath)
     lam, E = mpmath.eigsy(D)
     order = sorted(range(n), key=lambda j: lam[j])
     return [lam[j] for j in order], [[E[i, j] * r[i] for i in range(n)] for j in order]
