@@ -122,19 +122,18 @@ def _mp_eigenvalues(el, dps: int) -> list:
 def _settle_unresolved(el, rows: list[tuple]) -> list[tuple]:
     """Rows whose ζ float64 leaves unresolved (NaN) get it from the state matrix's eigenvalues in mpmath
     at doubling precision (40 … :data:`MP_MAX_DIGITS` digits): the eigenvalue nearest the row's
-    ``ω_n, ω_d``, accepted once two precisions agree on ζ to 1e-20 relative; else it stays NaN."""
+    ``i·ω_d``, accepted once two precisions agree on ζ to 1e-20 relative; else it stays NaN."""
     import mpmath
 
-    def zeta_of(lam, wn, wd):
-        v = min((v for v in lam if v.imag > 0), key=lambda v: abs(complex(v) - complex(-0.0, wd)) / wn,
-                default=None)
+    def zeta_of(lam, wd):  # of the eigenvalue nearest the row's i·ω_d (upper half-plane)
+        v = min((v for v in lam if v.imag > 0), key=lambda v: abs(complex(v) - 1j * wd), default=None)
         return None if v is None else -v.real / abs(v)
 
     todo = [k for k, (_, z, _) in enumerate(rows) if z is not None and z != z]
     prev, dps = None, 40
     while todo and dps <= MP_MAX_DIGITS:
         lam = _mp_eigenvalues(el, dps)
-        now = {k: zeta_of(lam, rows[k][0], rows[k][2]) for k in todo}
+        now = {k: zeta_of(lam, rows[k][2]) for k in todo}
         if prev is not None:
             for k in list(todo):
                 a, b = now[k], prev[k]

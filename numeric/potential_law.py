@@ -86,16 +86,21 @@ def compiled_law(module: ModuleType, values: dict[str, float]) -> CompiledLaw | 
 
     if not available():
         return None
-    text = law_source(module)
-    key = hashlib.sha256(text.encode()).hexdigest()[:20]
-    law = _LAWS.get(key)
-    if law is None:
-        from .compiled.cache import load_text
+    known = _BY_MODULE.get(id(module))
+    if known is None or known[0] is not module:  # the text is read and hashed once per module object
+        text = law_source(module)
+        key = hashlib.sha256(text.encode()).hexdigest()[:20]
+        if key not in _LAWS:
+            from .compiled.cache import load_text
 
-        mod, path = load_text(text, f"law_{key}")
-        law = _LAWS[key] = (mod._compiled(), str(path))
-    return CompiledLaw(law[0], tuple(float(values[p]) for p in module.PARAMETERS), law[1])
+            mod, path = load_text(text, f"law_{key}")
+            _LAWS[key] = (mod._compiled(), str(path))
+        known = _BY_MODULE[id(module)] = (module, _LAWS[key])
+    kernels, path = known[1]
+    return CompiledLaw(kernels, tuple(float(values[p]) for p in module.PARAMETERS), path)
 
 
 #: The kernels of this process by the hash of their file's text: (namespace, path).
 _LAWS: dict = {}
+#: id(generated module) -> (module, its entry of _LAWS).
+_BY_MODULE: dict = {}
