@@ -47,6 +47,10 @@ class _Mode(enum.IntEnum):
 
 _FREE, _WALL, _RING = End.FREE.code, End.WALL.code, End.RING.code
 _VERLET, _LEAPFROG, _FORCE = int(_Mode.VERLET), int(_Mode.LEAPFROG), int(_Mode.FORCE)
+#: Integer constants passed to the inner kernels go through ``_int`` (``np.intp``): numba types a bare
+#: ``0`` or a global constant as a literal and compiles the callee once more for each literal value;
+#: ``_int(0)`` is a plain int64, so every call site shares one compiled kick (half the compile time).
+_int = np.intp
 
 
 def _at(c, i):
@@ -163,7 +167,7 @@ def _kick_rows_impl(x, v, a, r0, r1, nb, n, im, k, k3, kl, kr, k3l, k3r, left, r
     if r1 <= r0:
         return
     if r0 == 0:
-        _kick_end(x, v, a, 0, nb, n, im, k, k3, kl, kr, k3l, k3r, left, right, c, mode)
+        _kick_end(x, v, a, r0, nb, n, im, k, k3, kl, kr, k3l, k3r, left, right, c, mode)
         r0 = 1
     last = r1 == n and r0 <= n - 1
     if last:
@@ -190,7 +194,7 @@ def _row(c, i):
 
 def _force_impl(x, a, nb, n, im, k, k3, kl, kr, k3l, k3r, left, right):
     """a ← a(x) for all rows."""
-    _kick_rows(x, a, a, 0, n, nb, n, im, k, k3, kl, kr, k3l, k3r, left, right, 0.0, _FORCE)
+    _kick_rows(x, a, a, _int(0), n, nb, n, im, k, k3, kl, kr, k3l, k3r, left, right, 0.0, _int(_FORCE))
 
 
 def _drift_rows_impl(x, w, r0, r1, nb, h):
@@ -247,7 +251,7 @@ def _sweep_impl(xi, vi, ai, xo, vo, ao, inplace, nb, n, im, k, k3, kl, kr, k3l, 
             lo = hi
         _kick_rows(xo, vo, ao, n - 1, n, nb, n, im, k, k3, kl, kr, k3l, k3r, left, right, c, mode)
         if first == 1 and n > 1:
-            _kick_rows(xo, vo, ao, 0, 1, nb, n, im, k, k3, kl, kr, k3l, k3r, left, right, c, mode)
+            _kick_rows(xo, vo, ao, _int(0), _int(1), nb, n, im, k, k3, kl, kr, k3l, k3r, left, right, c, mode)
 
 
 def _leapfrog_pair_impl(x, w, rows, nb, n, im, k, k3, kl, kr, k3l, k3r, left, right, h):
@@ -264,14 +268,14 @@ def _leapfrog_pair_impl(x, w, rows, nb, n, im, k, k3, kl, kr, k3l, k3r, left, ri
         hi = min(lo + rows, n)
         _drift_rows(x, w, lo, hi, nb, h)
         _kick_rows(x, w, w, max(lo - 1, 0), min(hi - 1, n - 1), nb, n, im, k, k3, kl, kr, k3l, k3r, left, right,
-                   h, _LEAPFROG)
+                   h, _int(_LEAPFROG))
         _drift_rows(x, w, max(lo - 2, 0), max(hi - 2, 0), nb, h)
         _kick_rows(x, w, w, max(lo - 3, 0), max(hi - 3, 0), nb, n, im, k, k3, kl, kr, k3l, k3r, left, right,
-                   h, _LEAPFROG)
+                   h, _int(_LEAPFROG))
         lo = hi
-    _kick_rows(x, w, w, n - 1, n, nb, n, im, k, k3, kl, kr, k3l, k3r, left, right, h, _LEAPFROG)
+    _kick_rows(x, w, w, n - 1, n, nb, n, im, k, k3, kl, kr, k3l, k3r, left, right, h, _int(_LEAPFROG))
     _drift_rows(x, w, max(n - 2, 0), n, nb, h)
-    _kick_rows(x, w, w, max(n - 3, 0), n, nb, n, im, k, k3, kl, kr, k3l, k3r, left, right, h, _LEAPFROG)
+    _kick_rows(x, w, w, max(n - 3, 0), n, nb, n, im, k, k3, kl, kr, k3l, k3r, left, right, h, _int(_LEAPFROG))
 
 
 def _half_kick_impl(v, a, c):
