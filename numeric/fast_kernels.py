@@ -226,7 +226,7 @@ def _sweep_impl(xi, vi, ai, xo, vo, ao, inplace, nb, n, im, k, k3, kl, kr, k3l, 
             _leapfrog_pair(xo, vo, rows, nb, n, im, k, k3, kl, kr, k3l, k3r, left, right, h)
         single = steps % 2
     for step in range(single):
-        lo = 0
+        lo = _int(0)
         while lo < n:
             hi = min(lo + rows, n)
             s, t = lo * nb, hi * nb
@@ -263,7 +263,7 @@ def _leapfrog_pair_impl(x, w, rows, nb, n, im, k, k3, kl, kr, k3l, k3r, left, ri
     halo) is still in cache, so the pair moves each row through memory once:
     16 bytes per mass and step. The last rows finish after the loop.
     """
-    lo = 0
+    lo = _int(0)
     while lo < n:
         hi = min(lo + rows, n)
         _drift_rows(x, w, lo, hi, nb, h)

@@ -127,8 +127,8 @@ def newmark_loop(x0, v0, p, h, steps, rec, xs, vs, beta, gamma, alpha, lu, piv, 
     bh2, gh = beta * h * h, gamma * h
     c1, c2 = ap * bh2, ap * gh
     hh_pred, h_pred = (0.5 - beta) * h * h, (1.0 - gamma) * h
-    _store_frame(xs, vs, 0, x, v)
-    j = 1
+    _store_frame(xs, vs, np.intp(0), x, v)
+    j = np.intp(1)
     for i in range(steps):
         t1 = (i + 1) * h
         for r in range(n):

@@ -13,6 +13,8 @@ Conventions of every loop
 Strang splitting the fixed-step loops use (as :class:`numeric.effects.EffectSplitting`).
 Frames are written into the preallocated ``xs``, ``vs`` (F, N) at the step indices ``rec``
 (increasing, ``rec[0] = 0``); time is ``t = i·h`` at step i.
+Integer constants handed to a helper, and counters that start from one, are ``np.intp(...)``:
+numba compiles a helper once more for every literal integer it is called with.
 """
 
 import numpy as np
@@ -47,9 +49,9 @@ def verlet_loop(x0, v0, p, h, steps, rec, xs, vs, E):
     a, an, tmp = np.empty(n), np.empty(n), np.empty(n)
     _force(x, 0.0, a, p)
     hh, h2 = 0.5 * h * h, 0.5 * h
-    _store(xs, vs, 0, x, v)
+    _store(xs, vs, np.intp(0), x, v)
     damped = E.shape[0] > 0  # tested once: an undamped run then calls no damping helper (2x per step)
-    j = 1
+    j = np.intp(1)
     for i in range(steps):
         if damped:
             _half_damp(v, E, tmp)
@@ -74,9 +76,9 @@ def kahan_verlet_loop(x0, v0, p, h, steps, rec, xs, vs, E):
     cx, cv = np.zeros(n), np.zeros(n)
     _force(x, 0.0, a, p)
     half = 0.5 * h
-    _store(xs, vs, 0, x, v)
+    _store(xs, vs, np.intp(0), x, v)
     damped = E.shape[0] > 0
-    j = 1
+    j = np.intp(1)
     for i in range(steps):
         if damped:
             _half_damp(v, E, tmp)
@@ -112,10 +114,10 @@ def splitting_loop(x0, v0, p, h, steps, rec, xs, vs, E, kicks, drifts, nodes):
     x, v = x0.copy(), v0.copy()
     a, tmp = np.empty(n), np.empty(n)
     _force(x, 0.0, a, p)
-    _store(xs, vs, 0, x, v)
+    _store(xs, vs, np.intp(0), x, v)
     s = drifts.shape[0]
     damped = E.shape[0] > 0
-    j = 1
+    j = np.intp(1)
     for i in range(steps):
         if damped:
             _half_damp(v, E, tmp)
@@ -158,9 +160,9 @@ def rk4_loop(x0, v0, p, h, steps, rec, xs, vs, E, Ad):
     x2, x3, x4, xt, f = np.empty(n), np.empty(n), np.empty(n), np.empty(n), np.empty(n)
     _force(x, 0.0, a, p)
     h2, h6 = 0.5 * h, h / 6.0
-    _store(xs, vs, 0, x, v)
+    _store(xs, vs, np.intp(0), x, v)
     damped = E.shape[0] > 0
-    j = 1
+    j = np.intp(1)
     for i in range(steps):
         t = i * h
         if damped:
@@ -212,14 +214,15 @@ def dop853_loop(x0, v0, p, t0, t_end, rtol, atol, Ad, A, B, C, E3, E5, ts, max_s
     n = x0.shape[0]
     m = 2 * n
     y = np.empty(m)
-    y[:n] = x0
-    y[n:] = v0
+    for r in range(n):  # element loops, not slice assignment (whose shape check compiles string code)
+        y[r] = x0[r]
+        y[n + r] = v0[r]
     f = np.empty(m)
     g = np.empty(n)
     K = np.empty((16, m))
     F = np.empty((7, m))
     yo = np.empty(m)
-    row = 0
+    row = np.intp(0)
     _rhs(y, t0, p, Ad, f, g)
     evals = 1
     span = abs(t_end - t0)
@@ -270,7 +273,7 @@ def dop853_loop(x0, v0, p, t0, t_end, rtol, atol, Ad, A, B, C, E3, E5, ts, max_s
             h_abs = abs(h)
             for r in range(m):
                 K[0, r] = f[r]
-            _rk_stages(y, ys, K, A, C, t, h, p, Ad, g, 1, 12)
+            _rk_stages(y, ys, K, A, C, t, h, p, Ad, g, np.intp(1), np.intp(12))
             for r in range(m):
                 acc = 0.0
                 for q in range(12):
@@ -337,7 +340,7 @@ def _dop853_dense(y, yn, f, K, t, h, p, Ad, A, C, D, g, ys, F, yo, t_eval, row, 
     ``t_eval[row:]`` inside the step (Dop853DenseOutput's Horner form). Returns the next row."""
     m = y.shape[0]
     n = m // 2
-    _rk_stages(y, ys, K, A, C, t, h, p, Ad, g, 13, 16)
+    _rk_stages(y, ys, K, A, C, t, h, p, Ad, g, np.intp(13), np.intp(16))
     for r in range(m):
         dy = yn[r] - y[r]
         F[0, r] = dy
@@ -391,7 +394,7 @@ def rkn_loop(x0, v0, p, t_eval, rtol, atol, c, A, b, bp, e, ep, fsal, q_hat, ord
     xi, xn, vn, ex, ev = np.empty(n), np.empty(n), np.empty(n), np.empty(n), np.empty(n)
     sx, sv = np.empty(n), np.empty(n)
     t = t_eval[0]
-    _store(xs, vs, 0, x, v)
+    _store(xs, vs, np.intp(0), x, v)
     _force(x, t, K[0], p)
     evals = 1
     # first step (numeric.integrators.nystrom.EmbeddedNystrom._first_step)
