@@ -6,6 +6,7 @@ Heavy packages (SymPy, SciPy, matplotlib) are imported by the function that need
 
 from __future__ import annotations
 
+import functools
 import math
 import shutil
 from dataclasses import dataclass, field
@@ -118,13 +119,20 @@ class Modes:
     def chain(self) -> bool:
         return self.scene.chain is not None
 
+    @functools.cached_property
+    def _chain_report(self) -> tuple[str, dict]:
+        """A ``[chain]`` scene's text and JSON reports, computed once (ζ of a damped chain can take seconds)."""
+        from .derive.chain import chain_report
+
+        return chain_report(self.model, self.modes, _chain_omega2(self.scene, self.modes),
+                            _chain_damped(self.scene, self.model), self.participation)
+
     def to_json(self) -> dict:
         """Exactly what ``springchain modes SCENE --json`` prints."""
         if self.chain:
-            from .derive.chain import chain_report
+            import copy
 
-            return chain_report(self.model, self.modes, _chain_omega2(self.scene, self.modes),
-                                _chain_damped(self.scene, self.model), self.participation)[1]
+            return copy.deepcopy(self._chain_report[1])  # the caller may edit its dict
         from .derive.report import modes_json
 
         return modes_json(self.model, self.modes)
@@ -132,10 +140,7 @@ class Modes:
     def to_text(self) -> str:
         """What ``springchain modes SCENE`` prints."""
         if self.chain:
-            from .derive.chain import chain_report
-
-            return chain_report(self.model, self.modes, _chain_omega2(self.scene, self.modes),
-                                _chain_damped(self.scene, self.model), self.participation)[0]
+            return self._chain_report[0]
         from .derive.report import render_text
 
         return render_text(self.model, self.modes)

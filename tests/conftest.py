@@ -1,6 +1,7 @@
 """Shared fixtures for the springchain test suite.
 
 * matplotlib is forced to the non-interactive Agg backend before anything imports it;
+* bytecode caches are written even under ``PYTHONDONTWRITEBYTECODE`` (one compile per run, not per process);
 * ``SPRINGCHAIN_CACHE`` points at a temporary folder of the run (shared by its xdist workers), so no
   test writes into the user's cache (and a subprocess started by a test inherits it); ``fresh_cache``
   gives one test a cache of its own;
@@ -19,8 +20,14 @@ import importlib
 import importlib.util
 import itertools
 import os
+import sys
 from pathlib import Path
 
+# The run keeps bytecode caches even where PYTHONDONTWRITEBYTECODE is set (CI images set it): springchain's
+# modules and the rewritten test modules are compiled once and reused by the other worker and by every
+# subprocess a test starts (they inherit this environment), not compiled again in each (~40 CPU-s a run).
+sys.dont_write_bytecode = False
+os.environ.pop("PYTHONDONTWRITEBYTECODE", None)
 os.environ.setdefault("MPLBACKEND", "Agg")
 
 import matplotlib  # noqa: E402

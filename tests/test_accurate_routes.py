@@ -493,7 +493,7 @@ def test_long_ring_frf_is_certified_or_refused(tmp_path):
 @example(n=6, ends=("wall", "free"), a=10.0, b=10.0, c=-3.0, at=5, rayleigh=False)
 # a heavy dashpot beside light modes: their σ is below 1e10·ε·max|G| (ζ was left out); mpmath settles it
 @example(n=3, ends=("wall", "free"), a=0.0, b=0.0, c=2.0, at=0, rayleigh=False)
-def test_damped_chain_modes_print_zeta_of_60_digit_eigenvalues(tmp_path, capsys, n, ends, a, b, c, at, rayleigh):
+def test_damped_chain_modes_print_zeta_of_60_digit_eigenvalues(tmp_path, n, ends, a, b, c, at, rayleigh):
     """`modes` of a damped [chain] lists ζ and ω_d per mode (was none): dashpots by the refined modal
     state matrix, Rayleigh by its closed form; against ζ of the 60-digit state matrix built from the
     TOML, at contrasts up to 1e10."""
@@ -508,8 +508,8 @@ def test_damped_chain_modes_print_zeta_of_60_digit_eigenvalues(tmp_path, capsys,
         text = text.replace("[initial]", f'[[dampers]]\nbetween = [{at}, "wall"]\nc = "{c!r}"\n\n[initial]')
         dampers = [(at, -1, c)]
     path = _write(tmp_path, text, "dchain")
-    assert main(["modes", str(path), "--json"]) == 0
-    modes = json.loads(capsys.readouterr().out)["modes"]
+    result = sc.modes(path)  # what `modes --json` and `modes` print (the command prints these two)
+    modes = result.to_json()["modes"]
     masses, springs = _chain_reference(n, *ends, a, b, "0")
     scene = ref.Scene([str(j) for j in range(n)], masses, springs, dampers, params, data)
     want = ref.damping_ratios(scene)
@@ -522,8 +522,7 @@ def test_damped_chain_modes_print_zeta_of_60_digit_eigenvalues(tmp_path, capsys,
     sigma = want * np.array([m["omega_damped"] for m in rows]) / np.sqrt(np.maximum(1 - want**2, 1e-300))
     assert np.all(sigma[~given_] <= 1e-3 * np.max(sigma, initial=0.0))
     assert np.all(np.abs(got - want)[given_] <= (1e-12 * np.abs(want) + np.where(got == 0.0, ZETA_FLOOR, 1e-300))[given_])
-    assert main(["modes", str(path)]) == 0
-    assert capsys.readouterr().out.count("   zeta = ") == sum(m["damping_ratio"] is not None for m in modes)
+    assert result.to_text().count("   zeta = ") == sum(m["damping_ratio"] is not None for m in modes)
 
 
 def test_long_damped_chain_says_zeta_is_not_computed(tmp_path):

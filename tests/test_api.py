@@ -200,3 +200,22 @@ def test_generate_writes_and_checks_like_the_derive_command(tmp_path):
     written.path.write_text("# stale\n", encoding="utf-8")
     (stale,) = springchain.generate(["seed"], out=tmp_path, check=True)
     assert stale.fresh is False and "stale" in stale.message
+
+
+def test_chain_modes_report_is_computed_once_and_to_json_returns_a_copy(tmp_path, monkeypatch):
+    """A damped [chain]'s ζ can take seconds: ``to_text`` and ``to_json`` of one result share one report,
+    and editing the dict ``to_json`` returned does not change the next one."""
+    from springchain import _api
+
+    calls = []
+    real = _api._chain_damped
+    monkeypatch.setattr(_api, "_chain_damped", lambda *a: calls.append(1) or real(*a))
+    text = ('name = "dc"\n[parameters]\nm = 1.0\nk = 2.0\n[chain]\nn = 4\nmass = "m"\nk = "k"\n'
+            'left = "wall"\nright = "free"\n[[dampers]]\nbetween = [0, "wall"]\nc = "0.1"\n')
+    path = tmp_path / "dc.toml"
+    path.write_text(text)
+    m = springchain.modes(path)
+    data = m.to_json()
+    assert "   zeta = " in m.to_text() and len(calls) == 1
+    data["modes"].clear()
+    assert len(m.to_json()["modes"]) == 4 and len(calls) == 1
