@@ -10,6 +10,8 @@ import inspect
 
 import numpy as _np
 
+from ..generated.contract import SCALAR_HELPERS
+
 #: 1/k! for k = 2 … 18: the series of expm1(z) − z, to below 2⁻⁵³ relative for |z| ≤ 1/2.
 _EXPM1MX_COEFFICIENTS = (
     1 / 2, 1 / 6, 1 / 24, 1 / 120, 1 / 720, 1 / 5040, 1 / 40320, 1 / 362880, 1 / 3628800,
@@ -67,8 +69,8 @@ def _log1pmx_s(_z):
 #: The helpers a generated module may need, by the name its code calls (``_s``: the scalar forms of
 #: ``scalar_force``, which call them where the array forms are called).
 HELPERS = {"_expm1mx": _expm1mx, "_log1pmx": _log1pmx, "_expm1mx_s": _expm1mx_s, "_log1pmx_s": _log1pmx_s}
-#: The scalar form of each array helper.
-SCALAR = {"_expm1mx": "_expm1mx_s", "_log1pmx": "_log1pmx_s"}
+#: The scalar form of each array helper (the shared fact, :data:`generated.contract.SCALAR_HELPERS`).
+SCALAR = SCALAR_HELPERS
 
 
 def helper_source(names) -> str:

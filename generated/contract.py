@@ -27,6 +27,9 @@ from types import MappingProxyType, ModuleType
 #: Dense N × N matrices (mass, stiffness, damping; eigenvector fallbacks of index-dependent chains)
 #: are built for at most this many masses; beyond it chains use stencils, bands and closed forms.
 MAX_DENSE = 4000
+#: The helpers a spring potential's printed tension may call (``derive.law_helpers``), by their array
+#: name, and the scalar form of each (which ``scalar_force`` and the compiled chain kernels call).
+SCALAR_HELPERS = MappingProxyType({"_expm1mx": "_expm1mx_s", "_log1pmx": "_log1pmx_s"})
 
 
 class End(enum.StrEnum):

@@ -20,9 +20,10 @@ import re
 from dataclasses import dataclass
 from types import ModuleType, SimpleNamespace
 
-#: Scalar forms of the helpers a printed tension may call (``derive.law_helpers``): inside the
-#: kernels the extension is one float.
-_SCALAR_HELPERS = {"_expm1mx": "_expm1mx_s", "_log1pmx": "_log1pmx_s"}
+from ..generated.contract import SCALAR_HELPERS
+
+#: Scalar forms of the helpers a printed tension may call: inside the kernels the extension is one float.
+_SCALAR_HELPERS = SCALAR_HELPERS
 
 _TAIL = """
 

@@ -23,7 +23,7 @@ PACKAGES = {"springchain": "springchain", "derive": "springchain.derive", "numer
 #: The layers below the top package.
 LOWER = ("springchain.derive", "springchain.numeric", "springchain.generated", "springchain.scenes")
 #: What numeric modules other than system.py may take from the contract: facts both sides share.
-SHARED_FACTS = {"MAX_DENSE", "End", "END_WORDS", "Ground"}
+SHARED_FACTS = {"MAX_DENSE", "End", "END_WORDS", "Ground", "SCALAR_HELPERS"}
 
 
 def _modules() -> dict[str, Path]:

@@ -24,13 +24,14 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from types import ModuleType
 
+from ...generated.contract import SCALAR_HELPERS
 from . import implicit_loops as _implicit
 from . import loops as _template
 
 #: The templates the compiled file holds, in order (each defines LOOPS and HELPERS).
 _TEMPLATES = (_template, _implicit)
 #: Scalar helpers a potential's ``scalar_force`` may call (derive.law_helpers), compiled with it.
-_LAW_HELPERS = ("_expm1mx_s", "_log1pmx_s")
+_LAW_HELPERS = tuple(SCALAR_HELPERS.values())
 
 #: What the compiled file appends to the template and the module's function.
 _TAIL = """
