@@ -175,7 +175,8 @@ _CHILD = textwrap.dedent("""
     run = record(registry.method("verlet"), system, np.full(3, 0.1), np.zeros(3), Grid(0.001, 200_000, 20_000))
     c = compiled(system.module)
     d = c.loop("verlet_loop")
-    print(json.dumps({"compiled": sorted(c.compiled), "hits": sum(d.stats.cache_hits.values()),
+    print(json.dumps({"compiled": sorted(c.compiled), "force_compiled": c.force_compiled,
+                      "hits": sum(d.stats.cache_hits.values()),
                       "misses": sum(d.stats.cache_misses.values()), "x": run.x[-1].tolist(),
                       "seconds": c.compile_seconds}))
 """)
@@ -185,10 +186,27 @@ def test_second_process_compiles_nothing(tmp_path):
     env = {**os.environ, "SPRINGCHAIN_CACHE": str(tmp_path / "cache"), "OPENBLAS_NUM_THREADS": "1"}
     runs = [json.loads(subprocess.run([sys.executable, "-c", _CHILD], env=env, capture_output=True, text=True,
                                       check=True).stdout.strip().splitlines()[-1]) for _ in range(2)]
-    assert runs[0]["compiled"] == ["verlet_loop"] and runs[0]["misses"] == 1
+    assert runs[0]["compiled"] == ["verlet_loop"] and runs[0]["misses"] == 1 and runs[0]["force_compiled"]
     assert runs[1]["compiled"] == [] and runs[1]["misses"] == 0 and runs[1]["hits"] == 1
+    assert not runs[1]["force_compiled"]
     assert runs[0]["x"] == runs[1]["x"]
     assert list((tmp_path / "cache" / "compiled").glob("sc_*.py"))
+    assert list((tmp_path / "cache" / "compiled").glob("loops_*.py"))
+
+
+def test_scenes_share_one_compiled_loop(systems):
+    """A loop is compiled once for every scene: the scene's force is its first argument (a cfunc of one
+    type), so a second scene adds no signature, only its own force."""
+    from springchain.numeric.compiled.cache import compiled
+
+    method = registry.method("verlet")
+    for name in ("everything", "springy"):
+        system = systems[name]
+        x0, v0 = _state(system.n)
+        record(method, system, x0, v0, Grid(0.01, 50, 50))
+    forces = {id(compiled(systems[name].module).force) for name in ("everything", "springy")}
+    assert len(forces) == 2
+    assert len(compiled(systems["springy"].module).loop("verlet_loop").signatures) == 1
 
 
 @pytest.mark.parametrize("name", ["dprkn6", "dprkn8", "dprkn12"])

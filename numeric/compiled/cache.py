@@ -1,11 +1,16 @@
-"""Compile a generated module's ``scalar_force`` with the loops of :mod:`.loops`, once per module.
+"""Compile the small-scene loops once, and a generated module's ``scalar_force`` once per module.
 
-The compiled file is ``<cache>/compiled/sc_<hash>.py``: the loops' template text, the module's
-``scalar_force`` source (written by ``derive/codegen``: SymPy-printed expressions over validated
-names, never scene text) and the lines that compile both with ``numba.njit(cache=True)``.
-``<hash>`` is the sha256 of that text (so of the module's force code, the loops and numba's
-version); numba keeps the machine code next to it, so a second process with the same module
-compiles nothing. The file is written through a temporary file and a rename.
+Two kinds of file in ``<cache>/compiled/``, each named by the sha256 of its text and written through a
+temporary file and a rename (a file is never rewritten); numba keeps the machine code next to it
+(``cache=True``), so a second process compiles nothing:
+
+* ``loops_<hash>.py``: the templates :mod:`.loops` and :mod:`.implicit_loops`, every function
+  ``numba.njit``-compiled. One file for all scenes: a loop takes the scene's force as its first
+  argument, a first-class function of the type :data:`FORCE_SIGNATURE`, so it is compiled once per
+  numba version and loop, not once per scene (seconds each);
+* ``sc_<hash>.py``: a module's ``scalar_force`` source (written by ``derive/codegen``: SymPy-printed
+  expressions over validated names, never scene text), the scalar law helpers it calls, and the
+  line that compiles it as a ``numba.cfunc`` of that type (a fraction of a second).
 
 The cache directory is ``$SPRINGCHAIN_CACHE`` or the user's cache (the place
 ``springchain._modules.cache_dir`` keeps generated modules of user scenes).
@@ -13,6 +18,7 @@ The cache directory is ``$SPRINGCHAIN_CACHE`` or the user's cache (the place
 
 from __future__ import annotations
 
+import functools
 import hashlib
 import importlib.util
 import inspect
@@ -28,19 +34,28 @@ from ...generated.contract import SCALAR_HELPERS
 from . import implicit_loops as _implicit
 from . import loops as _template
 
-#: The templates the compiled file holds, in order (each defines LOOPS and HELPERS).
+#: The templates the loops file holds, in order (each defines LOOPS and HELPERS).
 _TEMPLATES = (_template, _implicit)
 #: Scalar helpers a potential's ``scalar_force`` may call (derive.law_helpers), compiled with it.
 _LAW_HELPERS = tuple(SCALAR_HELPERS.values())
+#: The force's type, as numba source: ``force(x, t, out, p)`` on float64 C arrays, returning nothing.
+FORCE_SIGNATURE = "void(float64[::1], float64, float64[::1], float64[::1])"
 
-#: What the compiled file appends to the template and the module's function.
-_TAIL = """
+#: What the loops file appends to the templates.
+_LOOPS_TAIL = """
+
+import numba as _numba
+
+{binds}
+"""
+#: What a scene's file appends to its force code: helpers first (the cfunc compiles when it is made).
+_FORCE_TAIL = """
 
 import numba as _numba
 
 _scalar_force_terms = _numba.njit(cache=True)(_scalar_force_terms)
-_force = _numba.njit(cache=True)(scalar_force)
 {binds}
+force = _numba.cfunc({signature!r}, cache=True)(scalar_force)
 """
 
 
@@ -60,8 +75,19 @@ def cache_root() -> Path:
     return Path(base) / "compiled"
 
 
+def loops_source() -> str:
+    """The loops file's text: the templates and the lines that compile their functions."""
+    import numba
+
+    binds = "\n".join(f"{name} = _numba.njit(cache=True)({name})"
+                      for name in [n for t in _TEMPLATES for n in t.HELPERS + t.LOOPS])
+    return (f"# compiled loops of small [masses] scenes (numba {numba.__version__}); written by "
+            f"springchain.numeric.compiled.cache, do not edit\n"
+            + "\n\n".join(inspect.getsource(t) for t in _TEMPLATES) + _LOOPS_TAIL.format(binds=binds))
+
+
 def source_of(module: ModuleType) -> str:
-    """The compiled file's text for ``module`` (which must define ``scalar_force``)."""
+    """The text of the compiled force of ``module`` (which must define ``scalar_force``)."""
     import numba
 
     body = inspect.getsource(module.scalar_force) + "\n\n" + inspect.getsource(module._scalar_force_terms)
@@ -69,37 +95,52 @@ def source_of(module: ModuleType) -> str:
     if laws:
         body += (f"\n\n_EXPM1MX_COEFFICIENTS = {tuple(getattr(module, '_EXPM1MX_COEFFICIENTS', ()))!r}\n\n"
                  + "\n\n".join(inspect.getsource(getattr(module, name)) for name in laws))
-    binds = "\n".join(f"{name} = _numba.njit(cache=True)({name})"
-                      for name in [n for t in _TEMPLATES for n in t.HELPERS + t.LOOPS] + laws)
-    return (f"# compiled loops of scene {module.SCENE!r} (numba {numba.__version__}); written by "
+    binds = "\n".join(f"{name} = _numba.njit(cache=True)({name})" for name in laws)
+    return (f"# compiled force of scene {module.SCENE!r} (numba {numba.__version__}); written by "
             f"springchain.numeric.compiled.cache, do not edit\n"
-            + "\n\n".join(inspect.getsource(t) for t in _TEMPLATES)
-            + "\n\nimport numpy as _np\n\n\n" + body + _TAIL.format(binds=binds))
+            + "import numpy as _np\n\n\n" + body
+            + _FORCE_TAIL.format(binds=binds, signature=FORCE_SIGNATURE))
+
+
+@functools.lru_cache(maxsize=1)
+def loops_module() -> ModuleType:
+    """The loops file, imported once per process (numba compiles a loop on its first call, or loads it)."""
+    text = loops_source()
+    return load_text(text, f"loops_{hashlib.sha256(text.encode()).hexdigest()[:20]}")[0]
 
 
 @dataclass
 class Compiled:
-    """The compiled loops of one module and what it cost to get them.
+    """The compiled force of one module, the loops it runs in, and what getting them cost.
 
     Attributes
     ----------
     module : ModuleType
-        The compiled file (its ``*_loop`` functions are numba dispatchers).
+        The module's force file (its ``force`` is the ``numba.cfunc`` the loops call).
     path : Path
     compile_seconds : float
-        Wall time spent compiling (or loading from the disk cache) in this process, summed over loops.
+        Wall time spent in this process compiling (or loading from the disk cache) the force, and the
+        loops whose first call in this process was for this module.
     compiled : set of str
-        Loops compiled (not loaded from disk) in this process.
+        Loops compiled (not loaded from disk) in this process, on a call for this module.
+    force_compiled : bool
+        Whether the force was compiled (not loaded from disk) in this process.
     """
 
     module: ModuleType
     path: Path
     compile_seconds: float = 0.0
     compiled: set = field(default_factory=set)
+    force_compiled: bool = False
+
+    @property
+    def force(self):
+        """The module's ``scalar_force`` as a first-class function (the loops' first argument)."""
+        return self.module.force
 
     def loop(self, name: str):
-        """The dispatcher ``name`` (one of :data:`.loops.LOOPS`)."""
-        return getattr(self.module, name)
+        """The dispatcher ``name`` (one of the templates' ``LOOPS``), shared by every module."""
+        return getattr(loops_module(), name)
 
     def note(self, name: str, seconds: float) -> None:
         """Record the first call of loop ``name`` (``seconds`` of wall time; misses mean it compiled)."""
@@ -115,18 +156,16 @@ _BY_MODULE: dict[int, tuple[ModuleType, Compiled]] = {}
 
 
 def compiled(module: ModuleType) -> Compiled:
-    """The compiled loops of ``module`` (written and imported once per process; numba compiles on a
-    loop's first call, or loads it from the disk cache)."""
+    """The compiled force of ``module`` (written, imported and compiled or loaded once per process)."""
     known = _BY_MODULE.get(id(module))
     if known is not None and known[0] is module:
         return known[1]
     text = source_of(module)
     key = hashlib.sha256(text.encode()).hexdigest()[:20]
-    if key in _LOADED:
-        _BY_MODULE[id(module)] = (module, _LOADED[key])
-        return _LOADED[key]
-    mod, path = load_text(text, f"sc_{key}")
-    _LOADED[key] = Compiled(mod, path)
+    if key not in _LOADED:
+        t0 = time.perf_counter()
+        mod, path = load_text(text, f"sc_{key}")
+        _LOADED[key] = Compiled(mod, path, time.perf_counter() - t0, force_compiled=not mod.force.cache_hits)
     _BY_MODULE[id(module)] = (module, _LOADED[key])
     return _LOADED[key]
 
@@ -154,9 +193,10 @@ def load_text(text: str, stem: str) -> tuple[ModuleType, Path]:
 
 
 def timed_first_call(c: Compiled, name: str, *args):
-    """Call loop ``name``; the first call's compile (or disk load) is timed and noted separately
-    by compiling for the argument types before the run."""
+    """Call loop ``name`` with ``c``'s force first, then ``args``; a first call in this process compiles
+    (or loads) the loop for the argument types before the run, timed and noted on ``c``."""
     disp = c.loop(name)
+    args = (c.force, *args)
     if not disp.signatures:
         t0 = time.perf_counter()
         disp.compile(tuple(disp.typeof_pyval(a) for a in args))
@@ -164,4 +204,5 @@ def timed_first_call(c: Compiled, name: str, *args):
     return disp(*args)
 
 
-__all__ = ["Compiled", "compiled", "available", "cache_root", "load_text", "source_of", "timed_first_call"]
+__all__ = ["Compiled", "FORCE_SIGNATURE", "compiled", "available", "cache_root", "load_text", "loops_module",
+           "loops_source", "source_of", "timed_first_call"]

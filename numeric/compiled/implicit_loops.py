@@ -1,6 +1,6 @@
 """The whole-run loop of the implicit steps (Newmark-β, HHT-α) on small ``[masses]`` scenes, as plain
 Python over float arrays: a template compiled by :mod:`.cache` beside :mod:`.loops` (same conventions:
-``_force(x, t, out, p)`` writes ``a(x) + a_ext(t)``, frames at the step indices ``rec``, t = i·h).
+``force(x, t, out, p)`` writes ``a(x) + a_ext(t)``, frames at the step indices ``rec``, t = i·h).
 
 The scheme is :mod:`numeric.integrators.newmark`'s, step for step: predictor ``x̃ = x + h v + (½ − β)h² a``,
 ``ṽ = v + (1 − γ)h a``; ``a₁`` from ``S a₁ = (1 + α)(f(x̃, t₁) + D ṽ) − α F₀`` with
@@ -11,8 +11,6 @@ same stopping rule.
 """
 
 import numpy as np
-
-_force = None  # bound by the compiled file to the module's scalar_force
 
 
 def _lu_solve(lu, piv, r, out):
@@ -108,7 +106,7 @@ def _with_damping(f, v, D, out, scale):
         out[r] = scale * s
 
 
-def newmark_loop(x0, v0, p, h, steps, rec, xs, vs, beta, gamma, alpha, lu, piv, D,
+def newmark_loop(force, x0, v0, p, h, steps, rec, xs, vs, beta, gamma, alpha, lu, piv, D,
                  nonlinear, masses, ends, k, k3, max_newton):
     """The HHT-α / Newmark-β run (see the module docstring). Returns ``(force evaluations, failed step)``
     (failed step -1: every Newton iteration converged)."""
@@ -118,7 +116,7 @@ def newmark_loop(x0, v0, p, h, steps, rec, xs, vs, beta, gamma, alpha, lu, piv, 
     xt, vt, rhs, a1, x1, v1, R, da = (np.empty(n), np.empty(n), np.empty(n), np.empty(n), np.empty(n),
                                       np.empty(n), np.empty(n), np.empty(n))
     S = np.empty((n, n))
-    _force(x, 0.0, f, p)
+    force(x, 0.0, f, p)
     _with_damping(f, v, D, a, 1.0)
     for r in range(n):
         F0[r] = a[r]
@@ -134,7 +132,7 @@ def newmark_loop(x0, v0, p, h, steps, rec, xs, vs, beta, gamma, alpha, lu, piv, 
         for r in range(n):
             xt[r] = x[r] + h * v[r] + hh_pred * a[r]
             vt[r] = v[r] + h_pred * a[r]
-        _force(xt, t1, f, p)
+        force(xt, t1, f, p)
         evals += 1
         _with_damping(f, vt, D, rhs, ap)
         for r in range(n):
@@ -150,7 +148,7 @@ def newmark_loop(x0, v0, p, h, steps, rec, xs, vs, beta, gamma, alpha, lu, piv, 
                 for r in range(n):
                     x1[r] = xt[r] + bh2 * a1[r]
                     v1[r] = vt[r] + gh * a1[r]
-                _force(x1, t1, f, p)
+                force(x1, t1, f, p)
                 evals += 1
                 _with_damping(f, v1, D, R, ap)
                 for r in range(n):
@@ -173,7 +171,7 @@ def newmark_loop(x0, v0, p, h, steps, rec, xs, vs, beta, gamma, alpha, lu, piv, 
             v[r] = vt[r] + gh * a1[r]
             a[r] = a1[r]
         if alpha != 0.0:  # HHT keeps the force of this step for the next one
-            _force(x, t1, f, p)
+            force(x, t1, f, p)
             evals += 1
             _with_damping(f, v, D, F0, 1.0)
         if j < rec.shape[0] and rec[j] == i + 1:

@@ -1,15 +1,15 @@
 """The whole-run loops of small ``[masses]`` scenes, as plain Python over float arrays.
 
-This file is a template, never run as it stands: :mod:`.cache` writes it, together with the
-generated module's ``scalar_force`` (straight-line scalar code), into one file keyed by their hash,
-binds ``_force`` to the compiled ``scalar_force`` and compiles every function here with
-``numba.njit(cache=True)`` — so the loops call the force without any Python in between, and a second
-process loads the machine code from disk.
+This file is a template, never run as it stands: :mod:`.cache` writes it (with
+:mod:`.implicit_loops`) into one file keyed by its hash and compiles every function with
+``numba.njit(cache=True)``, once for all scenes: a scene's force comes in as the loops' first
+argument ``force``, a first-class function (the generated module's ``scalar_force`` compiled as a
+``numba.cfunc``), so a new scene compiles only its force and a second process loads the loops from disk.
 
 Conventions of every loop
 -------------------------
-``_force(x, t, out, p)`` writes ``a(x) + a_ext(t)`` into ``out`` (N,). ``Ad`` is ``-M⁻¹C``
-(N, N), or shape (0, 0) without dampers; ``E = exp(Ad h/2)`` is the half damping flow of the
+``force(x, t, out, p)`` (float64 arrays, C-contiguous) writes ``a(x) + a_ext(t)`` into ``out`` (N,).
+``Ad`` is ``-M⁻¹C`` (N, N), or shape (0, 0) without dampers; ``E = exp(Ad h/2)`` is the half damping flow of the
 Strang splitting the fixed-step loops use (as :class:`numeric.effects.EffectSplitting`).
 Frames are written into the preallocated ``xs``, ``vs`` (F, N) at the step indices ``rec``
 (increasing, ``rec[0] = 0``); time is ``t = i·h`` at step i.
@@ -18,8 +18,6 @@ numba compiles a helper once more for every literal integer it is called with.
 """
 
 import numpy as np
-
-_force = None  # bound by the compiled file to the module's scalar_force
 
 
 def _half_damp(v, E, tmp):
@@ -42,12 +40,12 @@ def _store(xs, vs, j, x, v):
         vs[j, r] = v[r]
 
 
-def verlet_loop(x0, v0, p, h, steps, rec, xs, vs, E):
+def verlet_loop(force, x0, v0, p, h, steps, rec, xs, vs, E):
     """Velocity Verlet, ``x ← x + v h + a h²/2; a' = a(x); v ← v + (a + a') h/2`` (numeric.integrators.verlet)."""
     n = x0.shape[0]
     x, v = x0.copy(), v0.copy()
     a, an, tmp = np.empty(n), np.empty(n), np.empty(n)
-    _force(x, 0.0, a, p)
+    force(x, 0.0, a, p)
     hh, h2 = 0.5 * h * h, 0.5 * h
     _store(xs, vs, np.intp(0), x, v)
     damped = E.shape[0] > 0  # tested once: an undamped run then calls no damping helper (2x per step)
@@ -57,7 +55,7 @@ def verlet_loop(x0, v0, p, h, steps, rec, xs, vs, E):
             _half_damp(v, E, tmp)
         for r in range(n):
             x[r] = x[r] + h * v[r] + hh * a[r]
-        _force(x, (i + 1) * h, an, p)
+        force(x, (i + 1) * h, an, p)
         for r in range(n):
             v[r] = v[r] + h2 * (a[r] + an[r])
             a[r] = an[r]
@@ -68,13 +66,13 @@ def verlet_loop(x0, v0, p, h, steps, rec, xs, vs, E):
             j += 1
 
 
-def kahan_verlet_loop(x0, v0, p, h, steps, rec, xs, vs, E):
+def kahan_verlet_loop(force, x0, v0, p, h, steps, rec, xs, vs, E):
     """Kick–drift–kick Verlet with compensated sums of x and v (numeric.integrators.verlet_compensated)."""
     n = x0.shape[0]
     x, v = x0.copy(), v0.copy()
     a, tmp = np.empty(n), np.empty(n)
     cx, cv = np.zeros(n), np.zeros(n)
-    _force(x, 0.0, a, p)
+    force(x, 0.0, a, p)
     half = 0.5 * h
     _store(xs, vs, np.intp(0), x, v)
     damped = E.shape[0] > 0
@@ -93,7 +91,7 @@ def kahan_verlet_loop(x0, v0, p, h, steps, rec, xs, vs, E):
             s = x[r] + y
             cx[r] = (s - x[r]) - y
             x[r] = s
-        _force(x, (i + 1) * h, a, p)
+        force(x, (i + 1) * h, a, p)
         for r in range(n):
             y = half * a[r] - cv[r]
             s = v[r] + y
@@ -107,13 +105,13 @@ def kahan_verlet_loop(x0, v0, p, h, steps, rec, xs, vs, E):
             j += 1
 
 
-def splitting_loop(x0, v0, p, h, steps, rec, xs, vs, E, kicks, drifts, nodes):
+def splitting_loop(force, x0, v0, p, h, steps, rec, xs, vs, E, kicks, drifts, nodes):
     """A BAB splitting/composition method (numeric.integrators.splitting): ``kicks`` (s+1,) and ``drifts``
     (s,) already times h, ``nodes`` (s+1,) the kick times in units of h."""
     n = x0.shape[0]
     x, v = x0.copy(), v0.copy()
     a, tmp = np.empty(n), np.empty(n)
-    _force(x, 0.0, a, p)
+    force(x, 0.0, a, p)
     _store(xs, vs, np.intp(0), x, v)
     s = drifts.shape[0]
     damped = E.shape[0] > 0
@@ -127,7 +125,7 @@ def splitting_loop(x0, v0, p, h, steps, rec, xs, vs, E, kicks, drifts, nodes):
             d, k = drifts[q], kicks[q + 1]
             for r in range(n):
                 x[r] = x[r] + d * v[r]
-            _force(x, (i + nodes[q + 1]) * h, a, p)
+            force(x, (i + nodes[q + 1]) * h, a, p)
             for r in range(n):
                 v[r] = v[r] + k * a[r]
         if damped:
@@ -150,7 +148,7 @@ def _total(f, v, Ad, out):
             out[r] += s
 
 
-def rk4_loop(x0, v0, p, h, steps, rec, xs, vs, E, Ad):
+def rk4_loop(force, x0, v0, p, h, steps, rec, xs, vs, E, Ad):
     """Classic RK4 on ``(x, v)' = (v, a(x) + a_ext(t) + Ad v)`` (numeric.integrators.rk4), inside the
     Strang splitting by ``E`` as the fixed-step runs do (pass one of E, Ad empty)."""
     n = x0.shape[0]
@@ -158,7 +156,7 @@ def rk4_loop(x0, v0, p, h, steps, rec, xs, vs, E, Ad):
     a = np.empty(n)
     k1, k2, k3, k4 = np.empty(n), np.empty(n), np.empty(n), np.empty(n)
     x2, x3, x4, xt, f = np.empty(n), np.empty(n), np.empty(n), np.empty(n), np.empty(n)
-    _force(x, 0.0, a, p)
+    force(x, 0.0, a, p)
     h2, h6 = 0.5 * h, h / 6.0
     _store(xs, vs, np.intp(0), x, v)
     damped = E.shape[0] > 0
@@ -171,22 +169,22 @@ def rk4_loop(x0, v0, p, h, steps, rec, xs, vs, E, Ad):
         for r in range(n):
             x2[r] = v[r] + h2 * k1[r]
             xt[r] = x[r] + h2 * v[r]
-        _force(xt, t + h2, f, p)
+        force(xt, t + h2, f, p)
         _total(f, x2, Ad, k2)
         for r in range(n):
             x3[r] = v[r] + h2 * k2[r]
             xt[r] = x[r] + h2 * x2[r]
-        _force(xt, t + h2, f, p)
+        force(xt, t + h2, f, p)
         _total(f, x3, Ad, k3)
         for r in range(n):
             x4[r] = v[r] + h * k3[r]
             xt[r] = x[r] + h * x3[r]
-        _force(xt, (i + 1) * h, f, p)
+        force(xt, (i + 1) * h, f, p)
         _total(f, x4, Ad, k4)
         for r in range(n):
             x[r] = x[r] + h6 * (v[r] + 2.0 * (x2[r] + x3[r]) + x4[r])
             v[r] = v[r] + h6 * (k1[r] + 2.0 * (k2[r] + k3[r]) + k4[r])
-        _force(x, (i + 1) * h, a, p)
+        force(x, (i + 1) * h, a, p)
         if damped:
             _half_damp(v, E, k4)
         if j < rec.shape[0] and rec[j] == i + 1:
@@ -194,16 +192,16 @@ def rk4_loop(x0, v0, p, h, steps, rec, xs, vs, E, Ad):
             j += 1
 
 
-def _rhs(y, t, p, Ad, out, f):
+def _rhs(force, y, t, p, Ad, out, f):
     """``out = (v, a(x) + a_ext(t) + Ad v)`` for ``y = (x, v)`` (2N,)."""
     n = y.shape[0] // 2
-    _force(y[:n], t, f, p)
+    force(y[:n], t, f, p)
     for r in range(n):
         out[r] = y[n + r]
     _total(f, y[n:], Ad, out[n:])
 
 
-def dop853_loop(x0, v0, p, t0, t_end, rtol, atol, Ad, A, B, C, E3, E5, ts, max_steps, t_eval, xs, vs, D):
+def dop853_loop(force, x0, v0, p, t0, t_end, rtol, atol, Ad, A, B, C, E3, E5, ts, max_steps, t_eval, xs, vs, D):
     """SciPy's DOP853 (``scipy.integrate.DOP853``: its tableau, initial step, error norm and step
     control, step for step) on the first-order system; the accepted step ends go into ``ts``
     (up to ``max_steps``). Frames at the increasing times ``t_eval`` (S,) (empty: none) go into
@@ -223,7 +221,7 @@ def dop853_loop(x0, v0, p, t0, t_end, rtol, atol, Ad, A, B, C, E3, E5, ts, max_s
     F = np.empty((7, m))
     yo = np.empty(m)
     row = np.intp(0)
-    _rhs(y, t0, p, Ad, f, g)
+    _rhs(force, y, t0, p, Ad, f, g)
     evals = 1
     span = abs(t_end - t0)
     sc = np.empty(m)
@@ -241,7 +239,7 @@ def dop853_loop(x0, v0, p, t0, t_end, rtol, atol, Ad, A, B, C, E3, E5, ts, max_s
     f1 = np.empty(m)
     for r in range(m):
         y1[r] = y[r] + h0 * f[r]
-    _rhs(y1, t0 + h0, p, Ad, f1, g)
+    _rhs(force, y1, t0 + h0, p, Ad, f1, g)
     evals += 1
     d2 = 0.0
     for r in range(m):
@@ -273,13 +271,13 @@ def dop853_loop(x0, v0, p, t0, t_end, rtol, atol, Ad, A, B, C, E3, E5, ts, max_s
             h_abs = abs(h)
             for r in range(m):
                 K[0, r] = f[r]
-            _rk_stages(y, ys, K, A, C, t, h, p, Ad, g, np.intp(1), np.intp(12))
+            _rk_stages(force, y, ys, K, A, C, t, h, p, Ad, g, np.intp(1), np.intp(12))
             for r in range(m):
                 acc = 0.0
                 for q in range(12):
                     acc += K[q, r] * B[q]
                 yn[r] = y[r] + h * acc
-            _rhs(yn, t + h, p, Ad, K[12], g)
+            _rhs(force, yn, t + h, p, Ad, K[12], g)
             evals += 12
             e5 = 0.0
             e3 = 0.0
@@ -309,7 +307,7 @@ def dop853_loop(x0, v0, p, t0, t_end, rtol, atol, Ad, A, B, C, E3, E5, ts, max_s
                 h_abs *= max(0.2, 0.9 * err ** expo)
                 rejected = True
         if row < t_eval.shape[0] and t_eval[row] <= t_new:
-            row = _dop853_dense(y, yn, f, K, t, h, p, Ad, A, C, D, g, ys, F, yo, t_eval, row, xs, vs)
+            row = _dop853_dense(force, y, yn, f, K, t, h, p, Ad, A, C, D, g, ys, F, yo, t_eval, row, xs, vs)
             evals += 3
         t = t_new
         for r in range(m):
@@ -321,7 +319,7 @@ def dop853_loop(x0, v0, p, t0, t_end, rtol, atol, Ad, A, B, C, E3, E5, ts, max_s
     return y[:n].copy(), y[n:].copy(), accepted, evals
 
 
-def _rk_stages(y, ys, K, A, C, t, h, p, Ad, g, first, last):
+def _rk_stages(force, y, ys, K, A, C, t, h, p, Ad, g, first, last):
     """Stages ``first … last-1`` of an explicit Runge–Kutta tableau (A, C): ``K[s] = f(t + C_s h,
     y + h Σ_q A[s, q] K[q])`` (``ys`` the work row)."""
     m = y.shape[0]
@@ -331,16 +329,16 @@ def _rk_stages(y, ys, K, A, C, t, h, p, Ad, g, first, last):
             for q in range(s):
                 acc += K[q, r] * A[s, q]
             ys[r] = y[r] + acc * h
-        _rhs(ys, t + C[s] * h, p, Ad, K[s], g)
+        _rhs(force, ys, t + C[s] * h, p, Ad, K[s], g)
 
 
-def _dop853_dense(y, yn, f, K, t, h, p, Ad, A, C, D, g, ys, F, yo, t_eval, row, xs, vs):
+def _dop853_dense(force, y, yn, f, K, t, h, p, Ad, A, C, D, g, ys, F, yo, t_eval, row, xs, vs):
     """SciPy's DOP853 dense output on the accepted step ``t … t + h`` (``y`` → ``yn``, ``K[0]`` = f at t,
     ``K[12]`` at t + h): stages 13–15, the interpolant's rows ``F`` (7, 2N), and the frames at every
     ``t_eval[row:]`` inside the step (Dop853DenseOutput's Horner form). Returns the next row."""
     m = y.shape[0]
     n = m // 2
-    _rk_stages(y, ys, K, A, C, t, h, p, Ad, g, np.intp(13), np.intp(16))
+    _rk_stages(force, y, ys, K, A, C, t, h, p, Ad, g, np.intp(13), np.intp(16))
     for r in range(m):
         dy = yn[r] - y[r]
         F[0, r] = dy
@@ -381,7 +379,7 @@ def _rkn_norm(dx, dv, sx, sv):
     return np.sqrt(0.5 * (ax / n + av / n))
 
 
-def rkn_loop(x0, v0, p, t_eval, rtol, atol, c, A, b, bp, e, ep, fsal, q_hat, order, xs, vs):
+def rkn_loop(force, x0, v0, p, t_eval, rtol, atol, c, A, b, bp, e, ep, fsal, q_hat, order, xs, vs):
     """An embedded Runge–Kutta–Nyström pair with the step control of numeric.integrators.nystrom
     (Hairer–Nørsett–Wanner's first step, PI controller, stepping exactly onto every output time).
     Frames go into ``xs``, ``vs`` (S, N). Returns ``(evaluations, accepted steps)``; accepted = -1
@@ -395,7 +393,7 @@ def rkn_loop(x0, v0, p, t_eval, rtol, atol, c, A, b, bp, e, ep, fsal, q_hat, ord
     sx, sv = np.empty(n), np.empty(n)
     t = t_eval[0]
     _store(xs, vs, np.intp(0), x, v)
-    _force(x, t, K[0], p)
+    force(x, t, K[0], p)
     evals = 1
     # first step (numeric.integrators.nystrom.EmbeddedNystrom._first_step)
     span = t_eval[t_eval.shape[0] - 1] - t_eval[0]
@@ -411,7 +409,7 @@ def rkn_loop(x0, v0, p, t_eval, rtol, atol, c, A, b, bp, e, ep, fsal, q_hat, ord
         h0 = min(h0, span)
         for r in range(n):
             xi[r] = x[r] + h0 * v[r]
-        _force(xi, t + h0, vn, p)
+        force(xi, t + h0, vn, p)
         evals += 1
         for r in range(n):
             ex[r] = (vn[r] - K[0, r]) / h0
@@ -439,7 +437,7 @@ def rkn_loop(x0, v0, p, t_eval, rtol, atol, c, A, b, bp, e, ep, fsal, q_hat, ord
                     for q in range(i):
                         acc += A[i, q] * K[q, r]
                     xi[r] = x[r] + (c[i] * hs) * v[r] + h2 * acc
-                _force(xi, t + c[i] * hs, K[i], p)
+                force(xi, t + c[i] * hs, K[i], p)
                 evals += 1
             for r in range(n):
                 sb = 0.0
@@ -470,7 +468,7 @@ def rkn_loop(x0, v0, p, t_eval, rtol, atol, c, A, b, bp, e, ep, fsal, q_hat, ord
                     for r in range(n):
                         K[0, r] = K[s - 1, r]
                 else:
-                    _force(x, t, K[0], p)
+                    force(x, t, K[0], p)
                     evals += 1
                 err = max(err, 1e-10)
                 grow = SAFETY * err ** (-BETA1 / k_ctrl) * err_prev ** (BETA2 / k_ctrl)
