@@ -197,7 +197,7 @@ def measure_step_cost(method: Method, system: System, x0: np.ndarray, v0: np.nda
     if loop is None:
         return StepCost(per_step, setup)
     stages = max(method.traits.evals_per_step, 1.0)
-    start = 0.0 if compiled_run.ready(system, loop) else compiled_run.COMPILE_MIN_EVALS / stages
+    start = compiled_run.min_evals(system, loop) / stages
 
     def compiled() -> tuple[float, float]:
         with compiled_run.eager():  # the probes are short: take the loop (its warm-up call compiles it)

@@ -209,6 +209,25 @@ def test_scenes_share_one_compiled_loop(systems):
     assert len(compiled(systems["springy"].module).loop("verlet_loop").signatures) == 1
 
 
+def test_a_new_scene_takes_a_compiled_loop_from_ten_thousand_evaluations(monkeypatch, systems, scene_from_text):
+    """A loop compiled already costs a new scene only its force's compile (~0.2 s): runs from
+    FORCE_MIN_EVALS evaluations take it; a loop still to compile waits for COMPILE_MIN_EVALS."""
+    import springchain.numeric.compiled.run as compiled_run
+
+    method = registry.method("verlet")
+    record(method, systems["springy"], *_state(3), Grid(0.01, 50, 50))  # the loop is compiled (eagerly)
+    monkeypatch.setattr(compiled_run, "COMPILE_MIN_EVALS", 100_000)
+    text = DUFFING_ONLY.replace('name = "springy"', 'name = "fresh_force"')
+    assert text != DUFFING_ONLY
+    system = system_of(scene_from_text(text, "fresh_force.toml"))[1]
+    integ = method.integrator(system)
+    assert compiled_run.min_evals(system, "verlet_loop") == compiled_run.FORCE_MIN_EVALS < 100_000
+    assert route(system, integ, 10, evals=5_000) is None
+    assert route(system, integ, 10, evals=20_000) == "verlet_loop"
+    record(method, system, *_state(3), Grid(0.01, 20_000, 100))
+    assert compiled_run.min_evals(system, "verlet_loop") == 0 and route(system, integ, 10, evals=10) == "verlet_loop"
+
+
 @pytest.mark.parametrize("name", ["dprkn6", "dprkn8", "dprkn12"])
 def test_compiled_rkn_pairs_agree_with_numpy(systems, name):
     """Same pair, same step control: the trajectories agree far inside the tolerance (the step sequences

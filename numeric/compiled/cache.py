@@ -103,10 +103,25 @@ def source_of(module: ModuleType) -> str:
 
 
 @functools.lru_cache(maxsize=1)
+def _loops_stem() -> str:
+    return f"loops_{hashlib.sha256(loops_source().encode()).hexdigest()[:20]}"
+
+
+@functools.lru_cache(maxsize=1)
 def loops_module() -> ModuleType:
     """The loops file, imported once per process (numba compiles a loop on its first call, or loads it)."""
-    text = loops_source()
-    return load_text(text, f"loops_{hashlib.sha256(text.encode()).hexdigest()[:20]}")[0]
+    return load_text(loops_source(), _loops_stem())[0]
+
+
+def loop_on_hand(name: str) -> bool:
+    """Whether loop ``name`` needs no compiling: loaded in this process, or in numba's disk cache beside
+    the loops file (its index file)."""
+    if loops_module.cache_info().currsize and getattr(loops_module(), name).signatures:
+        return True
+    try:
+        return any((cache_root() / "__pycache__").glob(f"{_loops_stem()}.{name}-*.nbi"))
+    except OSError:
+        return False
 
 
 @dataclass
@@ -205,4 +220,4 @@ def timed_first_call(c: Compiled, name: str, *args):
 
 
 __all__ = ["Compiled", "FORCE_SIGNATURE", "compiled", "available", "cache_root", "load_text", "loops_module",
-           "loops_source", "source_of", "timed_first_call"]
+           "loop_on_hand", "loops_source", "source_of", "timed_first_call"]

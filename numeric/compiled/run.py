@@ -21,9 +21,12 @@ from .cache import available, compiled, timed_first_call
 
 #: Frames × masses kept in memory by one compiled run (beyond it the NumPy driver streams).
 MAX_FRAME_VALUES = 50_000_000
-#: A loop not yet compiled in this process is compiled (or loaded from disk) only for a run of at least
-#: this many force evaluations: a first compile costs seconds, as much as ~10⁵ evaluations on NumPy.
+#: A loop that must be compiled is compiled only for a run of at least this many force evaluations:
+#: a loop's first compile costs seconds, as much as ~10⁵ evaluations on NumPy.
 COMPILE_MIN_EVALS = 100_000
+#: A loop compiled already (in this process or numba's disk cache) is taken for a scene whose force is not
+#: compiled yet from this many evaluations: the force's cfunc compiles in 0.2–0.3 s, ~10⁴ NumPy evaluations.
+FORCE_MIN_EVALS = 10_000
 
 
 def loop_name(integrator: Integrator) -> str | None:
@@ -62,16 +65,29 @@ def eager(enabled: bool = True):
 
 
 def ready(system: System, loop: str) -> bool:
-    """Whether ``loop`` is compiled (or loaded) for the system's module in this process already."""
+    """Whether ``loop`` and the system's force are compiled (or loaded) in this process already."""
     from .cache import _BY_MODULE
 
     known = _BY_MODULE.get(id(system.module))
     return bool(known and known[0] is system.module and known[1].loop(loop).signatures)
 
 
+def min_evals(system: System, loop: str) -> float:
+    """Force evaluations from which a run of ``loop`` on ``system`` takes the compiled loop: 0 when the loop
+    and the force are ready; :data:`FORCE_MIN_EVALS` when only the force must compile (the loop is loaded
+    or on disk); else :data:`COMPILE_MIN_EVALS` (within :func:`eager`: 0)."""
+    from .cache import loop_on_hand
+
+    if ready(system, loop):
+        return 0.0
+    if loop_on_hand(loop):
+        return float(min(COMPILE_MIN_EVALS, FORCE_MIN_EVALS))
+    return float(COMPILE_MIN_EVALS)
+
+
 def worth_compiling(system: System, loop: str, evals: float) -> bool:
-    """Compile for a run of ``evals`` force evaluations: when the loop is ready, or the run is long."""
-    return evals >= COMPILE_MIN_EVALS or ready(system, loop)
+    """Take the compiled loop for a run of ``evals`` force evaluations (:func:`min_evals`)."""
+    return evals >= min_evals(system, loop)
 
 
 def route(system: System, integrator: Integrator, frames: int, evals: float = float("inf")) -> str | None:
@@ -209,5 +225,5 @@ def rkn(system: System, table, x0: np.ndarray, v0: np.ndarray, t_eval: np.ndarra
     return AdaptiveResult(t_eval, xs[:, :, None], vs[:, :, None], int(evals), int(steps))
 
 
-__all__ = ["eager", "rkn", "route", "ready", "worth_compiling", "COMPILE_MIN_EVALS", "run_steps", "loop_name", "scalar_ready", "parameter_vector", "compile_seconds", "dop853",
+__all__ = ["eager", "rkn", "route", "ready", "min_evals", "worth_compiling", "COMPILE_MIN_EVALS", "FORCE_MIN_EVALS", "run_steps", "loop_name", "scalar_ready", "parameter_vector", "compile_seconds", "dop853",
            "MAX_FRAME_VALUES"]
