@@ -219,3 +219,12 @@ def test_chebyshev_coefficients_check_themselves():
         ChebyshevCoefficients(co.h, co.radius2, bad, co.sinc, co.wsin)
     with pytest.raises(ValueError, match="same length"):
         ChebyshevCoefficients(co.h, co.radius2, co.cos[:-1], co.sinc, co.wsin)
+
+
+@pytest.mark.parametrize("name", sorted(SPLITTING))
+def test_half_traces_are_the_propagators_half_traces(name):
+    """The scan of the stability limit evaluates trace(P(z))/2 on whole grids; it is the 2x2 map's."""
+    t = SPLITTING[name].table
+    z = np.random.default_rng(7).uniform(0.0, 2.0 * len(t.drifts), 50)
+    want = np.array([0.5 * np.trace(t.propagator(q)) for q in z])
+    np.testing.assert_allclose(t.half_traces(z), want, rtol=1e-12, atol=1e-12)
