@@ -65,17 +65,18 @@ def eager(enabled: bool = True):
 
 
 def ready(system: System, loop: str) -> bool:
-    """Whether ``loop`` and the system's force are compiled (or loaded) in this process already."""
-    from .cache import _BY_MODULE
+    """Whether a run of ``loop`` on ``system`` compiles nothing: the system's force is loaded in this process
+    and the loop is loaded or in numba's disk cache (:func:`.cache.loop_on_hand`)."""
+    from .cache import _BY_MODULE, loop_on_hand
 
     known = _BY_MODULE.get(id(system.module))
-    return bool(known and known[0] is system.module and known[1].loop(loop).signatures)
+    return bool(known and known[0] is system.module and loop_on_hand(loop))
 
 
 def min_evals(system: System, loop: str) -> float:
-    """Force evaluations from which a run of ``loop`` on ``system`` takes the compiled loop: 0 when the loop
-    and the force are ready; :data:`FORCE_MIN_EVALS` when only the force must compile (the loop is loaded
-    or on disk); else :data:`COMPILE_MIN_EVALS` (within :func:`eager`: 0)."""
+    """Force evaluations from which a run of ``loop`` on ``system`` takes the compiled loop: 0 when nothing
+    must compile (:func:`ready`); :data:`FORCE_MIN_EVALS` when only the force must (the loop is loaded or
+    on disk); else :data:`COMPILE_MIN_EVALS` (within :func:`eager`: 0)."""
     from .cache import loop_on_hand
 
     if ready(system, loop):
