@@ -316,3 +316,25 @@ def test_potential_scenes_get_a_scalar_force(scene_from_text):
         off = record(m.with_options(Options(compiled=False, progress=False)), system, x0, v0, grid)
         assert np.abs(on.x - off.x).max() <= 1e-12 * np.abs(off.x).max()
         assert np.abs(on.x[-1] - x0).max() > 1e-2
+
+
+SINGULAR = scene_toml(
+    "singular", {"m": 1.0, "k": 1.0, "c": 0.1, "r0": 1.0},
+    masses={"p": "m", "q": "m"},
+    springs=[{"between": ["wall", "p"], "k": "k"},
+             {"between": ["p", "q"], "potential": "k*d**2/2 + c/(r0 + d) + c/(r0 - d)"}])
+
+
+def test_a_force_that_divides_by_zero_gives_what_numpy_gives(scene_from_text, capfd):
+    """The compiled force uses NumPy's error model: a division by zero (here at the extension d = ±r0)
+    gives inf or nan frames as on the NumPy path, and nothing is printed (a cfunc cannot raise)."""
+    _, system = system_of(scene_from_text(SINGULAR, "singular.toml"))
+    x0, v0 = np.array([0.0, 1.0]), np.zeros(2)
+    m = registry.method("verlet", Options(progress=False))
+    grid = Grid(0.01, 20, 20)
+    with np.errstate(all="ignore"):
+        on = record(m, system, x0, v0, grid)
+        off = record(m.with_options(Options(compiled=False, progress=False)), system, x0, v0, grid)
+    assert not np.isfinite(on.x[1:]).all() and not np.isfinite(off.x[1:]).all()
+    assert np.array_equal(np.isfinite(on.x), np.isfinite(off.x))
+    assert capfd.readouterr().err == ""

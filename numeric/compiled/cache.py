@@ -49,13 +49,14 @@ import numba as _numba
 {binds}
 """
 #: What a scene's file appends to its force code: helpers first (the cfunc compiles when it is made).
+#: NumPy's error model: a division by zero gives inf or nan, as on the NumPy path (a cfunc cannot raise).
 _FORCE_TAIL = """
 
 import numba as _numba
 
-_scalar_force_terms = _numba.njit(cache=True)(_scalar_force_terms)
+_scalar_force_terms = _numba.njit(cache=True, error_model="numpy")(_scalar_force_terms)
 {binds}
-force = _numba.cfunc({signature!r}, cache=True)(scalar_force)
+force = _numba.cfunc({signature!r}, cache=True, error_model="numpy")(scalar_force)
 """
 
 
@@ -95,7 +96,7 @@ def source_of(module: ModuleType) -> str:
     if laws:
         body += (f"\n\n_EXPM1MX_COEFFICIENTS = {tuple(getattr(module, '_EXPM1MX_COEFFICIENTS', ()))!r}\n\n"
                  + "\n\n".join(inspect.getsource(getattr(module, name)) for name in laws))
-    binds = "\n".join(f"{name} = _numba.njit(cache=True)({name})" for name in laws)
+    binds = "\n".join(f"{name} = _numba.njit(cache=True, error_model=\"numpy\")({name})" for name in laws)
     return (f"# compiled force of scene {module.SCENE!r} (numba {numba.__version__}); written by "
             f"springchain.numeric.compiled.cache, do not edit\n"
             + "import numpy as _np\n\n\n" + body
