@@ -433,6 +433,8 @@ def _method_settings(alpha: float | None, names=None) -> tuple:
     from .numeric.run.protocol import Options
 
     options = Options(progress=False, settings={} if alpha is None else {"alpha": alpha})
+    if not options.settings:  # nothing to check (and no method to import)
+        return options.settings
     chosen = [registry.method(name, options) for name in (names or registry.names())]  # refuses a bad value
     _check_settings(chosen, options)
     return options.settings

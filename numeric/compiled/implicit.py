@@ -23,11 +23,9 @@ def route(system: System, integrator, frames: int, evals: float = float("inf")) 
     """:data:`LOOP` when this run of ``integrator`` (a Newmark-family step built on ``system``) takes the
     compiled loop, else None (the NumPy driver)."""
     op = getattr(integrator, "operator", None)
-    if op is None or not scalar_ready(system) or system.potential or getattr(op, "sparse", True):
+    if op is None or system.potential or getattr(op, "sparse", True) or frames * system.n > MAX_FRAME_VALUES:
         return None
-    if frames * system.n > MAX_FRAME_VALUES:
-        return None
-    return LOOP if worth_compiling(system, LOOP, evals) else None
+    return LOOP if worth_compiling(system, LOOP, evals) and scalar_ready(system) else None
 
 
 def run_newmark(system: System, integrator, x0: np.ndarray, v0: np.ndarray, h: float, steps: int,

@@ -67,10 +67,9 @@ def eager(enabled: bool = True):
 def ready(system: System, loop: str) -> bool:
     """Whether a run of ``loop`` on ``system`` compiles nothing: the system's force is loaded in this process
     and the loop is loaded or in numba's disk cache (:func:`.cache.loop_on_hand`)."""
-    from .cache import _BY_MODULE, loop_on_hand
+    from .cache import loop_on_hand
 
-    known = _BY_MODULE.get(id(system.module))
-    return bool(known and known[0] is system.module and loop_on_hand(loop))
+    return _force_loaded(system) and loop_on_hand(loop)
 
 
 def min_evals(system: System, loop: str) -> float:
@@ -86,18 +85,28 @@ def min_evals(system: System, loop: str) -> float:
     return float(COMPILE_MIN_EVALS)
 
 
+def _force_loaded(system: System) -> bool:
+    from .cache import _BY_MODULE
+
+    known = _BY_MODULE.get(id(system.module))
+    return bool(known and known[0] is system.module)
+
+
 def worth_compiling(system: System, loop: str, evals: float) -> bool:
-    """Take the compiled loop for a run of ``evals`` force evaluations (:func:`min_evals`)."""
+    """Take the compiled loop for a run of ``evals`` force evaluations (:func:`min_evals`). A run shorter
+    than both thresholds on a system whose force is not loaded is refused first, without importing numba."""
+    if evals < min(COMPILE_MIN_EVALS, FORCE_MIN_EVALS) and not _force_loaded(system):
+        return False
     return evals >= min_evals(system, loop)
 
 
 def route(system: System, integrator: Integrator, frames: int, evals: float = float("inf")) -> str | None:
     """The compiled loop for this run of about ``evals`` force evaluations, or None (then the NumPy
     driver): small ``[masses]`` scenes, runs long enough to pay a first compile (:func:`worth_compiling`)."""
-    if not scalar_ready(system) or frames * system.n > MAX_FRAME_VALUES:
-        return None
     name = loop_name(integrator)
-    return name if name is not None and worth_compiling(system, name, evals) else None
+    if name is None or frames * system.n > MAX_FRAME_VALUES or not worth_compiling(system, name, evals):
+        return None
+    return name if scalar_ready(system) else None
 
 
 def parameter_vector(system: System) -> np.ndarray:

@@ -68,8 +68,8 @@ class AdaptiveRun(Method):
             # a rough count: steps of the error control, and half a step per output time it steps onto
             evals = table.evals_per_step * (float(t[-1] - t[0]) * system.omega_max * rtol ** (-1.0 / table.order)
                                             + 0.5 * len(t))
-            if scalar_ready(system) and rtol > 0 and atol > 0 and np.all(np.diff(t) > 0) \
-                    and worth_compiling(system, "rkn_loop", evals):
+            if rtol > 0 and atol > 0 and np.all(np.diff(t) > 0) and worth_compiling(system, "rkn_loop", evals) \
+                    and scalar_ready(system):
                 return rkn(system, table, x0, v0, t, rtol, atol)
         return self.solver_class().solve(self.problem(system), x0, v0, t, rtol, atol)
 
