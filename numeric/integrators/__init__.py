@@ -7,20 +7,27 @@ tolerances and have their own small interface
 in :mod:`numeric.run.registry`.
 """
 
-from .base import Integrator, LinearChain, Problem, State
-from .blanes_moan4 import BlanesMoan4
-from .blanes_moan6 import BlanesMoan6
-from .chebyshev import ChebyshevPropagator
-from .dprkn6 import DPRKN6
-from .dprkn8 import DPRKN8
-from .dprkn12 import DPRKN12
-from .expm import MatrixExponential
-from .ivp import DOP853, LSODA, RK45, AdaptiveMethod, AdaptiveResult
-from .kahan_li import KahanLi8
-from .rk4 import RK4
-from .verlet import VelocityVerlet
-from .verlet_compensated import CompensatedVerlet
-from .yoshida import Yoshida4
+import importlib
+
+#: Public name -> the module that defines it (imported on first access: importing one integrator, or the
+#: package, does not import the others, SciPy's solvers among them).
+_WHERE = {
+    "Integrator": "base", "LinearChain": "base", "Problem": "base", "State": "base",
+    "BlanesMoan4": "blanes_moan4", "BlanesMoan6": "blanes_moan6", "ChebyshevPropagator": "chebyshev",
+    "DPRKN6": "dprkn6", "DPRKN8": "dprkn8", "DPRKN12": "dprkn12", "MatrixExponential": "expm",
+    "DOP853": "ivp", "LSODA": "ivp", "RK45": "ivp", "AdaptiveMethod": "ivp", "AdaptiveResult": "ivp",
+    "KahanLi8": "kahan_li", "RK4": "rk4", "VelocityVerlet": "verlet", "CompensatedVerlet": "verlet_compensated",
+    "Yoshida4": "yoshida",
+}
+
+
+def __getattr__(name: str):
+    if name in _WHERE:
+        value = getattr(importlib.import_module(f".{_WHERE[name]}", __name__), name)
+        globals()[name] = value
+        return value
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
 
 __all__ = [
     "Integrator", "Problem", "State", "LinearChain",
