@@ -125,10 +125,11 @@ class SplittingTable:
         def unstable(z):
             return abs(self.half_traces(z)) > 1.0 + 1e-13
 
-        dz, top, block = 1e-3, 50.0 * self.stages, 4096
+        dz, block = 1e-3, 4096
+        last = math.ceil(50.0 * self.stages / dz)  # the scan ends at z = 50 × stages
         k = 1
-        while k * dz < top:
-            grid = np.arange(k, k + block) * dz
+        while k <= last:
+            grid = np.arange(k, min(k + block, last + 1)) * dz
             bad = np.flatnonzero(unstable(grid))
             if bad.size:
                 lo, hi = grid[bad[0]] - dz, grid[bad[0]]
