@@ -138,6 +138,20 @@ def run_methods(system: System, x0: np.ndarray, v0: np.ndarray, h: float, steps:
     return out
 
 
+def non_finite_notes(runs: dict[str, Run]) -> list[str]:
+    """One line per run whose frames leave the finite numbers (a force that divides by zero or overflows
+    on the way): the method and the first such frame's time."""
+    notes = []
+    for name, run in runs.items():
+        ok = np.isfinite(run.x).all(axis=1) & np.isfinite(run.v).all(axis=1)
+        if not ok.all():
+            j = int(np.argmin(ok))
+            notes.append(f"{name}: the state is not finite at t = {run.t[j]:.6g} s (frame {j}, the first recorded "
+                         "frame that is not: the force divided by zero or overflowed on the way); its frames and "
+                         "energies from there on are inf/nan")
+    return notes
+
+
 def stream_methods(system: System, x0: np.ndarray, v0: np.ndarray, h: float, steps: int,
                    methods: list[str], record_every: int, out: Path, scene_name: str,
                    snapshots: int = 5, figures: bool = True, progress: bool | None = None,
@@ -185,4 +199,5 @@ def stream_methods(system: System, x0: np.ndarray, v0: np.ndarray, h: float, ste
     return summary
 
 
-__all__ = ["Run", "default_methods", "unstable_defaults", "applicable", "run_methods", "stream_methods"]
+__all__ = ["Run", "default_methods", "unstable_defaults", "applicable", "run_methods", "stream_methods",
+           "non_finite_notes"]

@@ -501,32 +501,44 @@ def _kept(sc: Scene, system, names, dt, steps, record_every, options, out, figur
     from .numeric.absolute import absolute_npz_arrays
     from .numeric.compare import compare
     from .numeric.progress import phase
-    from .numeric.simulate import run_methods
+    import contextlib
+
+    import numpy as np
+
+    from .numeric.simulate import non_finite_notes, run_methods
 
     _check_memory(sc, steps, record_every, len(names), "steps")
-    runs = run_methods(system, sc.x0, sc.v0, dt, steps, names, record_every, spectrum_source=options.spectrum,
-                       rtol=options.rtol, atol=options.atol, progress=options.progress, settings=options.settings)
+    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):  # a run that diverges is said in a note
+        runs = run_methods(system, sc.x0, sc.v0, dt, steps, names, record_every, spectrum_source=options.spectrum,
+                           rtol=options.rtol, atol=options.atol, progress=options.progress,
+                           settings=options.settings)
+    diverged = non_finite_notes(runs)
+    notes = list(notes) + diverged
     t = next(iter(runs.values())).t
     x, v = {m: r.x for m, r in runs.items()}, {m: r.v for m, r in runs.items()}
-    extra = absolute_npz_arrays(system, t, x, v)
-    if springs:
-        extra.update(_spring_arrays(system, x))
-    extra.update(_notes_array(list(notes)))
-    npz, figs = None, ()
-    if out is not None:
-        from .numeric.npz import save_npz
+    # a run that left the finite numbers is said once, in its note, not by NumPy's warnings on every array after it
+    with (np.errstate(divide="ignore", invalid="ignore", over="ignore") if diverged else contextlib.nullcontext()):
+        extra = absolute_npz_arrays(system, t, x, v)
+        if springs:
+            extra.update(_spring_arrays(system, x))
+        extra.update(_notes_array(notes))
+        npz, figs = None, ()
+        if out is not None:
+            from .numeric.npz import save_npz
 
-        out = Path(out)
-        out.mkdir(parents=True, exist_ok=True)
-        npz = out / f"{sc.name}.npz"
-        with phase(f"writing {npz.name}", enabled=options.progress):
-            save_npz(npz, t, x, v, extra)
-        if figures:
-            from .numeric.figures import write_figures
+            out = Path(out)
+            out.mkdir(parents=True, exist_ok=True)
+            npz = out / f"{sc.name}.npz"
+            with phase(f"writing {npz.name}", enabled=options.progress):
+                save_npz(npz, t, x, v, extra)
+            if figures:
+                from .numeric.figures import write_figures
 
-            with phase("figures", enabled=options.progress):
-                figs = tuple(write_figures(out, sc.name, sc.mass_names, system, runs))
-    return compare(system, runs), t, x, v, extra, npz, figs
+                with phase("figures", enabled=options.progress):
+                    figs = tuple(write_figures(out, sc.name, sc.mass_names, system, runs))
+        summary = compare(system, runs)
+    summary["diverged"] = diverged
+    return summary, t, x, v, extra, npz, figs
 
 
 def _modal_energies(sc: Scene, system, t, x, v, extra, npz, figs, figures, progress):
@@ -629,7 +641,7 @@ def simulate(scene: str | Path | Scene, methods: list[str] | None = None, dt: fl
                                                    springs, limits)
     if modal_energy:
         summary["modal_energy"], figs = _modal_energies(sc, system, t, x, v, extra, npz, figs, figures, progress)
-    notes = notes + limits
+    notes = notes + limits + summary.pop("diverged", [])
     summary.update({"scene": sc.name, "module": origin, "dt": dt, "steps": steps, "t_end": steps * dt,
                     "npz": None if npz is None else str(npz), "figures": [str(p) for p in figs],
                     "methods_that_apply": sim.applicable(system),

@@ -338,3 +338,24 @@ def test_a_force_that_divides_by_zero_gives_what_numpy_gives(scene_from_text, ca
     assert not np.isfinite(on.x[1:]).all() and not np.isfinite(off.x[1:]).all()
     assert np.array_equal(np.isfinite(on.x), np.isfinite(off.x))
     assert capfd.readouterr().err == ""
+
+
+@pytest.mark.parametrize("compiled", [False, True], ids=["numpy-driver", "compiled-loop"])
+def test_a_run_that_diverges_says_so_in_one_note(tmp_path, capfd, monkeypatch, compiled):
+    """Started at the singular extension, Verlet's state is inf/nan from the first step: the command says
+    so in one note (stdout, the NPZ's notes) and NumPy prints no warning, on either path."""
+    import springchain.numeric.compiled.run as compiled_run
+    from springchain.cli import main
+
+    if not compiled:
+        monkeypatch.setattr(compiled_run, "COMPILE_MIN_EVALS", 10**12)
+        monkeypatch.setattr(compiled_run, "FORCE_MIN_EVALS", 10**12)
+    path = tmp_path / "singular.toml"
+    path.write_text(SINGULAR + '\n[initial]\nx = [0.0, 1.0]\nv = [0.0, 0.0]\n')
+    assert main(["simulate", str(path), "--method", "verlet", "--steps", "2000", "--record-every", "100",
+                 "--out", str(tmp_path / "o")]) == 0
+    out, err = capfd.readouterr()
+    assert "note: verlet: the state is not finite at t = 10 s (frame 1, the first recorded frame" in out, out
+    assert "Warning" not in err, err
+    notes = np.load(tmp_path / "o" / "singular.npz")["notes"].tolist()
+    assert len(notes) == 1 and notes[0].startswith("verlet: the state is not finite")
