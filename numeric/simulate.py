@@ -8,6 +8,7 @@ the figures :mod:`numeric.figures`'.
 
 from __future__ import annotations
 
+import contextlib
 import time
 from dataclasses import dataclass
 from pathlib import Path
@@ -138,18 +139,22 @@ def run_methods(system: System, x0: np.ndarray, v0: np.ndarray, h: float, steps:
     return out
 
 
+def divergence_note(name: str, t: np.ndarray, finite: np.ndarray, what: str = "state") -> str | None:
+    """The one line for a run whose recorded ``what`` (per frame: ``finite``, shape (S,)) leaves the finite
+    numbers, naming the first such frame's time; None when every frame is finite."""
+    if finite.all():
+        return None
+    j = int(np.argmin(finite))
+    return (f"{name}: the {what} is not finite at t = {t[j]:.6g} s (frame {j}, the first recorded frame that is "
+            "not: the force divided by zero or overflowed on the way); its frames and energies from there on "
+            "are inf/nan")
+
+
 def non_finite_notes(runs: dict[str, Run]) -> list[str]:
-    """One line per run whose frames leave the finite numbers (a force that divides by zero or overflows
-    on the way): the method and the first such frame's time."""
-    notes = []
-    for name, run in runs.items():
-        ok = np.isfinite(run.x).all(axis=1) & np.isfinite(run.v).all(axis=1)
-        if not ok.all():
-            j = int(np.argmin(ok))
-            notes.append(f"{name}: the state is not finite at t = {run.t[j]:.6g} s (frame {j}, the first recorded "
-                         "frame that is not: the force divided by zero or overflowed on the way); its frames and "
-                         "energies from there on are inf/nan")
-    return notes
+    """One line per run whose frames leave the finite numbers (:func:`divergence_note`)."""
+    notes = [divergence_note(name, run.t, np.isfinite(run.x).all(axis=1) & np.isfinite(run.v).all(axis=1))
+             for name, run in runs.items()]
+    return [n for n in notes if n]
 
 
 def stream_methods(system: System, x0: np.ndarray, v0: np.ndarray, h: float, steps: int,
@@ -171,7 +176,7 @@ def stream_methods(system: System, x0: np.ndarray, v0: np.ndarray, h: float, ste
     grid = Grid(h, steps, record_every)
     t = grid.t
     keep = set(np.linspace(0, len(t) - 1, min(snapshots, len(t))).round().astype(int).tolist())
-    summary: dict = {"methods": {}}
+    summary: dict = {"methods": {}, "diverged": []}
     recorders: dict[str, StreamRecorder] = {}
     npz = out / f"{scene_name}.npz"
     extra = [f"{q}_{m}" for m in methods for q in absolute_keys(system)]
@@ -179,9 +184,15 @@ def stream_methods(system: System, x0: np.ndarray, v0: np.ndarray, h: float, ste
         for m in chosen:
             rec = recorders[m.name] = StreamRecorder(writer, system, m.name, t, keep)
             t0 = time.perf_counter()
-            evals = m.run(system, x0, v0, grid, rec)
-            summary["methods"][m.name] = {"seconds": time.perf_counter() - t0, "force_evals": evals,
-                                          **energy_drift(rec.energy, float(np.max(rec.kinetic)))}
+            with np.errstate(divide="ignore", invalid="ignore", over="ignore"):  # a divergence is said in a note
+                evals = m.run(system, x0, v0, grid, rec)
+            seconds = time.perf_counter() - t0
+            note = divergence_note(m.name, t, np.isfinite(rec.energy), "energy")
+            with np.errstate(invalid="ignore", over="ignore") if note else contextlib.nullcontext():
+                summary["methods"][m.name] = {"seconds": seconds, "force_evals": evals,
+                                              **energy_drift(rec.energy, float(np.max(rec.kinetic)))}
+            if note:
+                summary["diverged"].append(note)
         exact = next((m for m in chosen if m.kind is Kind.EXACT), None)
         if exact is not None:
             others = [m.name for m in chosen if m is not exact]
@@ -200,4 +211,4 @@ def stream_methods(system: System, x0: np.ndarray, v0: np.ndarray, h: float, ste
 
 
 __all__ = ["Run", "default_methods", "unstable_defaults", "applicable", "run_methods", "stream_methods",
-           "non_finite_notes"]
+           "non_finite_notes", "divergence_note"]

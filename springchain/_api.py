@@ -630,11 +630,11 @@ def simulate(scene: str | Path | Scene, methods: list[str] | None = None, dt: fl
     if system.chain:
         summary, t, x, v, extra, npz, figs = _streamed(sc, system, names, dt, steps, record_every, out, figures,
                                                        options)
-        if springs or limits:  # from the frames read back; the NPZ rewritten with them (temp file + rename)
+        if springs or limits or summary["diverged"]:  # from the frames read back; the NPZ rewritten with them
             from .numeric.npz import save_npz
 
             extra.update(_spring_arrays(system, x) if springs else {})
-            extra.update(_notes_array(limits))
+            extra.update(_notes_array(limits + summary["diverged"]))
             save_npz(npz, t, x, v, extra)
     else:
         summary, t, x, v, extra, npz, figs = _kept(sc, system, names, dt, steps, record_every, options, out, figures,

@@ -359,3 +359,21 @@ def test_a_run_that_diverges_says_so_in_one_note(tmp_path, capfd, monkeypatch, c
     assert "Warning" not in err, err
     notes = np.load(tmp_path / "o" / "singular.npz")["notes"].tolist()
     assert len(notes) == 1 and notes[0].startswith("verlet: the state is not finite")
+
+
+def test_a_chain_that_diverges_says_so_in_one_note(tmp_path, capfd, repo_root):
+    """The bundled FPUT-alpha chain started at 40 times its amplitude leaves the cubic potential's well
+    (V is unbounded below) and overflows: the streamed [chain] run says so in one note, also in the NPZ."""
+    from springchain.cli import main
+
+    text = (repo_root / "scenes" / "fput_alpha.toml").read_text()
+    big = text.replace('x = "sin(pi*(i + 1)/(n + 1))"', 'x = "40*sin(pi*(i + 1)/(n + 1))"')
+    assert big != text
+    path = tmp_path / "fput_big.toml"
+    path.write_text(big.replace('name = "fput_alpha"', 'name = "fput_big"'))
+    assert main(["simulate", str(path), "--method", "verlet", "--steps", "2000", "--out", str(tmp_path / "o")]) == 0
+    out, err = capfd.readouterr()
+    assert "note: verlet: the energy is not finite at t = " in out, out
+    assert "Warning" not in err, err
+    notes = np.load(tmp_path / "o" / "fput_big.npz")["notes"].tolist()
+    assert len(notes) == 1 and notes[0].startswith("verlet: the energy is not finite")
