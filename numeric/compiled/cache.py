@@ -117,12 +117,19 @@ def loops_module() -> ModuleType:
 def loop_on_hand(name: str) -> bool:
     """Whether loop ``name`` needs no compiling: loaded in this process, or in numba's disk cache beside
     the loops file (its index file)."""
-    if loops_module.cache_info().currsize and getattr(loops_module(), name).signatures:
+    if name in _ON_DISK or (loops_module.cache_info().currsize and getattr(loops_module(), name).signatures):
         return True
     try:
-        return any((cache_root() / "__pycache__").glob(f"{_loops_stem()}.{name}-*.nbi"))
+        found = any((cache_root() / "__pycache__").glob(f"{_loops_stem()}.{name}-*.nbi"))
     except OSError:
         return False
+    if found:  # a cache entry is never removed by springchain: asked once per process and loop
+        _ON_DISK.add(name)
+    return found
+
+
+#: Loops found in numba's disk cache by :func:`loop_on_hand` in this process.
+_ON_DISK: set[str] = set()
 
 
 @dataclass

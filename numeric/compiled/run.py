@@ -78,11 +78,9 @@ def min_evals(system: System, loop: str) -> float:
     on disk); else :data:`COMPILE_MIN_EVALS` (within :func:`eager`: 0)."""
     from .cache import loop_on_hand
 
-    if ready(system, loop):
-        return 0.0
-    if loop_on_hand(loop):
-        return float(min(COMPILE_MIN_EVALS, FORCE_MIN_EVALS))
-    return float(COMPILE_MIN_EVALS)
+    if not loop_on_hand(loop):
+        return float(COMPILE_MIN_EVALS)
+    return 0.0 if _force_loaded(system) else float(min(COMPILE_MIN_EVALS, FORCE_MIN_EVALS))
 
 
 def _force_loaded(system: System) -> bool:
