@@ -134,9 +134,16 @@ def run_methods(system: System, x0: np.ndarray, v0: np.ndarray, h: float, steps:
     for m in chosen:
         rec = MemoryRecorder(grid.frames, system.n)
         t0 = time.perf_counter()
-        evals = m.run(system, x0, v0, grid, rec)
+        with quiet_floats():  # a run that diverges is said in a note (non_finite_notes)
+            evals = m.run(system, x0, v0, grid, rec)
         out[m.name] = Run(grid.t, rec.x, rec.v, evals, m.name, time.perf_counter() - t0, m.kind is Kind.EXACT)
     return out
+
+
+def quiet_floats(enabled: bool = True):
+    """NumPy's floating-point warnings off within the block (``enabled``): a run that diverges is said once,
+    in its :func:`divergence_note`, not by a warning on every array computed from it."""
+    return np.errstate(divide="ignore", invalid="ignore", over="ignore") if enabled else contextlib.nullcontext()
 
 
 def divergence_note(name: str, t: np.ndarray, finite: np.ndarray, what: str = "state") -> str | None:
@@ -184,11 +191,11 @@ def stream_methods(system: System, x0: np.ndarray, v0: np.ndarray, h: float, ste
         for m in chosen:
             rec = recorders[m.name] = StreamRecorder(writer, system, m.name, t, keep)
             t0 = time.perf_counter()
-            with np.errstate(divide="ignore", invalid="ignore", over="ignore"):  # a divergence is said in a note
+            with quiet_floats():
                 evals = m.run(system, x0, v0, grid, rec)
             seconds = time.perf_counter() - t0
             note = divergence_note(m.name, t, np.isfinite(rec.energy), "energy")
-            with np.errstate(invalid="ignore", over="ignore") if note else contextlib.nullcontext():
+            with quiet_floats(bool(note)):
                 summary["methods"][m.name] = {"seconds": seconds, "force_evals": evals,
                                               **energy_drift(rec.energy, float(np.max(rec.kinetic)))}
             if note:
@@ -211,4 +218,4 @@ def stream_methods(system: System, x0: np.ndarray, v0: np.ndarray, h: float, ste
 
 
 __all__ = ["Run", "default_methods", "unstable_defaults", "applicable", "run_methods", "stream_methods",
-           "non_finite_notes", "divergence_note"]
+           "non_finite_notes", "divergence_note", "quiet_floats"]

@@ -501,23 +501,16 @@ def _kept(sc: Scene, system, names, dt, steps, record_every, options, out, figur
     from .numeric.absolute import absolute_npz_arrays
     from .numeric.compare import compare
     from .numeric.progress import phase
-    import contextlib
-
-    import numpy as np
-
-    from .numeric.simulate import non_finite_notes, run_methods
+    from .numeric.simulate import non_finite_notes, quiet_floats, run_methods
 
     _check_memory(sc, steps, record_every, len(names), "steps")
-    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):  # a run that diverges is said in a note
-        runs = run_methods(system, sc.x0, sc.v0, dt, steps, names, record_every, spectrum_source=options.spectrum,
-                           rtol=options.rtol, atol=options.atol, progress=options.progress,
-                           settings=options.settings)
+    runs = run_methods(system, sc.x0, sc.v0, dt, steps, names, record_every, spectrum_source=options.spectrum,
+                       rtol=options.rtol, atol=options.atol, progress=options.progress, settings=options.settings)
     diverged = non_finite_notes(runs)
     notes = list(notes) + diverged
     t = next(iter(runs.values())).t
     x, v = {m: r.x for m, r in runs.items()}, {m: r.v for m, r in runs.items()}
-    # a run that left the finite numbers is said once, in its note, not by NumPy's warnings on every array after it
-    with (np.errstate(divide="ignore", invalid="ignore", over="ignore") if diverged else contextlib.nullcontext()):
+    with quiet_floats(bool(diverged)):  # a run that left the finite numbers is said once, in its note
         extra = absolute_npz_arrays(system, t, x, v)
         if springs:
             extra.update(_spring_arrays(system, x))
