@@ -8,6 +8,7 @@ checked against a transfer-matrix computation in tests/test_sweep.py.
 
 from __future__ import annotations
 
+import json
 from pathlib import Path
 
 import numpy as np
@@ -59,6 +60,22 @@ def _stats(a: np.ndarray) -> dict:
     return out
 
 
+def figure_paths(out: Path, chain: bool) -> list[Path]:
+    """The figures :func:`summarise` writes: the ω distribution, and for a chain the localisation panels."""
+    out = Path(out)
+    return [out / "omega-distribution.png"] + ([out / "localisation.png"] if chain else [])
+
+
+def written(out: Path, chain: bool) -> tuple[dict, list[Path]] | None:
+    """The summary and figures already in ``out`` (None when any is missing): a resumed sweep that
+    computed nothing has nothing new to summarise (``summary.json`` is written last, after the figures)."""
+    paths = figure_paths(out, chain)
+    summary = Path(out) / "summary.json"
+    if not summary.is_file() or not all(p.is_file() for p in paths):
+        return None
+    return json.loads(summary.read_text(encoding="utf-8")), paths
+
+
 def summarise(out: Path, scene: str, law: dict | None = None) -> tuple[dict, list[Path]]:
     """Write DIR/summary.json and the figures; return (summary, figure paths).
 
@@ -76,7 +93,7 @@ def summarise(out: Path, scene: str, law: dict | None = None) -> tuple[dict, lis
     summary = {"scene": scene, "samples": int(w2.shape[0]), "modes": int(w2.shape[1]),
                "quantiles": list(QUANTILES), "omega2": _stats(w2)}
     omega = np.sqrt(np.maximum(w2, 0.0))
-    paths = [out / "omega-distribution.png"]
+    paths = figure_paths(out, chain)
     fig, ax = plots.new_figure(figsize=(8, 4.5))
     ax.hist(omega.ravel(), bins=min(120, max(20, int(np.sqrt(omega.size)))), density=True, color="C0", alpha=0.8)
     ax.set_xlabel("ω [rad/s]")
@@ -96,7 +113,6 @@ def summarise(out: Path, scene: str, law: dict | None = None) -> tuple[dict, lis
             summary["inverse_localisation_length"]["note"] = GAMMA_MISSING
         if law:
             summary["matsuda_ishii"] = dict(law, formula="gamma = sigma2 * omega^2 / (8 * k * mbar)")
-        paths.append(out / "localisation.png")
         # no γ (rings): one panel, not an empty one with a legend entry
         fig, axes = plots.new_figure(1, 2 if centres.size else 1, figsize=(11 if centres.size else 6.5, 4.5),
                                      squeeze=False)

@@ -156,7 +156,8 @@ def sweep(scene: str | Path | Scene, vary=(), disorder=(), samples: int = 100, *
     scheduler : str, optional
         Address of a running ``dask scheduler`` (``tcp://HOST:PORT``) instead.
     out : str or Path
-        Output folder (default ``springchain-sweep``). Re-running into it resumes.
+        Output folder (default ``springchain-sweep``). Re-running into it resumes; when every batch is
+        already there, the summary and figures on disk are returned, not drawn again.
     progress : bool
         A line on stderr every few seconds of a long sweep.
     client : dask.distributed.Client, optional
@@ -247,7 +248,9 @@ def sweep(scene: str | Path | Scene, vary=(), disorder=(), samples: int = 100, *
                          f"Dask scheduler {scheduler}" if scheduler is not None else
                          f"LocalCluster, {workers or os.cpu_count() or 1} worker processes" if own else
                          "in-process (Dask's synchronous scheduler)")}
-    summary, figures = sweep_summary.summarise(out, sc.name, _law(sc, system, disorder, vary) if sc.chain else None)
+    done = None if run["computed"] else sweep_summary.written(out, sc.chain is not None)
+    summary, figures = done or sweep_summary.summarise(out, sc.name,
+                                                      _law(sc, system, disorder, vary) if sc.chain else None)
     return SweepResult(out, summary["samples"], summary, tuple(figures), run, manifest)
 
 

@@ -46,12 +46,6 @@ def client2():
         yield client
 
 
-@pytest.fixture(scope="module")
-def client1():
-    with _cluster(1) as cluster, Client(cluster) as client:
-        yield client
-
-
 def rows(result_or_out):
     out = getattr(result_or_out, "out", result_or_out)
     return sweep_driver.read(out).to_pydict()
@@ -149,19 +143,21 @@ def test_rows_do_not_depend_on_batching(tmp_path):
 
 
 # -- the Dask sweep -------------------------------------------------------------------------------
-def test_same_seed_same_rows_whatever_workers_and_batch(tmp_path, client1, client2):
+def test_same_seed_same_rows_whatever_workers_and_batch(tmp_path, client2):
+    """One worker (this process, Dask's synchronous scheduler) and two worker processes: the same rows."""
     scene = chain_scene(tmp_path, 60)
     kw = dict(vary=["k=uniform(0.8, 1.2)", "m=grid(1, 2, 3)"], disorder=["mass=uniform(0.5, 1.5)"], samples=4,
               seed=11, progress=False)
-    a = springchain.sweep(scene, batch=5, out=tmp_path / "a", client=client1, **kw)
+    a = springchain.sweep(scene, batch=5, out=tmp_path / "a", workers=1, **kw)
     b = springchain.sweep(scene, batch=2, out=tmp_path / "b", client=client2, **kw)
+    assert a.run["scheduler"].startswith("in-process") and b.run["scheduler"] == "an existing client"
     ra, rb = rows(a), rows(b)
     assert ra == rb
     assert ra["sample"] == list(range(12))
     assert sorted(set(ra["m"])) == [1.0, 1.5, 2.0] and ra["m"][:4] == [1.0] * 4
     assert set(ra) == {"sample", "k", "m", "omega2", "participation_ratio", "inverse_localisation_length"}
     assert all(len(w) == 60 and np.all(np.diff(w) >= 0) and w[0] == 0.0 for w in ra["omega2"])
-    c = springchain.sweep(scene, batch=5, out=tmp_path / "c", client=client1, **dict(kw, seed=12))
+    c = springchain.sweep(scene, batch=5, out=tmp_path / "c", workers=1, **dict(kw, seed=12))
     assert rows(c)["omega2"] != ra["omega2"]
     summary = json.loads((a.out / "summary.json").read_text())
     assert summary["samples"] == 12 and len(summary["omega2"]["mean"]) == 60
@@ -176,9 +172,15 @@ def test_resume_skips_finished_batches_and_completes_partial(tmp_path, client2):
     first = springchain.sweep(scene, **kw)
     assert first.run["computed"] == 4
     before = rows(first)
+    stamps = {p.name: p.stat().st_mtime_ns for p in (*first.figures, first.out / "summary.json")}
     again = springchain.sweep(scene, **kw)
     assert again.run == dict(again.run, computed=0, skipped=4)
     assert rows(again) == before
+    # nothing new: the summary and figures on disk are the answer, not drawn again
+    assert again.summary == first.summary and again.figures == first.figures
+    assert {p.name: p.stat().st_mtime_ns for p in (*again.figures, again.out / "summary.json")} == stamps
+    first.figures[1].unlink()  # a figure the user deleted is drawn again
+    assert springchain.sweep(scene, **kw).figures[1].is_file()
     for b in (1, 3):
         sweep_driver.part_path(first.out, b).unlink()
     partial = springchain.sweep(scene, **kw)
@@ -326,7 +328,7 @@ def test_worker_side_needs_no_sympy(repo_root):
     assert out.stdout.strip() == "(3, 3)"
 
 
-def test_existing_cluster_via_scheduler_address(tmp_path, client1):
+def test_existing_cluster_via_scheduler_address(tmp_path):
     """`dask scheduler` + `dask worker` as separate processes (the README's two shells); same rows."""
     import shutil
     import subprocess
@@ -347,7 +349,7 @@ def test_existing_cluster_via_scheduler_address(tmp_path, client1):
         scene = chain_scene(tmp_path, 30)
         kw = dict(disorder=["mass=uniform(0.5, 1.5)"], samples=6, batch=4, seed=2, progress=False)
         ext = springchain.sweep(scene, scheduler=address, out=tmp_path / "ext", **kw)
-        ref = springchain.sweep(scene, out=tmp_path / "ref", client=client1, **kw)
+        ref = springchain.sweep(scene, out=tmp_path / "ref", workers=1, **kw)
         assert rows(ext) == rows(ref) and len(rows(ext)["sample"]) == 6
     finally:
         for p in reversed(procs):
