@@ -31,7 +31,8 @@ class SweepResult:
         What ``DIR/summary.json`` holds.
     figures : tuple of Path
     run : dict
-        Batches computed and skipped (resumed), seconds.
+        Batches computed and skipped (resumed), seconds, the scheduler; ``summary``: ``"written"``, or
+        ``"kept"`` when nothing was computed and the summary and figures on disk were returned.
     """
 
     out: Path
@@ -251,6 +252,7 @@ def sweep(scene: str | Path | Scene, vary=(), disorder=(), samples: int = 100, *
     done = None if run["computed"] else sweep_summary.written(out, sc.chain is not None)
     summary, figures = done or sweep_summary.summarise(out, sc.name,
                                                       _law(sc, system, disorder, vary) if sc.chain else None)
+    run["summary"] = "kept" if done else "written"
     return SweepResult(out, summary["samples"], summary, tuple(figures), run, manifest)
 
 

@@ -295,10 +295,10 @@ def cmd_sweep(args) -> int:
     r = result.run
     print(f"sweep of {result.summary['scene']!r}: {result.rows} samples x {result.summary['modes']} modes; "
           f"{r['computed']} batches computed, {r['skipped']} already done, {r['seconds']:.2f} s ({r['scheduler']})")
-    print(f"  wrote {result.parquet}")
-    print(f"  wrote {result.out / 'summary.json'}")
-    for p in result.figures:
-        print(f"  wrote {p}")
+    print(f"  {'wrote' if r['computed'] else 'kept '} {result.parquet}")
+    verb = "kept " if r["summary"] == "kept" else "wrote"
+    for p in (result.out / "summary.json", *result.figures):
+        print(f"  {verb} {p}")
     return 0
 
 

@@ -300,6 +300,20 @@ def test_cli_json(tmp_path, capsys):
     assert rows(tmp_path / "cli")["sample"] == list(range(6))
 
 
+def test_cli_says_kept_when_a_resumed_sweep_had_nothing_to_do(tmp_path, capsys):
+    scene = chain_scene(tmp_path, 12)
+    argv = ["sweep", str(scene), "--disorder", "k=uniform(0.9, 1.1)", "--samples", "4", "--workers", "1",
+            "--out", str(tmp_path / "o"), "--no-progress"]
+    assert main(argv) == 0
+    first = capsys.readouterr().out.splitlines()
+    assert [line.split()[0] for line in first[1:]] == ["wrote"] * 4  # parquet, summary, two figures
+    assert main(argv) == 0
+    again = capsys.readouterr().out.splitlines()
+    assert "0 batches computed" in again[0]
+    assert [line.split()[0] for line in again[1:]] == ["kept"] * 4
+    assert [line.split()[1] for line in again[1:]] == [line.split()[1] for line in first[1:]]
+
+
 def test_progress_lines(capsys):
     prog = sweep_driver.Progress(100, every=0.0)
     prog.add(10)
