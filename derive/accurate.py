@@ -32,6 +32,8 @@ from fractions import Fraction
 import mpmath
 import sympy as sp
 
+from .mp_eval import mp_function
+
 #: Relative agreement of two successive precisions accepted as converged.
 AGREE = 1e-18
 #: Largest working precision (decimal digits) tried before giving up.
@@ -63,8 +65,8 @@ def _agree(a: float, b: float) -> bool:
 
 @functools.lru_cache(maxsize=512)
 def _mp_function(expr: sp.Expr, symbols: tuple):
-    """``expr`` as an mpmath function of ``symbols`` (compiled once per expression)."""
-    return sp.lambdify(symbols, expr, modules="mpmath")
+    """``expr`` as an mpmath function of ``symbols`` (built once per expression, :mod:`derive.mp_eval`)."""
+    return mp_function(expr, symbols)
 
 
 def _mp_exact(r: sp.Rational):
@@ -74,7 +76,7 @@ def _mp_exact(r: sp.Rational):
 
 @functools.lru_cache(maxsize=4096)
 def _value(expr: sp.Expr, subs: tuple) -> float:
-    if (expr.subs(dict(subs)) if subs else expr).is_zero:
+    if (expr.xreplace(dict(subs)) if subs else expr).is_zero:  # symbols -> exact rationals (no pattern matching)
         return 0.0
     symbols = tuple(s for s, _ in subs if expr.has(s))
     values = [v for s, v in subs if expr.has(s)]
