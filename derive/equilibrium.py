@@ -29,6 +29,7 @@ import sympy as sp
 
 from .accurate import exact_values
 from .errors import SceneError
+from .mp_eval import mp_function
 from .potential import SpringLaw
 
 #: Relative agreement of two successive precisions accepted as converged.
@@ -106,7 +107,7 @@ def _at_rest_finite(file: str, law: SpringLaw, subs: dict) -> None:
                          "e.g. d**2 instead of sqrt(d**2)")
     with mpmath.workdps(30):
         for name, expr in (("V", law.energy), ("V'", law.force), ("V''", law.stiffness)):
-            f = sp.lambdify([law.d] + list(subs), expr, modules="mpmath")
+            f = mp_function(expr, (law.d, *subs))
             try:
                 v = f(mpmath.mpf(0), *[_mpv(r, 30) for r in subs.values()])
             except (ZeroDivisionError, ValueError, OverflowError, TypeError, NameError):
@@ -141,7 +142,7 @@ def check_law(file: str, law: SpringLaw, d_value, subs: dict, *, closed_form: sp
                                 "a potential with two continuous derivatives at the equilibrium, e.g. d**2 instead of abs(d)")
         vals = []
         for name, expr in (("V", law.energy), ("V'", law.force), ("V''", law.stiffness)):
-            f = sp.lambdify([law.d] + list(subs), expr, modules="mpmath")
+            f = mp_function(expr, (law.d, *subs))
             try:
                 v = f(dv, *[_mpv(r, dps) for r in subs.values()])
             except (ZeroDivisionError, ValueError, OverflowError, TypeError, NameError):
@@ -175,7 +176,7 @@ class _Problem:
         self.f64 = [(a, b, sp.lambdify([law.d] + syms, law.energy, "numpy"),
                      sp.lambdify([law.d] + syms, law.force, "numpy"),
                      sp.lambdify([law.d] + syms, law.stiffness, "numpy")) for a, b, law in springs]
-        self.fmp = [(a, b, sp.lambdify([law.d] + syms, law.force, "mpmath")) for a, b, law in springs]
+        self.fmp = [(a, b, mp_function(law.force, (law.d, *syms))) for a, b, law in springs]
         self.loads = list(loads)
         self.load_f = np.array([float(v) for v in self.loads])
         self.fvals = [float(v) for v in self.values]

@@ -6,7 +6,8 @@ closed forms of the test suite's scenes, half the time :func:`derive.accurate.va
 :func:`mp_function` walks the tree once into nested closures instead (0.2 ms) that do the same mpmath
 operations lambdify's printer writes: sequential sums and products, ``mpmath.sqrt`` for square roots,
 exact integers, rationals as ``mpf(p)/q`` at the working precision. Expressions with a node it does not
-know fall back to lambdify.
+know fall back to lambdify. Used by :mod:`derive.accurate` and by :mod:`derive.equilibrium` (V, V', V''
+of spring potentials at the equilibrium, in mpmath).
 """
 
 from __future__ import annotations
