@@ -1,6 +1,7 @@
 """Shared fixtures for the springchain test suite.
 
 * matplotlib is forced to the non-interactive Agg backend before anything imports it;
+* BLAS runs on one thread per worker (the workers already use every core);
 * bytecode caches are written even under ``PYTHONDONTWRITEBYTECODE`` (one compile per run, not per process);
 * ``SPRINGCHAIN_CACHE`` points at a temporary folder of the run (shared by its xdist workers), so no
   test writes into the user's cache (and a subprocess started by a test inherits it); ``fresh_cache``
@@ -29,6 +30,11 @@ from pathlib import Path
 sys.dont_write_bytecode = False
 os.environ.pop("PYTHONDONTWRITEBYTECODE", None)
 os.environ.setdefault("MPLBACKEND", "Agg")
+# `-n auto` starts one worker per core, so each worker's BLAS gets one thread: two workers' OpenBLAS
+# threads on two cores would spin-wait against each other (measured: ~25 CPU-s of a run). Set before
+# NumPy/SciPy load their OpenBLAS and inherited by every subprocess a test starts.
+for _var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
+    os.environ.setdefault(_var, "1")
 
 import matplotlib  # noqa: E402
 
