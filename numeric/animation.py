@@ -47,7 +47,12 @@ def _arc(a: float, b: float, height: float = 0.45) -> tuple[np.ndarray, np.ndarr
 
 
 def _write(fig, update, frames: int, fps: float, path: Path) -> Path:
-    """Draw ``frames`` frames with ``update(f)`` and write them as a GIF, atomically."""
+    """Draw ``frames`` frames with ``update(f)`` and write them as a GIF, atomically.
+
+    The first frame lays the figure out (constrained layout); the others keep that layout: a frame
+    moves artists inside fixed axis limits and changes a label's text, nothing the layout depends
+    on, and laying out each frame again cost more than drawing it.
+    """
     from matplotlib.animation import PillowWriter
 
     writer = PillowWriter(fps=fps)
@@ -56,6 +61,8 @@ def _write(fig, update, frames: int, fps: float, path: Path) -> Path:
             for f in range(frames):
                 update(f)
                 writer.grab_frame()
+                if f == 0:  # keep the axes where the first frame put them; with no layout engine
+                    fig.set_layout_engine(None)  # (matplotlib's default), savefig draws a frame once, not twice
     return path
 
 
