@@ -46,7 +46,11 @@ def table(headers: list[str], rows: list[list], caption: str | None = None, bold
 
 
 def figure_png(fig, dpi: int = DPI) -> bytes:
-    """A matplotlib Figure as PNG bytes (its own Agg canvas: no pyplot, no backend switch)."""
+    """A matplotlib Figure as PNG bytes (its own Agg canvas: no pyplot, no backend switch), laid out
+    once (:func:`numeric.plots.lay_out`: the figure is for this picture only)."""
+    from .plots import lay_out
+
+    lay_out(fig, dpi)
     buf = io.BytesIO()
     fig.savefig(buf, format="png", dpi=dpi)
     return buf.getvalue()

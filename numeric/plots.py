@@ -127,12 +127,31 @@ def modal_energies(t: np.ndarray, energies: np.ndarray, omega: np.ndarray, title
     return fig
 
 
+#: Resolution of the figures springchain writes.
+DPI = 110
+
+
+def lay_out(fig, dpi: float) -> None:
+    """Lay a figure out once, at ``dpi``, for its one final drawing, and drop its layout engine.
+
+    ``savefig`` on a figure that keeps its engine draws it twice (once to lay it out, once to render),
+    and a figure's ticks, labels and legends are measured on every pass; laid out here, it is drawn
+    once, and the picture is the same (pixel for pixel). For a figure about to be written and closed.
+    """
+    engine = fig.get_layout_engine()
+    if engine is not None:
+        fig.set_dpi(dpi)
+        engine.execute(fig)
+        fig.set_layout_engine(None)  # matplotlib's default: no engine, the axes stay where they are
+
+
 def save(fig, path) -> None:
-    """Save a figure atomically (temporary file, then rename) and close it."""
+    """Save a figure atomically (temporary file, then rename) and close it (laid out once: :func:`lay_out`)."""
     from .files import atomic_path
 
+    lay_out(fig, DPI)
     with atomic_path(path) as tmp:
-        fig.savefig(tmp, dpi=110, format=str(path).rsplit(".", 1)[-1])
+        fig.savefig(tmp, dpi=DPI, format=str(path).rsplit(".", 1)[-1])
 
 
 #: Profiles of more masses than this are drawn as a min–max envelope per bin of masses.

@@ -95,7 +95,8 @@ def summarise(out: Path, scene: str, law: dict | None = None) -> tuple[dict, lis
     omega = np.sqrt(np.maximum(w2, 0.0))
     paths = figure_paths(out, chain)
     fig, ax = plots.new_figure(figsize=(8, 4.5))
-    ax.hist(omega.ravel(), bins=min(120, max(20, int(np.sqrt(omega.size)))), density=True, color="C0", alpha=0.8)
+    ax.hist(omega.ravel(), bins=min(120, max(20, int(np.sqrt(omega.size)))), density=True, color="C0", alpha=0.8,
+            histtype="stepfilled")  # one polygon, not a patch per bin: the same picture, drawn in half the time
     ax.set_xlabel("ω [rad/s]")
     ax.set_ylabel("density of ω (all modes, all samples)")
     ax.set_title(f"{scene}: distribution of ω over {w2.shape[0]} samples")
