@@ -132,10 +132,11 @@ def _wait_until_loaded(pid: int, marker: str, timeout: float = 60.0) -> None:
 def test_ctrl_c_prints_one_line_and_exits_130(delay, tmp_path):
     """SIGINT at several moments after the interpreter has started: during imports (NumPy
     loading), while deriving, while simulating."""
-    path = chain_scene(tmp_path, 200_000, "wall", "wall", steps=20_000, dt=0.1)
+    # long enough (~40 s uninterrupted) that even a fast machine is still simulating at the last signal
+    path = chain_scene(tmp_path, 200_000, "wall", "wall", steps=200_000, dt=0.1)
     env = {**os.environ, "SPRINGCHAIN_CACHE": str(tmp_path / "cache")}
     proc = subprocess.Popen([sys.executable, "-m", "springchain", "simulate", str(path), "--out",
-                             str(tmp_path / "o"), "--no-figures", "--record-every", "2000"], stdout=subprocess.PIPE,
+                             str(tmp_path / "o"), "--no-figures", "--record-every", "20000"], stdout=subprocess.PIPE,
                             stderr=subprocess.PIPE, text=True, env=env,
                             preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
     _wait_until_loaded(proc.pid, "_multiarray_umath")  # imported by springchain's own code
