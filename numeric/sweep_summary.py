@@ -66,18 +66,19 @@ def figure_paths(out: Path, chain: bool) -> list[Path]:
     return [out / "omega-distribution.png"] + ([out / "localisation.png"] if chain else [])
 
 
-def written(out: Path, chain: bool) -> tuple[dict, list[Path]] | None:
-    """The summary and figures already in ``out`` (None when any is missing): a resumed sweep that
-    computed nothing has nothing new to summarise (``summary.json`` is written last, after the figures)."""
-    paths = figure_paths(out, chain)
+def written(out: Path, chain: bool, figures: bool = True) -> tuple[dict, list[Path]] | None:
+    """The summary (and, with ``figures``, the figures) already in ``out``, None when any is missing: a
+    resumed sweep that computed nothing has nothing new to summarise (``summary.json`` is written last,
+    after the figures)."""
+    paths = figure_paths(out, chain) if figures else []
     summary = Path(out) / "summary.json"
     if not summary.is_file() or not all(p.is_file() for p in paths):
         return None
     return json.loads(summary.read_text(encoding="utf-8")), paths
 
 
-def summarise(out: Path, scene: str, law: dict | None = None) -> tuple[dict, list[Path]]:
-    """Write DIR/summary.json and the figures; return (summary, figure paths).
+def summarise(out: Path, scene: str, law: dict | None = None, figures: bool = True) -> tuple[dict, list[Path]]:
+    """Write DIR/summary.json and (``figures``) the figures; return (summary, figure paths).
 
     Reads the ω² column (and, for chains, the participation ratio and γ) of the finished
     parts: S × N numbers each.
@@ -93,15 +94,7 @@ def summarise(out: Path, scene: str, law: dict | None = None) -> tuple[dict, lis
     summary = {"scene": scene, "samples": int(w2.shape[0]), "modes": int(w2.shape[1]),
                "quantiles": list(QUANTILES), "omega2": _stats(w2)}
     omega = np.sqrt(np.maximum(w2, 0.0))
-    paths = figure_paths(out, chain)
-    fig, ax = plots.new_figure(figsize=(8, 4.5))
-    ax.hist(omega.ravel(), bins=min(120, max(20, int(np.sqrt(omega.size)))), density=True, color="C0", alpha=0.8,
-            histtype="stepfilled")  # one polygon, not a patch per bin: the same picture, drawn in half the time
-    ax.set_xlabel("ω [rad/s]")
-    ax.set_ylabel("density of ω (all modes, all samples)")
-    ax.set_title(f"{scene}: distribution of ω over {w2.shape[0]} samples")
-    ax.grid(alpha=0.3)
-    plots.save(fig, paths[0])
+    pr = gamma = None
     if chain:
         pr = _column(table, "participation_ratio")
         gamma = _column(table, "inverse_localisation_length")
@@ -114,35 +107,55 @@ def summarise(out: Path, scene: str, law: dict | None = None) -> tuple[dict, lis
             summary["inverse_localisation_length"]["note"] = GAMMA_MISSING
         if law:
             summary["matsuda_ishii"] = dict(law, formula="gamma = sigma2 * omega^2 / (8 * k * mbar)")
-        # no γ (rings): one panel, not an empty one with a legend entry
-        fig, axes = plots.new_figure(1, 2 if centres.size else 1, figsize=(11 if centres.size else 6.5, 4.5),
-                                     squeeze=False)
-        a1 = axes[0, 0]
-        pc, pm, _ = binned(omega, pr)
-        step = max(1, omega.size // 20000)
-        a1.plot(omega.ravel()[::step], pr.ravel()[::step], ".", ms=1, alpha=0.3, color="0.5", label="modes")
-        a1.plot(pc, pm, "-o", ms=3, color="C0", label="mean per ω bin")
-        a1.set_xlabel("ω [rad/s]")
-        a1.set_ylabel("participation ratio 1/(N Σψ⁴)")
-        a1.set_title("Participation ratio (1 = spread over all masses, 1/N = one mass)"
-                     + ("" if centres.size else f"\n{GAMMA_MISSING}"), fontsize=10)
-        a1.grid(alpha=0.3)
-        a1.legend(fontsize=8)
-        if centres.size:
-            a2 = axes[0, 1]
-            a2.loglog(centres, g_mean, "o", ms=4, color="C1", label="γ: transfer matrix, mean per ω bin")
-            if law:
-                w = np.geomspace(max(centres[0], 1e-3), centres[-1], 100)
-                a2.loglog(w, matsuda_ishii(w**2, **law), "k--",
-                          label=f"Matsuda–Ishii σ²ω²/(8km̄), σ² = {law['sigma2']:.3g}")
-            a2.set_xlabel("ω [rad/s]")
-            a2.set_ylabel("inverse localisation length γ [1/site]")
-            a2.set_title("Inverse localisation length")
-            a2.grid(alpha=0.3, which="both")
-            a2.legend(fontsize=8)
-        plots.save(fig, paths[1])
+    paths = _figures(out, scene, omega, pr, gamma, law) if figures else []
     atomic_write_text(out / "summary.json", dumps(summary, indent=1) + "\n")  # strict: NaN (e.g. γ of a ring) as null
     return summary, paths
+
+
+def _figures(out: Path, scene: str, omega: np.ndarray, pr: np.ndarray | None, gamma: np.ndarray | None,
+             law: dict | None) -> list[Path]:
+    """Draw the ω distribution and, for a chain (``pr``, ``gamma`` of shape (S, N)), the localisation
+    panels into ``out``; return their paths (:func:`figure_paths`)."""
+    paths = figure_paths(out, pr is not None)
+    fig, ax = plots.new_figure(figsize=(8, 4.5))
+    ax.hist(omega.ravel(), bins=min(120, max(20, int(np.sqrt(omega.size)))), density=True, color="C0", alpha=0.8,
+            histtype="stepfilled")  # one polygon, not a patch per bin: the same picture, drawn in half the time
+    ax.set_xlabel("ω [rad/s]")
+    ax.set_ylabel("density of ω (all modes, all samples)")
+    ax.set_title(f"{scene}: distribution of ω over {omega.shape[0]} samples")
+    ax.grid(alpha=0.3)
+    plots.save(fig, paths[0])
+    if pr is None:
+        return paths
+    centres, g_mean, _ = binned(omega, gamma)
+    # no γ (rings): one panel, not an empty one with a legend entry
+    fig, axes = plots.new_figure(1, 2 if centres.size else 1, figsize=(11 if centres.size else 6.5, 4.5),
+                                 squeeze=False)
+    a1 = axes[0, 0]
+    pc, pm, _ = binned(omega, pr)
+    step = max(1, omega.size // 20000)
+    a1.plot(omega.ravel()[::step], pr.ravel()[::step], ".", ms=1, alpha=0.3, color="0.5", label="modes")
+    a1.plot(pc, pm, "-o", ms=3, color="C0", label="mean per ω bin")
+    a1.set_xlabel("ω [rad/s]")
+    a1.set_ylabel("participation ratio 1/(N Σψ⁴)")
+    a1.set_title("Participation ratio (1 = spread over all masses, 1/N = one mass)"
+                 + ("" if centres.size else f"\n{GAMMA_MISSING}"), fontsize=10)
+    a1.grid(alpha=0.3)
+    a1.legend(fontsize=8)
+    if centres.size:
+        a2 = axes[0, 1]
+        a2.loglog(centres, g_mean, "o", ms=4, color="C1", label="γ: transfer matrix, mean per ω bin")
+        if law:
+            w = np.geomspace(max(centres[0], 1e-3), centres[-1], 100)
+            a2.loglog(w, matsuda_ishii(w**2, **law), "k--",
+                      label=f"Matsuda–Ishii σ²ω²/(8km̄), σ² = {law['sigma2']:.3g}")
+        a2.set_xlabel("ω [rad/s]")
+        a2.set_ylabel("inverse localisation length γ [1/site]")
+        a2.set_title("Inverse localisation length")
+        a2.grid(alpha=0.3, which="both")
+        a2.legend(fontsize=8)
+    plots.save(fig, paths[1])
+    return paths
 
 
 __all__ = ["summarise", "matsuda_ishii", "binned", "QUANTILES"]

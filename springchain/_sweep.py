@@ -30,6 +30,7 @@ class SweepResult:
     summary : dict
         What ``DIR/summary.json`` holds.
     figures : tuple of Path
+        Paths of the figures (empty for ``figures=False``).
     run : dict
         Batches computed and skipped (resumed), seconds, the scheduler; ``summary``: ``"written"``, or
         ``"kept"`` when nothing was computed and the summary and figures on disk were returned.
@@ -128,7 +129,7 @@ def _law(scene: Scene, system, disorder, vary) -> dict | None:
 
 def sweep(scene: str | Path | Scene, vary=(), disorder=(), samples: int = 100, *, seed: int = 0,
           batch: int | None = None, workers: int | None = None, scheduler: str | None = None,
-          out: str | Path | None = None, progress: bool = True, client=None) -> SweepResult:
+          out: str | Path | None = None, figures: bool = True, progress: bool = True, client=None) -> SweepResult:
     """A parameter study or disorder ensemble, computed on Dask and written as parquet.
 
     Parameters
@@ -159,6 +160,8 @@ def sweep(scene: str | Path | Scene, vary=(), disorder=(), samples: int = 100, *
     out : str or Path
         Output folder (default ``springchain-sweep``). Re-running into it resumes; when every batch is
         already there, the summary and figures on disk are returned, not drawn again.
+    figures : bool
+        Draw the figures (default); False writes the parquet parts and ``summary.json`` only.
     progress : bool
         A line on stderr every few seconds of a long sweep.
     client : dask.distributed.Client, optional
@@ -249,11 +252,11 @@ def sweep(scene: str | Path | Scene, vary=(), disorder=(), samples: int = 100, *
                          f"Dask scheduler {scheduler}" if scheduler is not None else
                          f"LocalCluster, {workers or os.cpu_count() or 1} worker processes" if own else
                          "in-process (Dask's synchronous scheduler)")}
-    done = None if run["computed"] else sweep_summary.written(out, sc.chain is not None)
-    summary, figures = done or sweep_summary.summarise(out, sc.name,
-                                                      _law(sc, system, disorder, vary) if sc.chain else None)
+    done = None if run["computed"] else sweep_summary.written(out, sc.chain is not None, figures)
+    summary, drawn = done or sweep_summary.summarise(out, sc.name,
+                                                    _law(sc, system, disorder, vary) if sc.chain else None, figures)
     run["summary"] = "kept" if done else "written"
-    return SweepResult(out, summary["samples"], summary, tuple(figures), run, manifest)
+    return SweepResult(out, summary["samples"], summary, tuple(drawn), run, manifest)
 
 
 __all__ = ["sweep", "SweepResult", "DEFAULT_SWEEP_OUT"]

@@ -281,14 +281,14 @@ def cmd_sweep(args) -> int:
     Draw S realisations of a scene (parameters with --vary, per-mass or per-spring disorder of [chain]
     scenes with --disorder), compute every realisation's omega^2 (and, for chains, participation ratios
     and inverse localisation lengths) as Dask tasks of B realisations, and write DIR/sweep.parquet (one
-    part per batch), DIR/summary.json and figures. DIST: uniform(a, b), normal(mu, sigma), lognormal(mu,
+    part per batch), DIR/summary.json and figures (not with --no-figures). DIST: uniform(a, b), normal(mu, sigma), lognormal(mu,
     sigma) or grid(a, b, n). Re-running into the same DIR resumes.
     """
     from ._sweep import sweep
 
     result = sweep(args.scene, vary=args.vary or (), disorder=args.disorder or (), samples=args.samples,
                    seed=args.seed, batch=args.batch, workers=args.workers, scheduler=args.scheduler,
-                   out=args.out, progress=not args.no_progress)
+                   out=args.out, figures=not args.no_figures, progress=not args.no_progress)
     if args.json:
         print(_dumps(result.to_json(), indent=1))
         return 0
@@ -555,6 +555,7 @@ def _add_sweep(sub) -> None:
     where.add_argument("--scheduler", metavar="ADDRESS",
                        help="use a running `dask scheduler`, e.g. tcp://127.0.0.1:8786")
     _out(sw, DEFAULT_SWEEP_OUT)
+    sw.add_argument("--no-figures", action="store_true", help="write only the parquet parts and summary.json")
     _json(sw)
     _no_progress(sw)
 

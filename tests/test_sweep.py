@@ -149,7 +149,7 @@ def test_same_seed_same_rows_whatever_workers_and_batch(tmp_path, client2):
     kw = dict(vary=["k=uniform(0.8, 1.2)", "m=grid(1, 2, 3)"], disorder=["mass=uniform(0.5, 1.5)"], samples=4,
               seed=11, progress=False)
     a = springchain.sweep(scene, batch=5, out=tmp_path / "a", workers=1, **kw)
-    b = springchain.sweep(scene, batch=2, out=tmp_path / "b", client=client2, **kw)
+    b = springchain.sweep(scene, batch=2, out=tmp_path / "b", client=client2, figures=False, **kw)
     assert a.run["scheduler"].startswith("in-process") and b.run["scheduler"] == "an existing client"
     ra, rb = rows(a), rows(b)
     assert ra == rb
@@ -157,7 +157,7 @@ def test_same_seed_same_rows_whatever_workers_and_batch(tmp_path, client2):
     assert sorted(set(ra["m"])) == [1.0, 1.5, 2.0] and ra["m"][:4] == [1.0] * 4
     assert set(ra) == {"sample", "k", "m", "omega2", "participation_ratio", "inverse_localisation_length"}
     assert all(len(w) == 60 and np.all(np.diff(w) >= 0) and w[0] == 0.0 for w in ra["omega2"])
-    c = springchain.sweep(scene, batch=5, out=tmp_path / "c", workers=1, **dict(kw, seed=12))
+    c = springchain.sweep(scene, batch=5, out=tmp_path / "c", workers=1, figures=False, **dict(kw, seed=12))
     assert rows(c)["omega2"] != ra["omega2"]
     summary = json.loads((a.out / "summary.json").read_text())
     assert summary["samples"] == 12 and len(summary["omega2"]["mean"]) == 60
@@ -256,7 +256,7 @@ def test_sweep_localisation_matches_transfer_matrix(tmp_path, client2):
     """The sweep's γ at low ω (mass disorder) against an independent transfer-matrix Lyapunov exponent."""
     scene = chain_scene(tmp_path, 800)
     res = springchain.sweep(scene, disorder=["mass=uniform(0.5, 1.5)"], samples=16, batch=4, seed=1,
-                            out=tmp_path / "phys", client=client2, progress=False)
+                            out=tmp_path / "phys", client=client2, progress=False, figures=False)
     law = res.summary["matsuda_ishii"]
     assert law["k"] == 1.0 and law["mbar"] == 1.0 and abs(law["sigma2"] - 1 / 12) < 1e-15
     t = rows(res)
@@ -291,13 +291,30 @@ def test_cli_errors_are_one_line(argv, needle, capsys, tmp_path):
 def test_cli_json(tmp_path, capsys):
     scene = chain_scene(tmp_path, 20)
     code = main(["sweep", str(scene), "--disorder", "mass=lognormal(0, 0.3)", "--samples", "6", "--batch", "4",
-                 "--workers", "1", "--out", str(tmp_path / "cli"), "--json", "--no-progress"])
+                 "--workers", "1", "--out", str(tmp_path / "cli"), "--json", "--no-progress", "--no-figures"])
     cap = capsys.readouterr()
     assert code == 0
     doc = json.loads(cap.out)
     assert doc["rows"] == 6 and doc["batches"] == 2 and doc["computed_batches"] == 2
+    assert doc["figures"] == [] and not list((tmp_path / "cli").glob("*.png"))  # --no-figures
+    assert json.loads((tmp_path / "cli" / "summary.json").read_text())["samples"] == 6
     assert doc["settings"]["disorder"] == ["mass=lognormal(0.0, 0.3)"] and doc["settings"]["seed"] == 0
     assert rows(tmp_path / "cli")["sample"] == list(range(6))
+
+
+def test_figures_false_writes_no_figure_and_a_later_run_draws_them(tmp_path):
+    """figures=False: parquet and summary.json only; resumed with figures, nothing is computed again
+    and the figures are drawn from the parts on disk; resumed without, the summary is kept."""
+    scene = chain_scene(tmp_path, 12)
+    kw = dict(disorder=["k=uniform(0.9, 1.1)"], samples=4, workers=1, out=tmp_path / "o", progress=False)
+    bare = springchain.sweep(scene, figures=False, **kw)
+    assert bare.figures == () and bare.run["summary"] == "written" and not list(bare.out.glob("*.png"))
+    drawn = springchain.sweep(scene, **kw)
+    assert drawn.run["computed"] == 0 and drawn.run["summary"] == "written"
+    assert [p.name for p in drawn.figures] == ["omega-distribution.png", "localisation.png"]
+    assert all(p.stat().st_size > 0 for p in drawn.figures) and drawn.summary == bare.summary
+    kept = springchain.sweep(scene, figures=False, **kw)
+    assert kept.run["summary"] == "kept" and kept.figures == () and kept.summary == bare.summary
 
 
 def test_cli_says_kept_when_a_resumed_sweep_had_nothing_to_do(tmp_path, capsys):
@@ -361,7 +378,7 @@ def test_existing_cluster_via_scheduler_address(tmp_path):
         procs.append(subprocess.Popen([dask_cli, "worker", address, "--nworkers", "1", "--nthreads", "1",
                                        "--no-dashboard"], stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL))
         scene = chain_scene(tmp_path, 30)
-        kw = dict(disorder=["mass=uniform(0.5, 1.5)"], samples=6, batch=4, seed=2, progress=False)
+        kw = dict(disorder=["mass=uniform(0.5, 1.5)"], samples=6, batch=4, seed=2, progress=False, figures=False)
         ext = springchain.sweep(scene, scheduler=address, out=tmp_path / "ext", **kw)
         ref = springchain.sweep(scene, out=tmp_path / "ref", workers=1, **kw)
         assert rows(ext) == rows(ref) and len(rows(ext)["sample"]) == 6
