@@ -281,8 +281,8 @@ def cmd_sweep(args) -> int:
     Draw S realisations of a scene (parameters with --vary, per-mass or per-spring disorder of [chain]
     scenes with --disorder), compute every realisation's omega^2 (and, for chains, participation ratios
     and inverse localisation lengths) as Dask tasks of B realisations, and write DIR/sweep.parquet (one
-    part per batch), DIR/summary.json and figures (not with --no-figures). DIST: uniform(a, b), normal(mu, sigma), lognormal(mu,
-    sigma) or grid(a, b, n). Re-running into the same DIR resumes.
+    part per batch), DIR/summary.json and figures (not with --no-figures). DIST: uniform(a, b),
+    normal(mu, sigma), lognormal(mu, sigma) or grid(a, b, n). Re-running into the same DIR resumes.
     """
     from ._sweep import sweep
 
