@@ -379,8 +379,8 @@ def test_existing_cluster_via_scheduler_address(tmp_path):
                                        "--no-dashboard"], stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL))
         scene = chain_scene(tmp_path, 30)
         kw = dict(disorder=["mass=uniform(0.5, 1.5)"], samples=6, batch=4, seed=2, progress=False, figures=False)
+        ref = springchain.sweep(scene, out=tmp_path / "ref", workers=1, **kw)  # while the worker starts
         ext = springchain.sweep(scene, scheduler=address, out=tmp_path / "ext", **kw)
-        ref = springchain.sweep(scene, out=tmp_path / "ref", workers=1, **kw)
         assert rows(ext) == rows(ref) and len(rows(ext)["sample"]) == 6
     finally:
         for p in reversed(procs):
