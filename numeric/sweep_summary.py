@@ -94,7 +94,8 @@ def summarise(out: Path, scene: str, law: dict | None = None, figures: bool = Tr
     summary = {"scene": scene, "samples": int(w2.shape[0]), "modes": int(w2.shape[1]),
                "quantiles": list(QUANTILES), "omega2": _stats(w2)}
     omega = np.sqrt(np.maximum(w2, 0.0))
-    pr = gamma = None
+    pr = None
+    centres = g_mean = np.zeros(0)
     if chain:
         pr = _column(table, "participation_ratio")
         gamma = _column(table, "inverse_localisation_length")
@@ -107,15 +108,16 @@ def summarise(out: Path, scene: str, law: dict | None = None, figures: bool = Tr
             summary["inverse_localisation_length"]["note"] = GAMMA_MISSING
         if law:
             summary["matsuda_ishii"] = dict(law, formula="gamma = sigma2 * omega^2 / (8 * k * mbar)")
-    paths = _figures(out, scene, omega, pr, gamma, law) if figures else []
+    paths = _figures(out, scene, omega, pr, (centres, g_mean), law) if figures else []
     atomic_write_text(out / "summary.json", dumps(summary, indent=1) + "\n")  # strict: NaN (e.g. γ of a ring) as null
     return summary, paths
 
 
-def _figures(out: Path, scene: str, omega: np.ndarray, pr: np.ndarray | None, gamma: np.ndarray | None,
+def _figures(out: Path, scene: str, omega: np.ndarray, pr: np.ndarray | None, gamma_binned: tuple,
              law: dict | None) -> list[Path]:
-    """Draw the ω distribution and, for a chain (``pr``, ``gamma`` of shape (S, N)), the localisation
-    panels into ``out``; return their paths (:func:`figure_paths`)."""
+    """Draw the ω distribution and, for a chain (``pr`` of shape (S, N); ``gamma_binned`` the summary's
+    (ω bin centres, mean γ), empty for rings), the localisation panels into ``out``; return their paths
+    (:func:`figure_paths`)."""
     paths = figure_paths(out, pr is not None)
     fig, ax = plots.new_figure(figsize=(8, 4.5))
     ax.hist(omega.ravel(), bins=min(120, max(20, int(np.sqrt(omega.size)))), density=True, color="C0", alpha=0.8,
@@ -127,7 +129,7 @@ def _figures(out: Path, scene: str, omega: np.ndarray, pr: np.ndarray | None, ga
     plots.save(fig, paths[0])
     if pr is None:
         return paths
-    centres, g_mean, _ = binned(omega, gamma)
+    centres, g_mean = gamma_binned
     # no γ (rings): one panel, not an empty one with a legend entry
     fig, axes = plots.new_figure(1, 2 if centres.size else 1, figsize=(11 if centres.size else 6.5, 4.5),
                                  squeeze=False)
