@@ -335,8 +335,9 @@ def spectral_displacement(record: Record, periods, zeta, *, progress: bool | Non
             done += float(np.sum(work[start:stop]))
             bar.update(int(done))
         bar.close()
-        sd = np.ldexp(pk, 2 * k + e_a)  # back to metres: ×(2^k)²·2^e_a, exact unless out of range
-        sd_rec = np.ldexp(pr, 2 * k + e_a)
+        with np.errstate(over="ignore", under="ignore"):  # out of float64's range: refused or noted below
+            sd = np.ldexp(pk, 2 * k + e_a)  # back to metres: ×(2^k)²·2^e_a, exact unless out of range
+            sd_rec = np.ldexp(pr, 2 * k + e_a)
         if not np.all(np.isfinite(sd)):
             j = int(np.argmin(np.isfinite(sd)))
             raise RunRefused(f"response spectrum of {record.name!r}: SD at T = {T[j]:.6g} s, zeta = {z[j]:g} exceeds "

@@ -214,9 +214,29 @@ def _close_stream_impl(st, om, z):
 
 
 # -- a long row interval: closed form and windows ---------------------------------------------------
+def _state_at_impl(c0, c1, W0, W1, S, D, alpha, beta, anchor, off):
+    """(u, u̇) at time ``anchor + off`` of a long interval in closed form, p + w.
+
+    The phase β·anchor is taken once and ``off`` added by angle addition, so that a window near a
+    late anchor (even where float64 cannot resolve ``anchor + off``) is sampled consistently with
+    the state at the anchor itself.
+    """
+    e = math.exp(-(alpha * anchor + alpha * off))
+    ca = math.cos(beta * anchor)
+    sa = math.sin(beta * anchor)
+    co = math.cos(beta * off)
+    so = math.sin(beta * off)
+    c = ca * co - sa * so
+    s = sa * co + ca * so
+    return (c0 + c1 * anchor) + c1 * off + e * (W0 * c + S * s), c1 + e * (W1 * c - D * s)
+
+
 def _long_interval_impl(st, M, u0, v0, al, ar, h, om, z):
     """Peak of |u| over a row interval of many periods (see the module docstring); returns the
-    state at its end (closed form)."""
+    state at its end (closed form).
+
+    Windows are (anchor, lo, hi): times anchor + [lo, hi] with anchor 0, the stationary time of
+    the local-maximum curve, or h."""
     cd = math.sqrt((1.0 - z) * (1.0 + z))
     alpha = z * om
     beta = om * cd
@@ -227,11 +247,7 @@ def _long_interval_impl(st, M, u0, v0, al, ar, h, om, z):
     W1 = v0 - c1
     S = (W1 + alpha * W0) / beta
     D = (om * om * W0 + alpha * W1) / beta
-    e = math.exp(-alpha * h)
-    ch = math.cos(beta * h)
-    sh = math.sin(beta * h)
-    uh = c0 + c1 * h + e * (W0 * ch + S * sh)
-    vh = c1 + e * (W1 * ch - D * sh)
+    uh, vh = _state_at(c0, c1, W0, W1, S, D, alpha, beta, h, 0.0)
     r = math.hypot(W0, S)
     L = max(st[_BEST], abs(u0), abs(uh))
     if z > 0.0:
@@ -241,12 +257,10 @@ def _long_interval_impl(st, M, u0, v0, al, ar, h, om, z):
         t_neg = h
     tmax = min(h, t_neg)
     half = WINDOW_PERIODS * _TWO_PI / beta
-    # windows: [start, end] pairs, at most three, in increasing order of start
-    ws = np.empty(3)
-    we = np.empty(3)
-    nw = 0
-    ws[0] = 0.0
-    we[0] = min(half, tmax)
+    anc = np.zeros(3)
+    lo = np.zeros(3)
+    hi = np.zeros(3)
+    hi[0] = min(half, tmax)
     nw = 1
     if z > 0.0 and c1 != 0.0:
         x = 4.0 * z * z * (1.0 - z) * (1.0 + z)
@@ -255,46 +269,46 @@ def _long_interval_impl(st, M, u0, v0, al, ar, h, om, z):
         if r > em:
             tm = math.log(r / em) / alpha
             if tm < tmax:
-                ws[nw] = max(0.0, tm - half)
-                we[nw] = min(tmax, tm + half)
+                anc[nw] = tm
+                lo[nw] = -min(half, tm)
+                hi[nw] = min(half, tmax - tm)
                 nw += 1
     if tmax >= h:
-        ws[nw] = max(0.0, h - half)
-        we[nw] = h
+        anc[nw] = h
+        lo[nw] = -min(half, h)
+        hi[nw] = 0.0
         nw += 1
-    # march the windows, merging overlaps (starts are increasing)
     j = 0
-    while j < nw:
-        a = ws[j]
-        b = we[j]
-        while j + 1 < nw and ws[j + 1] <= b:
+    while j < nw:  # march the windows, merging overlaps into the earlier one (anchors ascending)
+        anchor = anc[j]
+        a = lo[j]
+        b = hi[j]
+        at_end = anchor == h
+        while j + 1 < nw and (anc[j + 1] - anchor) + lo[j + 1] <= b:
             j += 1
-            b = max(b, we[j])
+            b = max(b, (anc[j] - anchor) + hi[j])
+            at_end = at_end or anc[j] == h
         j += 1
         if not b > a:
             continue
-        if a > 0.0:  # a fresh stream from the closed-form state at the window's start
-            _close_stream(st, om, z)
-            ea = math.exp(-alpha * a)
-            ca = math.cos(beta * a)
-            sa = math.sin(beta * a)
-            uw = c0 + c1 * a + ea * (W0 * ca + S * sa)
-            vw = c1 + ea * (W1 * ca - D * sa)
-            if abs(uw) > st[_BEST]:
-                st[_BEST] = abs(uw)
-        else:
+        if anchor == 0.0 and a == 0.0:  # continues the stream from the interval's start
             uw = u0
             vw = v0
+        else:  # a fresh stream from the closed-form state at the window's start
+            _close_stream(st, om, z)
+            uw, vw = _state_at(c0, c1, W0, W1, S, D, alpha, beta, anchor, a)
+            if abs(uw) > st[_BEST]:
+                st[_BEST] = abs(uw)
         n = max(1, int(math.ceil((b - a) * om * SAMPLES_PER_PERIOD / _TWO_PI)))
         g = (b - a) / n
         _substep_map(om, z, g, M)
-        a_end = ar if b >= h else al + s * b
-        _march(st, M, uw, vw, al + s * a, a_end, n, g, om, z)
-        if b < h:
+        a_start = (al + s * anchor) + s * a
+        a_end = ar if at_end else (al + s * anchor) + s * b
+        _march(st, M, uw, vw, a_start, a_end, n, g, om, z)
+        if not at_end:
             _close_stream(st, om, z)
     if t_neg < h:  # the bound of the extrema past t_neg: |u| there and at the end
-        en = math.exp(-alpha * t_neg)
-        un = c0 + c1 * t_neg + en * (W0 * math.cos(beta * t_neg) + S * math.sin(beta * t_neg))
+        un, _ = _state_at(c0, c1, W0, W1, S, D, alpha, beta, 0.0, t_neg)
         if abs(un) > st[_BEST]:
             st[_BEST] = abs(un)
         st[_HAVE] = 0.0
@@ -319,9 +333,12 @@ def _free_peak_impl(u, v, om, z):
     float
     """
     cd = math.sqrt((1.0 - z) * (1.0 + z))
-    x = math.atan2(cd * v, om * u + z * v)
-    if x <= 0.0:
-        x += math.pi
+    y = cd * v
+    X = om * u + z * v
+    if y < 0.0 or (y == 0.0 and X > 0.0):  # the root in (0, π]: the opposite direction (no x + π rounding)
+        y = -y if y != 0.0 else 0.0
+        X = -X
+    x = math.atan2(y, X)
     S = (v / om + z * u) / cd
     first = cd * math.hypot(u, S) * math.exp(-z * x / cd)
     return max(abs(u), first)
@@ -369,9 +386,10 @@ _substep_map = _substep_map_impl
 _refine = _refine_impl
 _march = _march_impl
 _close_stream = _close_stream_impl
+_state_at = _state_at_impl
 _long_interval = _long_interval_impl
 _free_peak = _free_peak_impl
-_INNER = ("_substep_map", "_refine", "_march", "_close_stream", "_long_interval", "_free_peak")
+_INNER = ("_substep_map", "_refine", "_march", "_close_stream", "_state_at", "_long_interval", "_free_peak")
 #: The tail's closed form, callable from Python.
 free_peak = _free_peak_impl
 

@@ -77,8 +77,8 @@ class Segment:
 
 def _root(f, lo, hi, flo, df=None):
     """The root of f in [lo, hi] (one sign change): Newton on ``df`` kept inside the bracket,
-    bisection when it leaves it, to the working precision."""
-    eps = mp.mpf(2) ** (-mp.mp.prec + 4)
+    bisection when it leaves it, to 2^-(precision - 24) (u there is off by its square)."""
+    eps = mp.mpf(2) ** (-mp.mp.prec + 24)
     x = (lo + hi) / 2
     while hi - lo > eps * max(abs(hi), 1):
         fx = f(x)
@@ -89,12 +89,10 @@ def _root(f, lo, hi, flo, df=None):
         else:
             hi = x
         step = fx / df(x) if df is not None else None
+        if step is not None and abs(step) <= eps * max(abs(x), 1):
+            return x - step
         nxt = x - step if step is not None else None
-        if nxt is None or not lo < nxt < hi:
-            nxt = (lo + hi) / 2
-        elif abs(step) <= eps * max(abs(x), 1):
-            return nxt
-        x = nxt
+        x = nxt if nxt is not None and lo < nxt < hi else (lo + hi) / 2
     return (lo + hi) / 2
 
 
