@@ -394,13 +394,31 @@ _INNER = ("_substep_map", "_refine", "_march", "_close_stream", "_state_at", "_l
 free_peak = _free_peak_impl
 
 
+def _numba_cache_present() -> bool:
+    """Whether numba's on-disk cache already holds this module's kernels (index files)."""
+    import os
+    from pathlib import Path
+
+    here = Path(__file__).resolve()
+    base = os.environ.get("NUMBA_CACHE_DIR")
+    folder = Path(base) if base else here.parent / "__pycache__"
+    try:
+        return any(folder.rglob(f"{here.stem}.*.nbi"))
+    except OSError:
+        return False
+
+
 @functools.lru_cache(maxsize=1)
 def _kernel():
     """The sweep compiled by numba (cached on disk), or the plain functions without numba."""
-    from .fast_kernels import available
+    from .fast_kernels import COMPILE_NOTE, available
 
     if not available():
         return _peaks_impl
+    if not _numba_cache_present():
+        from .progress import note
+
+        note(COMPILE_NOTE)
     import numba
 
     g = globals()
