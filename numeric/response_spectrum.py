@@ -52,7 +52,7 @@ MAX_WORK = 4e9
 #: Work units per compiled call between progress updates (Ctrl-C is honoured between calls).
 CHUNK_WORK = 2e7
 #: Work units charged for a row interval whose sub-step map must be computed afresh (unequal rows).
-MAP_WORK = 40
+MAP_WORK = 100
 #: What SD means, stated in every output.
 SD_CONVENTION = ("SD = max |u| over the record and the free vibration after its last row "
                  "(the free decay's first extremum, in closed form)")
@@ -267,6 +267,16 @@ def work_estimate(hs: np.ndarray, periods: np.ndarray) -> np.ndarray:
     return short + (hs.shape[0] - n_short) * float(LONG_INTERVAL_WORK) + MAP_WORK * changes
 
 
+def _check_work(record: Record, total: float, pairs: int) -> None:
+    """Refuse (one line naming the limit) a request of more than :data:`MAX_WORK` sub-steps."""
+    if total > MAX_WORK:
+        raise RunRefused(
+            f"response spectrum of {record.name!r}: {total:.3g} oscillator sub-steps ({pairs} (period, zeta) "
+            f"pairs on {record.t.shape[0]} rows; {SAMPLES_PER_PERIOD} per period, at most about "
+            f"{LONG_INTERVAL_WORK} per row interval); accepted: at most {MAX_WORK:.0e} (fewer periods or damping "
+            "ratios, longer periods, or fewer rows)", quantity="periods")
+
+
 def _scaled_time(periods: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """k with 2^k nearest the period in log scale, and ω in units of 2^k s, shape (P,)."""
     k = np.round(np.log2(periods)).astype(np.int64)
@@ -310,12 +320,7 @@ def spectral_displacement(record: Record, periods, zeta, *, progress: bool | Non
     per_period = work_estimate(hs, uniq)
     work = per_period[inverse]
     total = float(np.sum(work))
-    if total > MAX_WORK:
-        raise RunRefused(
-            f"response spectrum of {record.name!r}: {total:.3g} oscillator sub-steps ({T.size} (period, zeta) "
-            f"pairs on {record.t.shape[0]} rows; up to {SAMPLES_PER_PERIOD * LONG_CYCLES} per row interval, "
-            f"{SAMPLES_PER_PERIOD} per period); accepted: at most {MAX_WORK:.0e} (fewer periods or damping "
-            "ratios, longer periods, or fewer rows)", quantity="periods")
+    _check_work(record, total, T.size)
     sd = np.zeros(T.shape)
     sd_rec = np.zeros(T.shape)
     pga = record.pga
@@ -376,6 +381,8 @@ def response_spectrum(record: Record, zeta=DEFAULT_ZETA, periods=None, *, progre
         periods = np.geomspace(lo, hi, n)
     periods, zeta = _validate(periods, zeta)
     periods = np.sort(periods)
+    _check_work(record, float(np.sum(work_estimate(_intervals(record), periods))) * zeta.size,
+                periods.size * zeta.size)  # before the (Z, P) grids are made
     Tg, zg = np.meshgrid(periods, zeta)
     sd, sd_record, notes = spectral_displacement(record, Tg, zg, progress=progress, with_record=True)
     return ResponseSpectrum(periods, zeta, sd, record, sd_record, notes)
