@@ -311,7 +311,10 @@ def test_rsa_record_base_shear_of_an_undamped_chain(tmp_path):
 
 @pytest.mark.slow
 def test_rsa_record_base_shear_of_a_40_mass_chain(tmp_path):
-    """The issue's size: an undamped 40-mass chain (float shapes past 24 masses; base shear was 1.2e-4 low)."""
-    worst = check_chain(tmp_path, 40)
+    """The issue's size: an undamped 40-mass chain (float shapes past 24 masses; base shear was 1.2e-4
+    low; 4.3e-3 here before). 25 masses in CI's bounded form, 40 from SPRINGCHAIN_SLOW_BUDGET 1 on."""
+    from helpers import SLOW_BUDGET
+
+    worst = check_chain(tmp_path, 40 if SLOW_BUDGET >= 1 else 25)
     print(f"worst relative base-shear error: {worst:.2e}")
     assert worst < 1e-11, worst
