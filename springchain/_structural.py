@@ -182,7 +182,9 @@ class SpectrumResult:
     Attributes
     ----------
     spectrum : springchain.numeric.response_spectrum.ResponseSpectrum
-        ``.periods`` (P,), ``.zeta`` (Z,), ``.sd``, ``.psv``, ``.psa`` (Z, P).
+        ``.periods`` (P, ascending), ``.zeta`` (Z,), ``.sd``, ``.psv``, ``.psa`` (Z, P): SD the peak over
+        the record and the free vibration after it; ``.sd_record`` (Z, P) the peak over the record
+        alone; ``.notes`` (float64 limits met).
     seconds : float
     """
 
@@ -278,7 +280,8 @@ def response_spectrum(record, zeta=0.05, periods=None) -> SpectrumResult:
     zeta, periods
         Damping ratios and natural periods [s], as
         :func:`springchain.numeric.response_spectrum.response_spectrum` takes them (default: ζ = 0.05
-        at 100 periods log-spaced from 0.02 to 10 s).
+        at 100 periods log-spaced from 0.02 to 10 s; periods 1e-150 ... 1e150 s, listed ascending
+        in the result).
 
     Returns
     -------
