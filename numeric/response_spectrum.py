@@ -159,7 +159,7 @@ class ResponseSpectrum:
                 f"({self.periods[0]:g} ... {self.periods[-1]:g} s), zeta={self.zeta.tolist()})")
 
 
-# -- exact one-step maps -----------------------------------------------------------------------
+# -- exact one-step maps (NumPy; the compiled sweep builds the same maps in sdof_peak) ------------
 def _augmented(omega_h: np.ndarray, zeta: np.ndarray, theta: np.ndarray | float = 1.0) -> np.ndarray:
     """``expm(θ·A)`` of the scaled augmented matrix (time unit h), shape (..., 4, 4).
 
