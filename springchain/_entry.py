@@ -38,6 +38,18 @@ def _on_sigint(signum, frame):
     raise KeyboardInterrupt
 
 
+def _on_unraisable(unraisable) -> None:
+    """After Ctrl-C, errors CPython cannot raise are not printed: a KeyboardInterrupt raised in a
+    ctypes callback while numba compiles is lost (the work would go on until the grace timer: end
+    now, as that timer would, with one line), and finalizers of objects the interrupt left half
+    built fail ("Exception ignored in ... __del__" with a traceback)."""
+    if _state["signalled"]:
+        if issubclass(unraisable.exc_type, KeyboardInterrupt):
+            _hard_exit()
+        return
+    sys.__unraisablehook__(unraisable)
+
+
 def _interrupted() -> int:
     _state["handled"] = True
     signal.signal(signal.SIGINT, signal.SIG_IGN)  # a second Ctrl-C during clean-up prints nothing
@@ -63,6 +75,7 @@ def _from_interrupt(exc: BaseException) -> bool:
 def main(argv=None) -> int:
     if signal.getsignal(signal.SIGINT) is not signal.SIG_IGN:  # a background job keeps ignoring it
         signal.signal(signal.SIGINT, _on_sigint)
+        sys.unraisablehook = _on_unraisable
     try:
         from .cli import main as cli_main
 

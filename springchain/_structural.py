@@ -17,6 +17,8 @@ from pathlib import Path
 from .derive.errors import SceneError
 from .derive.scene import Scene
 
+#: The SD convention as the text and the figure state it.
+SD_NOTE = "SD = max |u| over the record and the free vibration after it"
 #: Header columns of the two spectrum files ``rsa --spectrum`` takes.
 RECORD_COLUMNS = ("t", "a")
 DESIGN_COLUMNS = ("t", "sa")
@@ -180,7 +182,9 @@ class SpectrumResult:
     Attributes
     ----------
     spectrum : springchain.numeric.response_spectrum.ResponseSpectrum
-        ``.periods`` (P,), ``.zeta`` (Z,), ``.sd``, ``.psv``, ``.psa`` (Z, P).
+        ``.periods`` (P, ascending), ``.zeta`` (Z,), ``.sd``, ``.psv``, ``.psa`` (Z, P): SD the peak over
+        the record and the free vibration after it; ``.sd_record`` (Z, P) the peak over the record
+        alone; ``.notes`` (float64 limits met).
     seconds : float
     """
 
@@ -193,7 +197,8 @@ class SpectrumResult:
     def to_json(self) -> dict:
         return {**self.spectrum.to_json(), "seconds": self.seconds,
                 "method": "exact one-step maps for piecewise-linear input (Nigam-Jennings), peak refined "
-                          "between samples, free vibration after the record"}
+                          "between samples, row intervals of many periods in closed form, free vibration "
+                          "after the record (its first extremum) in closed form"}
 
     def to_text(self, rows: int = 12) -> str:
         s = self.spectrum
@@ -201,6 +206,7 @@ class SpectrumResult:
         out = [f"response spectrum of {r.name!r}: {r.t.shape[0]} rows, t = {r.t[0]:g} ... {r.t[-1]:g} s, "
                f"PGA = {r.pga:.4g} m/s^2; {s.periods.shape[0]} periods x {s.zeta.shape[0]} damping ratios "
                f"in {self.seconds:.3f} s",
+               f"{SD_NOTE}; periods ascending",
                f"{'T [s]':>10}" + "".join(f"{'SD [m]':>14}{'PSV [m/s]':>12}{'PSA [m/s2]':>12}  " for _ in s.zeta)]
         out.append(" " * 10 + "".join(f"{'zeta = ' + format(z, 'g'):>38}  " for z in s.zeta))
         import numpy as np
@@ -212,6 +218,7 @@ class SpectrumResult:
         for z, zz in enumerate(s.zeta):
             k = int(np.argmax(s.psa[z]))
             out.append(f"peak PSA at zeta = {zz:g}: {s.psa[z, k]:.4g} m/s^2 at T = {s.periods[k]:.4g} s")
+        out.extend(f"note: {n}" for n in s.notes)
         return "\n".join(out) + "\n"
 
     def plot(self):
@@ -219,7 +226,8 @@ class SpectrumResult:
 
         s = self.spectrum
         return structural_plots.response_spectrum(s.periods, s.zeta, s.sd, s.psv, s.psa,
-                                                  f"Response spectra of {s.record.name!r}", s.record.pga)
+                                                  f"Response spectra of {s.record.name!r}", s.record.pga,
+                                                  note=SD_NOTE)
 
     def save(self, out: str | Path) -> list[Path]:
         """Write ``<record>-spectrum.png`` and ``<record>-spectrum.json`` into ``out``."""
@@ -272,7 +280,8 @@ def response_spectrum(record, zeta=0.05, periods=None) -> SpectrumResult:
     zeta, periods
         Damping ratios and natural periods [s], as
         :func:`springchain.numeric.response_spectrum.response_spectrum` takes them (default: ζ = 0.05
-        at 100 periods log-spaced from 0.02 to 10 s).
+        at 100 periods log-spaced from 0.02 to 10 s; periods 1e-150 ... 1e150 s, listed ascending
+        in the result).
 
     Returns
     -------
@@ -335,7 +344,7 @@ class RSA:
     def to_text(self) -> str:
         r, m = self.result, self.result.modes
         out = [f"response-spectrum analysis of {self.scene.name!r} with {r.spectrum!r} "
-               f"({'a record: exact SD at each mode' if self.kind == 'record' else 'a design spectrum: SD = Sa/omega^2'})",
+               f"({'a record: exact SD at each mode, ' + SD_NOTE if self.kind == 'record' else 'a design spectrum: SD = Sa/omega^2'})",
                f"{'mode':>4} {'T [s]':>10} {'zeta':>8} {'Gamma':>12} {'M*/M':>8} {'SD [m]':>12} {'PSA [m/s2]':>11} "
                f"{'base shear [N]':>15}"]
         for j in range(m.omega.shape[0]):
@@ -380,7 +389,7 @@ def rsa(scene, spectrum, combine: str = "cqc") -> RSA:
     from ._modules import system_of as _system
     from ._scenes import load
     from .numeric.errors import RunRefused
-    from .numeric.response_spectrum import Record, design_spectrum_sa, spectral_displacement
+    from .numeric.response_spectrum import PERIOD_RANGE, Record, design_spectrum_sa, spectral_displacement
     from .numeric.rsa import Combination, ModalProperties, analyse
 
     if combine not in {c.value for c in Combination}:
@@ -412,7 +421,15 @@ def rsa(scene, spectrum, combine: str = "cqc") -> RSA:
         if np.any(modes.zeta >= 1):
             raise RunRefused("a mode is critically damped or more (zeta >= 1): no response spectrum ordinate; "
                              "accepted: every mode underdamped", quantity="scene")
-        sd = spectral_displacement(data, modes.periods, np.maximum(modes.zeta, 0.0))
+        lo, hi = PERIOD_RANGE
+        out = np.flatnonzero(~((modes.periods >= lo) & (modes.periods <= hi)))
+        if out.size:
+            j = int(out[0])
+            raise RunRefused(f"spectrum {name!r}: mode {j + 1} has T = {modes.periods[j]:.6g} s; accepted: a record's "
+                             f"spectrum at periods {lo:g} ... {hi:g} s (float64's range for the record's times)",
+                             quantity="spectrum")
+        sd, _, sd_notes = spectral_displacement(data, modes.periods, np.maximum(modes.zeta, 0.0), with_record=True)
+        notes.extend(sd_notes)
     else:
         T, Sa = data
         sa = design_spectrum_sa(T, Sa, modes.periods)

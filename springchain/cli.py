@@ -355,8 +355,9 @@ def cmd_spectrum(args) -> int:
     Displacement, pseudo-velocity and pseudo-acceleration response spectra of a ground-acceleration
     record (CSV with header t,a in s and m/s^2, linear between rows, zero outside: the [ground] table
     format), exact for that piecewise-linear input (closed-form one-step maps of the damped oscillator,
-    no time-stepping error; the peak between samples is refined, free vibration after the record is
-    included). Writes DIR/<record>-spectrum.png and .json.
+    no time-stepping error; the peak between samples is refined). SD is the peak over the record and
+    the free vibration after its last row; periods are listed in ascending order. Writes
+    DIR/<record>-spectrum.png and .json.
     """
     from ._structural import parse_periods, read_record, response_spectrum
 
