@@ -1,0 +1,136 @@
+"""The modes of a finite periodic chain, each named by its band and wavenumber, or as a gap mode.
+
+The finite chain's modes come from the accurate spectrum of its own masses and springs
+(:attr:`springchain.numeric.system.System.spectrum`: the spring-factor SVD). Mass i lies in cell i // p at
+place i % p of the cell. A mode at ω² is
+
+* a **band mode** (band j = the j-th lowest branch at each q, wavenumber q ∈ [0, π]) when some band reaches
+  ω²: q solves ω²_j(q) = ω² (safeguarded Newton on the accurate branch with its group velocity); where several
+  (j, q) do, the one whose Bloch waves e^{±iqc} U_j(±q) carry most of the mode's weight (its projection);
+* a **gap mode** otherwise: it decays by e^{−κ} per cell, κ = Im q(ω) (:mod:`.decay`), localisation length
+  1/κ cells; an **edge** mode when its weight sits within three localisation lengths of an open end, a
+  **defect** mode otherwise (a cell that differs, or a ring).
+
+In a ring of N cells every band mode has q = 2πs/N (its ω² is ω²_j(2πs/N)).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from .cell import Cell
+from .decay import attenuation
+from .spectrum import spectrum
+
+#: Newton steps of the wavenumber search.
+STEPS = 60
+
+
+@dataclass(frozen=True)
+class FiniteMode:
+    """One mode of the finite chain."""
+
+    omega2: float
+    band: int | None
+    q: float | None
+    kind: str  # "band", "edge" or "defect"
+    localisation: float | None = None  # cells (gap modes)
+    weight: float | None = None  # fraction of the mode's weight on the Bloch waves (band modes)
+
+    @property
+    def omega(self) -> float:
+        return float(np.sqrt(max(self.omega2, 0.0)))
+
+    def as_json(self) -> dict:
+        return {"omega2": self.omega2, "omega": self.omega, "band": self.band, "q": self.q, "kind": self.kind,
+                "localisation_length": self.localisation, "bloch_weight": self.weight}
+
+
+def _solve(cell: Cell, j: int, a: float, b: float, target: np.ndarray) -> np.ndarray:
+    """q in [a, b] with ω_j(q) = target (ω_j monotone there), vectorised safeguarded Newton."""
+    ends = spectrum(cell, np.array([a, b]))
+    wa, wb = ends.omega[:, j]
+    up = wb > wa
+    qa, qb = np.full(target.shape, a), np.full(target.shape, b)
+    x = a + (b - a) * np.clip((target - wa) / (wb - wa), 0.0, 1.0) if wb != wa else np.full(target.shape, a)
+    for _ in range(STEPS):
+        s = spectrum(cell, x)
+        r = s.omega[:, j] - target
+        below = (r < 0) == up
+        qa, qb = np.where(below, x, qa), np.where(below, qb, x)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            step = x - r / s.velocity[:, j]
+        bad = ~np.isfinite(step) | (step <= np.minimum(qa, qb)) | (step >= np.maximum(qa, qb))
+        new = np.where(bad, 0.5 * (qa + qb), step)
+        if np.all(np.abs(new - x) <= 4 * np.finfo(float).eps * np.maximum(1.0, np.abs(x))):
+            return new
+        x = new
+    return x
+
+
+def _weight(cell: Cell, psi: np.ndarray, j: int, q: float) -> float:
+    """Fraction of the mode (mass-weighted, shape (cells, p)) on the Bloch waves of band j at ±q."""
+    u = spectrum(cell, np.array([q])).vectors[0, :, j]
+    c = np.arange(psi.shape[0])
+    total = float(np.sum(np.abs(psi) ** 2))
+    if total == 0:
+        return 0.0
+    amp = [abs(np.sum((psi @ (u if s > 0 else u.conj()).conj()) * np.exp(-1j * s * q * c))) ** 2 for s in (1, -1)]
+    return float(sum(amp) / (total * psi.shape[0]))
+
+
+def label(cell: Cell, omega2: np.ndarray, vectors: np.ndarray, ring: bool) -> list[FiniteMode]:
+    """Band and q, or gap kind and localisation length, of every mode.
+
+    Parameters
+    ----------
+    omega2 : ndarray, shape (N,)
+    vectors : ndarray, shape (N, N)
+        Mass-weighted unit mode vectors as columns (M^1/2 φ).
+    ring : bool
+        The chain closes on itself (no ends: a gap mode is a defect mode).
+    """
+    from .dos import SAMPLES, _pieces
+
+    p, n = cell.p, omega2.shape[0]
+    cells = -(-n // p)
+    omega = np.sqrt(np.maximum(omega2, 0.0))
+    qs = np.linspace(0.0, np.pi, SAMPLES)
+    grid = spectrum(cell, qs)
+    candidates: list[list[tuple[int, float]]] = [[] for _ in range(n)]
+    for j in range(p):
+        for a, b in _pieces(cell, j, qs, grid.omega[:, j]):
+            ends = spectrum(cell, np.array([a, b])).omega[:, j]
+            lo, hi = min(ends), max(ends)
+            tol = 1e-12 * max(hi, 1e-300)
+            inside = np.flatnonzero((omega >= lo - tol) & (omega <= hi + tol))
+            if inside.size:
+                for k, q in zip(inside, _solve(cell, j, a, b, np.clip(omega[inside], lo, hi))):
+                    candidates[k].append((j, float(q)))
+    out: list[FiniteMode | None] = [None] * n
+    gap = [k for k in range(n) if not candidates[k]]
+    for k in range(n):
+        if not candidates[k]:
+            continue
+        psi = np.zeros(cells * p, dtype=complex)
+        psi[:n] = vectors[:, k]
+        psi = psi.reshape(cells, p)
+        scored = [(_weight(cell, psi, j, q) if len(candidates[k]) > 1 else None, j, q) for j, q in candidates[k]]
+        w, j, q = max(scored, key=lambda t: -1.0 if t[0] is None else t[0])
+        out[k] = FiniteMode(float(omega2[k]), j, q, "band", None, w)
+    if gap:
+        kappa, _ = attenuation(cell, omega[gap])
+        for k, kap in zip(gap, kappa):
+            weight = np.abs(np.pad(vectors[:, k], (0, cells * p - n))).reshape(cells, p) ** 2
+            per_cell = weight.sum(axis=1)
+            centre = float(np.sum(np.arange(cells) * per_cell) / max(per_cell.sum(), 1e-300))
+            length = float(1.0 / kap) if kap > 0 else None
+            reach = 3 * (length or cells)
+            edge = not ring and min(centre, cells - 1 - centre) <= max(reach, 1.0)
+            out[k] = FiniteMode(float(omega2[k]), None, None, "edge" if edge else "defect", length)
+    return out
+
+
+__all__ = ["FiniteMode", "label"]
