@@ -83,27 +83,28 @@ def _omega2(d: Dispersion, sig: str) -> list[str]:
         return _stacked(d, sig, "band_omega2", d.branches,
                         "Closed-form ω²_j(q) of each branch [rad²/s²], shape q.shape + (p,).", odd=False)
     p = d.p
-    body = ["    _q = numpy.asarray(q, dtype=float)",
-            f"    _m = cell_masses({sig})",
-            f"    _k = cell_stiffness({sig})",
-            f"    _K = numpy.zeros(_q.shape + ({p}, {p}), dtype=complex)",
-            "    for (_a, _b, _r), _w in zip(_CELL_SPRINGS, _k):",
-            "        if _a < 0 or _b < 0:",
-            "            _c = _b if _a < 0 else _a",
-            "            _K[..., _c, _c] += _w",
-            "        elif _a == _b:",
-            "            _K[..., _a, _a] += 4 * _w * numpy.sin(_r * _q / 2) ** 2",
-            "        else:",
-            "            _e = numpy.exp(1j * _r * _q)",
-            "            _K[..., _a, _a] += _w",
-            "            _K[..., _b, _b] += _w",
-            "            _K[..., _a, _b] -= _w * _e",
-            "            _K[..., _b, _a] -= _w * numpy.conj(_e)",
-            "    _s = 1 / numpy.sqrt(_m)",
-            "    return numpy.linalg.eigvalsh(_K * _s[:, None] * _s[None, :])"]
+    helper = ["", "", "def _band_eigvalsh(_q, _m, _k):",
+              '    """eigvalsh of D(q) = M^-1/2 K(q) M^-1/2 assembled from CELL_SPRINGS, shape _q.shape + (p,)."""',
+              f"    _K = numpy.zeros(_q.shape + ({p}, {p}), dtype=numpy.complex128)",
+              "    for (_a, _b, _r), _w in zip(_CELL_SPRINGS, _k):",
+              "        if _a < 0 or _b < 0:",
+              "            _c = _b if _a < 0 else _a",
+              "            _K[..., _c, _c] += _w",
+              "        elif _a == _b:",
+              "            _K[..., _a, _a] += 4 * _w * numpy.sin(_r * _q / 2) ** 2",
+              "        else:",
+              "            _e = numpy.exp(1j * _r * _q)",
+              "            _K[..., _a, _a] += _w",
+              "            _K[..., _b, _b] += _w",
+              "            _K[..., _a, _b] -= _w * _e",
+              "            _K[..., _b, _a] -= _w * numpy.conj(_e)",
+              "    _s = 1 / numpy.sqrt(_m)",
+              "    return numpy.linalg.eigvalsh(_K * _s[:, None] * _s[None, :])"]
     return function(f"band_omega2(q, {sig})",
                     "ω²_j(q) of each branch, ascending [rad²/s²], shape q.shape + (p,): eigvalsh of D(q) in float64\n"
-                    "(no closed form; springchain.bands gives them to a few ulps at any contrast).", body)
+                    "(no closed form; springchain.bands gives them to a few ulps at any contrast).",
+                    [f"    return _band_eigvalsh(numpy.asarray(q, dtype=float), cell_masses({sig}), cell_stiffness({sig}))"]
+                    ) + helper
 
 
 def _stacked(d: Dispersion, sig: str, name: str, exprs, doc: str, *, odd: bool) -> list[str]:
