@@ -95,6 +95,22 @@ class Bands:
 
         return dispersion(self.cell)
 
+    def attenuation(self, omega) -> tuple:
+        """``(Im q, Re q)`` of the slowest evanescent wave at each ω [rad/s] (Im q = 0 inside a band), each of
+        shape (W,) (:func:`springchain.numeric.bands.decay.attenuation`)."""
+        import numpy as np
+
+        from .numeric.bands.decay import attenuation
+
+        return attenuation(self.elements, np.asarray(omega, dtype=float).reshape(-1))
+
+    def at(self, q):
+        """ω²_j, group velocities and eigenvectors at other q (ascending at each q): a
+        :class:`springchain.numeric.bands.spectrum.Spectrum`."""
+        from .numeric.bands.spectrum import spectrum
+
+        return spectrum(self.elements, _q_points(q, POINTS))
+
     # -- reports --------------------------------------------------------------------------------------
     def to_json(self) -> dict:
         """Exactly what ``springchain bands SCENE --json`` prints (without ``files``)."""
@@ -298,7 +314,7 @@ def _q_points(q, points):
     return arr
 
 
-def bands(scene: str | Path | Scene, q=None, *, points: int = POINTS, finite: bool = True,
+def bands(scene: str | Path | Scene, q=None, *, points: int = POINTS, finite=True,
           density: bool = True) -> Bands:
     """The bands of a periodic scene: ω_j(q) of every branch, its edges and gaps, and more.
 
@@ -310,9 +326,10 @@ def bands(scene: str | Path | Scene, q=None, *, points: int = POINTS, finite: bo
         Phases per cell [rad] at which to give ω_j(q) (default: ``points`` from −π to π).
     points : int
         Default grid size.
-    finite : bool
+    finite : bool, or str, Path or Scene
         Name every mode of the scene's own finite chain by band and q (chains of at most :data:`FINITE_MAX`
-        masses).
+        masses); or of another scene's chain laid out cell by cell like this one (a chain with a defect: its
+        gap modes are named defect modes).
     density : bool
         Compute the density of states and Im q on a frequency grid (the figure's side panels).
 
@@ -333,7 +350,7 @@ def bands(scene: str | Path | Scene, q=None, *, points: int = POINTS, finite: bo
     from ._scenes import load
     from .derive.bands.model import band_cell
     from .numeric.bands.edges import edges as band_edges
-    from .numeric.bands.spectrum import by_continuity, spectrum
+    from .numeric.bands.spectrum import align, spectrum
     from .numeric.progress import phase
 
     sc = load(scene)
@@ -343,8 +360,8 @@ def bands(scene: str | Path | Scene, q=None, *, points: int = POINTS, finite: bo
         system, _ = system_of(sc)
     elements = system.band_cell()
     with phase(f"bands of {sc.name!r}: {qs.shape[0]} q-points"):
-        spec, _ = by_continuity(spectrum(elements, qs))
-        ranges, gaps, _ = band_edges(elements)
+        ranges, gaps, grid = band_edges(elements)  # the branches followed on a fine grid of [0, π]
+        spec = align(grid, spectrum(elements, qs), elements)
     notes = list(cell.notes)
     top = max(e.omega_high for e in ranges)
     omega_grid = top * 1.05 * (np.arange(OMEGA_POINTS) + 0.5) / OMEGA_POINTS
@@ -357,18 +374,22 @@ def bands(scene: str | Path | Scene, q=None, *, points: int = POINTS, finite: bo
             dos = density_of(elements, omega_grid)
             imag, real = attenuation(elements, omega_grid)
     modes = None
-    if finite and sc.n <= FINITE_MAX:
+    chain = sc if finite is True else (load(finite) if finite is not False and finite is not None else None)
+    if chain is not None and chain.n <= FINITE_MAX:
         from .numeric.bands.finite import label
 
-        ring = "ring" in ((str(sc.chain.left),) if sc.chain is not None else (str(sc.cell.left),))
-        with phase(f"bands of {sc.name!r}: the finite chain's {sc.n} modes"):
-            s = system.spectrum
-            modes = label(elements, s.omega2, s.vectors, ring)
-        if sc.n % elements.p:
-            notes.append(f"the finite chain of {sc.n} masses ends with a partial cell ({sc.n % elements.p} of "
-                         f"{elements.p} masses)")
-    elif finite:
-        notes.append(f"the finite chain's modes are not named: {sc.n} masses (at most {FINITE_MAX})")
+        ends = (chain.chain.left if chain.chain is not None else chain.cell.left if chain.cell is not None else None)
+        with phase(f"bands of {sc.name!r}: the finite chain's {chain.n} modes"):
+            s = (system if chain is sc else system_of(chain)[0]).spectrum
+            modes = label(elements, s.omega2, s.vectors, str(ends) == "ring")
+        if chain.n % elements.p:
+            notes.append(f"the finite chain of {chain.n} masses ends with a partial cell ({chain.n % elements.p} "
+                         f"of {elements.p} masses)")
+        if chain is not sc:
+            notes.append(f"finite chain: {chain.name!r} ({chain.n} masses, read cell by cell against the bands of "
+                         f"{sc.name!r})")
+    elif chain is not None:
+        notes.append(f"the finite chain's modes are not named: {chain.n} masses (at most {FINITE_MAX})")
     damped = None
     if elements.damped:
         from .numeric.bands.damped import damped as damped_bands

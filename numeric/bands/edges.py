@@ -112,7 +112,7 @@ def edges(cell: Cell, points: int = POINTS) -> tuple[list[Edge], list[Gap], Spec
     grid : Spectrum on ``points`` q from 0 to π, branches by continuity
     """
     qs = np.linspace(0.0, np.pi, max(int(points), 3))
-    spec, _ = by_continuity(spectrum(cell, qs))
+    spec, _ = by_continuity(spectrum(cell, qs), cell)
     out = []
     for j in range(cell.p):
         v = spec.omega2[:, j]

@@ -114,8 +114,41 @@ def _long_wave(cell: Cell, f, U: np.ndarray, vel: np.ndarray):
     return U, vel
 
 
-def by_continuity(spec: Spectrum) -> tuple[Spectrum, np.ndarray]:
+def _match(ref: np.ndarray, U: np.ndarray) -> np.ndarray:
+    """The ascending index at a new q of each branch whose last vector is a column of ``ref`` (max overlap)."""
+    from scipy.optimize import linear_sum_assignment
+
+    overlap = np.abs(ref.conj().T @ U) ** 2  # [branch, ascending index]
+    best = np.argmax(overlap, axis=1)
+    if np.unique(best).shape[0] == best.shape[0] and np.all(overlap[np.arange(best.shape[0]), best] > 0.5):
+        return best
+    return linear_sum_assignment(-overlap)[1]
+
+
+#: Bisections of a step where branches change places (a crossing or a sharp avoided one).
+MAX_DEPTH = 52
+
+
+def _step(cell: Cell, qa: float, qb: float, ref: np.ndarray, rank: np.ndarray, Ub: np.ndarray, depth: int):
+    """Follow the branches from qa (vectors ``ref``, ascending indices ``rank``) to qb (vectors ``Ub``).
+
+    Where the branches' ascending order changes over the step, it is bisected until each piece either keeps the
+    order (the eigenvectors turned gradually: an avoided crossing, the order kept) or is too short to turn in
+    (a true crossing: the vectors pass through each other unchanged, the order swaps)."""
+    assign = _match(ref, Ub)
+    if np.array_equal(assign, rank) or depth == 0 or abs(qb - qa) <= 1e-13 * max(1.0, abs(qb)):
+        return assign
+    mid = 0.5 * (qa + qb)
+    Um = spectrum(cell, np.array([mid])).vectors[0]
+    left = _step(cell, qa, mid, ref, rank, Um, depth - 1)
+    return _step(cell, mid, qb, Um[:, left], left, Ub, depth - 1)
+
+
+def by_continuity(spec: Spectrum, cell: Cell | None = None) -> tuple[Spectrum, np.ndarray]:
     """The branches followed along increasing |q| by eigenvector overlap (ascending at the smallest |q|).
+
+    With ``cell``, a step where two branches change places is bisected (:func:`_step`): a sharp avoided
+    crossing keeps the branches apart, a true crossing lets them pass — whatever the grid's spacing.
 
     Returns
     -------
@@ -124,8 +157,6 @@ def by_continuity(spec: Spectrum) -> tuple[Spectrum, np.ndarray]:
     order : ndarray of int, shape (Q, p)
         ``order[k, j]``: the ascending index at q_k of branch j.
     """
-    from scipy.optimize import linear_sum_assignment
-
     Q, p = spec.omega2.shape
     order = np.tile(np.arange(p), (Q, 1))
     if Q == 0 or p == 1:
@@ -136,14 +167,12 @@ def by_continuity(spec: Spectrum) -> tuple[Spectrum, np.ndarray]:
     gaps = np.diff(w2, axis=1) <= DEGENERATE * scale  # (Q, p-1): neighbours (ascending) that coincide
     ref = spec.vectors[seq[0]].copy()  # reference vector of each branch
     for pos in range(1, Q):
-        k = seq[pos]
+        k, prev = seq[pos], seq[pos - 1]
         U = spec.vectors[k]
-        overlap = np.abs(ref.conj().T @ U) ** 2  # [branch, ascending index]
-        best = np.argmax(overlap, axis=1)
-        if np.unique(best).shape[0] == p and np.all(overlap[np.arange(p), best] > 0.5):
-            assign = best
+        if cell is None:
+            assign = _match(ref, U)
         else:
-            assign = linear_sum_assignment(-overlap)[1]
+            assign = _step(cell, abs(float(spec.q[prev])), abs(float(spec.q[k])), ref, order[prev], U, MAX_DEPTH)
         order[k] = assign
         degenerate = np.zeros(p, dtype=bool)
         degenerate[:-1] |= gaps[k]
@@ -153,4 +182,24 @@ def by_continuity(spec: Spectrum) -> tuple[Spectrum, np.ndarray]:
     return spec.take(order), order
 
 
-__all__ = ["DEGENERATE", "Spectrum", "by_continuity", "fold", "spectrum"]
+def align(grid: Spectrum, spec: Spectrum, cell: Cell) -> Spectrum:
+    """``spec``'s branches in the continuity order of ``grid`` (a fine grid on [0, π] ordered by
+    :func:`by_continuity`): each q is reached from the grid point nearest its folded |q| by :func:`_step` (a
+    coarse or unsorted set of q cannot be followed by itself: eigenvectors turn between samples)."""
+    Q, p = spec.omega2.shape
+    if Q == 0 or p == 1:
+        return spec
+    folded = fold(spec.q)
+    near = np.abs(np.abs(folded)[:, None] - grid.q[None, :]).argmin(axis=1)
+    mine = np.where((folded < 0)[:, None, None], spec.vectors.conj(), spec.vectors)
+    rank = np.argsort(np.argsort(grid.omega2, axis=1, kind="stable"), axis=1, kind="stable")[near]
+    overlap = np.abs(np.einsum("qkb,qkj->qbj", grid.vectors[near].conj(), mine)) ** 2  # [q, branch, ascending]
+    order = overlap.argmax(axis=2)
+    clear = (order == rank).all(axis=1) & (overlap.max(axis=2) > 0.5).all(axis=1)
+    for k in np.flatnonzero(~clear):
+        g = near[k]
+        order[k] = _step(cell, float(grid.q[g]), abs(float(folded[k])), grid.vectors[g], rank[k], mine[k], MAX_DEPTH)
+    return spec.take(order)
+
+
+__all__ = ["DEGENERATE", "Spectrum", "align", "by_continuity", "fold", "spectrum"]
