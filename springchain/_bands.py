@@ -259,8 +259,9 @@ class Bands:
         return paths
 
     def to_xarray(self):
-        """An ``xarray.Dataset``: ``omega2``, ``omega``, ``group_velocity`` on dims (q, branch); ``dos`` on
-        (omega, branch); ``imag_q``, ``real_q`` on (omega,). Needs ``pip install "springchain[data]"``."""
+        """An ``xarray.Dataset``: ``omega2``, ``omega``, ``group_velocity`` (and with damping ``zeta``,
+        ``omega_damped``, ``decay_rate``) on dims (q, branch); ``dos`` on (frequency, branch); ``imag_q``,
+        ``real_q`` on (frequency,) (the ω grid [rad/s]). Needs ``pip install "springchain[data]"``."""
         import numpy as np
 
         from ._data import require
@@ -270,14 +271,14 @@ class Bands:
         data = {"omega2": (("q", "branch"), self.omega2, {"units": "rad^2/s^2"}),
                 "omega": (("q", "branch"), self.omega, {"units": "rad/s"}),
                 "group_velocity": (("q", "branch"), self.velocity, {"units": "cells/s"}),
-                "dos": (("omega", "branch"), self.dos, {"units": "1/(cell rad/s)"}),
-                "imag_q": (("omega",), self.imag_q, {"units": "1/cell"}),
-                "real_q": (("omega",), self.real_q, {"units": "rad"})}
+                "dos": (("frequency", "branch"), self.dos, {"units": "1/(cell rad/s)"}),
+                "imag_q": (("frequency",), self.imag_q, {"units": "1/cell"}),
+                "real_q": (("frequency",), self.real_q, {"units": "rad"})}
         if self.damped is not None:
             data["zeta"] = (("q", "branch"), self.damped.zeta, {})
             data["omega_damped"] = (("q", "branch"), self.damped.omega_d, {"units": "rad/s"})
             data["decay_rate"] = (("q", "branch"), self.damped.sigma, {"units": "1/s"})
-        return xr.Dataset(data, coords={"q": self.q, "branch": branch, "omega": self.omega_grid},
+        return xr.Dataset(data, coords={"q": self.q, "branch": branch, "frequency": self.omega_grid},
                           attrs={"scene": self.scene.name, "cell": self.cell.source, "q_units": "rad per cell"})
 
     def __repr__(self) -> str:
@@ -303,7 +304,8 @@ def _q_points(q, points):
     if q is None:
         if isinstance(points, bool) or not isinstance(points, int) or not 3 <= points <= MAX_Q:
             raise RunRefused(f"points {points!r}: accepted: a whole number 3 ... {MAX_Q}", quantity="points")
-        return np.linspace(-np.pi, np.pi, points)
+        half = (points - 1) / 2
+        return np.pi * (np.arange(points) - half) / half  # symmetric: ±π and (odd points) q = 0 exactly
     try:
         arr = np.asarray(q, dtype=float).reshape(-1)
     except (TypeError, ValueError):

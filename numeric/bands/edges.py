@@ -4,7 +4,7 @@ Each branch (followed by continuity, :func:`.spectrum.by_continuity`) is sampled
 even); its lowest and highest values are the sampled ends q = 0, π or interior extrema, each refined by a
 bounded scalar search on the accurate ω²(q) (the value at an extremum is insensitive to the error in q to first
 order). The gaps are the complement of the union of the branches' ranges: ordering-independent, so crossing
-branches never open a false gap. Widths in ω are (ω²_up − ω²_low)/(ω_up + ω_low) from the accurate edges (their
+branches never open a false gap, and a gap narrower than :data:`GAP_RESOLUTION` (relative) is none. Widths in ω are (ω²_up − ω²_low)/(ω_up + ω_low) from the accurate edges (their
 relative error grows as ω²/Δω² only for gaps far narrower than the band frequencies).
 """
 
@@ -22,6 +22,9 @@ from .spectrum import Spectrum, by_continuity, spectrum
 POINTS = 513
 #: Tolerance in q of the extremum search [rad].
 Q_TOL = 1e-11
+#: Relative width (in ω²) below which two band edges touch: the edges are accurate to a few ulps, so a narrower
+#: "gap" cannot be told from none (bands that touch, e.g. at q = π of a folded monatomic chain).
+GAP_RESOLUTION = 1e-13
 
 
 @dataclass(frozen=True)
@@ -134,7 +137,7 @@ def gaps_of(ranges: list[Edge]) -> list[Gap]:
     order = sorted(ranges, key=lambda e: (e.low, e.high))
     top = order[0]
     for e in order[1:]:
-        if e.low > top.high:
+        if e.low - top.high > GAP_RESOLUTION * e.low:
             gaps.append(Gap(top.branch, e.branch, top.high, e.low, top.q_high, e.q_low))
         if e.high > top.high:
             top = e

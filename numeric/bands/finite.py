@@ -8,7 +8,7 @@ place i % p of the cell. A mode at ω² is
   ω²: q solves ω²_j(q) = ω² (safeguarded Newton on the accurate branch with its group velocity); where several
   (j, q) do, the one whose Bloch waves e^{±iqc} U_j(±q) carry most of the mode's weight (its projection);
 * a **gap mode** otherwise: it decays by e^{−κ} per cell, κ = Im q(ω) (:mod:`.decay`), localisation length
-  1/κ cells; an **edge** mode when its weight sits within three localisation lengths of an open end, a
+  1/κ cells; an **edge** mode when its largest cell is at an open end (within :data:`EDGE_CELLS` cells), a
   **defect** mode otherwise (a cell that differs, or a ring).
 
 In a ring of N cells every band mode has q = 2πs/N (its ω² is ω²_j(2πs/N)).
@@ -26,6 +26,8 @@ from .spectrum import spectrum
 
 #: Newton steps of the wavenumber search.
 STEPS = 60
+#: A gap mode whose largest cell is at most this many cells from an open end is an edge mode.
+EDGE_CELLS = 2
 
 
 @dataclass(frozen=True)
@@ -124,11 +126,9 @@ def label(cell: Cell, omega2: np.ndarray, vectors: np.ndarray, ring: bool) -> li
         kappa, _ = attenuation(cell, omega[gap])
         for k, kap in zip(gap, kappa):
             weight = np.abs(np.pad(vectors[:, k], (0, cells * p - n))).reshape(cells, p) ** 2
-            per_cell = weight.sum(axis=1)
-            centre = float(np.sum(np.arange(cells) * per_cell) / max(per_cell.sum(), 1e-300))
+            peak = int(np.argmax(weight.sum(axis=1)))
             length = float(1.0 / kap) if kap > 0 else None
-            reach = 3 * (length or cells)
-            edge = not ring and min(centre, cells - 1 - centre) <= max(reach, 1.0)
+            edge = not ring and min(peak, cells - 1 - peak) <= EDGE_CELLS
             out[k] = FiniteMode(float(omega2[k]), None, None, "edge" if edge else "defect", length)
     return out
 
