@@ -26,7 +26,7 @@ for _var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
     os.environ.setdefault(_var, "1")
 os.environ.setdefault("SPRINGCHAIN_PROGRESS", "0")
 
-import numpy as np  # noqa: E402
+import numpy as np
 
 
 def chain(p: int):
@@ -36,33 +36,49 @@ def chain(p: int):
                                "chain": {"n": 4 * p, "mass": f"m*(1 + i % {p})", "k": f"k*(1 + (i % {p})/{p})"}})
 
 
-def timings(points: int) -> list[dict]:
-    import springchain as sc
+def _runs(scene, cell, grid, q):
+    """The timed calls of one cell, name -> callable."""
     from springchain.numeric.bands.damped import bloch
-    from springchain.numeric.bands.edges import edges
     from springchain.numeric.bands.spectrum import align, spectrum
+
+    import springchain as sc
+
+    K = bloch(cell.p, cell.ends, cell.reach, cell.stiffness, q)
+    s = 1 / np.sqrt(cell.masses)
+    return {"spectrum": lambda: spectrum(cell, q),
+            "spectrum + align": lambda: align(grid, spectrum(cell, q), cell),
+            "bands": lambda: sc.bands(scene, q=q, finite=False, density=False),
+            "bands + dos": lambda: sc.bands(scene, q=q, finite=False, density=True),
+            "eigvalsh": lambda: np.linalg.eigvalsh(K * s[:, None] * s[None, :])}
+
+
+def timings(points: int) -> list[dict]:
+    from springchain.numeric.bands.edges import edges
     from springchain.numeric.timing import measure, single_threaded_blas
+
+    import springchain as sc
 
     q = np.linspace(-np.pi, np.pi, points)
     rows = []
     with single_threaded_blas():
         for p in (2, 4, 8):
             scene = chain(p)
-            b = sc.bands(scene, q=q[:3], finite=False, density=False)  # warm-up: module derived, SymPy loaded
-            cell = b.elements
-            grid = edges(cell)[2]
-            K = bloch(p, cell.ends, cell.reach, cell.stiffness, q)
-            s = 1 / np.sqrt(cell.masses)
+            cell = sc.bands(scene, q=q[:3], finite=False, density=False).elements  # warm-up: module, SymPy
             row = {"p": p, "points": points}
-            for name, run in (("spectrum", lambda: spectrum(cell, q)),
-                              ("spectrum + align", lambda: align(grid, spectrum(cell, q), cell)),
-                              ("bands", lambda: sc.bands(scene, q=q, finite=False, density=False)),
-                              ("bands + dos", lambda: sc.bands(scene, q=q, finite=False, density=True)),
-                              ("eigvalsh", lambda: np.linalg.eigvalsh(K * s[:, None] * s[None, :]))):
-                t = measure(run, budget=2.0, max_repeats=3)
-                row[name] = t.seconds
+            for name, run in _runs(scene, cell, edges(cell)[2], q).items():
+                row[name] = measure(run, budget=2.0, max_repeats=3).seconds
             rows.append(row)
     return rows
+
+
+def _textbook(m1, m2, k1, k2, q):
+    """The diatomic chain's ω²∓(q) (60 digits: the cancellation in the lower one is harmless there)."""
+    import mpmath as mp
+
+    with mp.workdps(60):
+        a = (k1 + k2) * (1 / mp.mpf(m1) + 1 / mp.mpf(m2)) / 2
+        r = mp.sqrt(a * a - 4 * k1 * k2 * mp.sin(mp.mpf(q) / 2) ** 2 / (m1 * mp.mpf(m2)))
+        return [a - r, a + r]
 
 
 def accuracy() -> list[dict]:
@@ -80,21 +96,18 @@ def accuracy() -> list[dict]:
                                                   "k": "k1*(1 - i % 2) + k2*(i % 2)"}})
             b = sc.bands(scene, q=qs, finite=False, density=False)
             with mp.workdps(60):
-                def ref(q):
-                    a = (k1 + k2) * (1 / mp.mpf(m1) + 1 / mp.mpf(m2)) / 2
-                    r = mp.sqrt(a * a - 4 * k1 * k2 * mp.sin(mp.mpf(q) / 2) ** 2 / (m1 * mp.mpf(m2)))
-                    return [a - r, a + r]
-
                 def rel(x, y):
                     return float(abs(mp.mpf(x) - y) / abs(y))
 
-                omega = max(rel(b.omega2[k, j], ref(q)[j]) for k, q in enumerate(qs) for j in range(2))
-                lo, hi, top = ref(np.pi)[0], ref(np.pi)[1], ref(0.0)[1]
+                omega = max(rel(b.omega2[k, j], _textbook(m1, m2, k1, k2, q)[j]) for k, q in enumerate(qs)
+                            for j in range(2))
+                (lo, hi), top = _textbook(m1, m2, k1, k2, np.pi), _textbook(m1, m2, k1, k2, 0.0)[1]
                 e0, e1 = b.edges
                 edge = max(rel(e0.high, lo), rel(e1.low, hi), rel(e1.high, top))
                 gap = rel(b.gaps[0].width, mp.sqrt(hi) - mp.sqrt(lo))
+            zero = bool(sc.bands(scene, q=[0.0], finite=False, density=False).omega2[0, 0] == 0.0)
             out.append({"contrast": f"{which} {c:g}", "omega2": omega, "edges": edge, "gap_width": gap,
-                        "zero_at_q0": bool(sc.bands(scene, q=[0.0], finite=False, density=False).omega2[0, 0] == 0.0)})
+                        "zero_at_q0": zero})
     return out
 
 
@@ -110,7 +123,7 @@ def main() -> None:
     if args.json:
         print(json.dumps(result, indent=1))
         return
-    print(f"| p | q-points | spectrum s | spectrum + align s | bands s | bands + dos s | eigvalsh (float64) s |")
+    print("| p | q-points | spectrum s | spectrum + align s | bands s | bands + dos s | eigvalsh (float64) s |")
     print("|---:|---:|---:|---:|---:|---:|---:|")
     for r in result["timings"]:
         print(f"| {r['p']} | {r['points']} | {r['spectrum']:.3f} | {r['spectrum + align']:.3f} | {r['bands']:.3f} | "

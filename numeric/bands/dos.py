@@ -10,6 +10,8 @@ the grid keeps strictly inside the bands.
 
 from __future__ import annotations
 
+import itertools
+
 import numpy as np
 
 from .cell import Cell
@@ -39,7 +41,34 @@ def _pieces(cell: Cell, j: int, qs: np.ndarray, w: np.ndarray) -> list[tuple[flo
                                   bounds=(qs[k - 1], qs[k + 1]), method="bounded", options={"xatol": 1e-12})
             bounds.append(float(res.x))
     bounds.append(float(np.pi))
-    return [(a, b) for a, b in zip(bounds[:-1], bounds[1:]) if b > a]
+    return [(a, b) for a, b in itertools.pairwise(bounds) if b > a]
+
+
+def newton(cell: Cell, j: int, a: float, b: float, wa: float, wb: float, target: np.ndarray) -> np.ndarray:
+    """q in [a, b] where band j (monotone there, ω = wa at a, wb at b) reaches each ω of ``target``: safeguarded
+    Newton with the group velocity (bisection where a step leaves the bracket), iterating only on the q not yet
+    converged."""
+    up = wb > wa
+    qa, qb = np.full(target.shape, a), np.full(target.shape, b)
+    x = a + (b - a) * np.clip((target - wa) / (wb - wa), 0.0, 1.0) if wb != wa else np.full(target.shape, a)
+    live = np.arange(target.shape[0])
+    for _ in range(STEPS):
+        f, v = _sorted_value(cell, x[live], j)
+        r = f - target[live]
+        below = (r < 0) == up  # the root lies beyond x (towards b)
+        qa[live] = np.where(below, x[live], qa[live])
+        qb[live] = np.where(below, qb[live], x[live])
+        with np.errstate(divide="ignore", invalid="ignore"):
+            step = x[live] - r / v
+        lo, hi = np.minimum(qa[live], qb[live]), np.maximum(qa[live], qb[live])
+        bad = ~np.isfinite(step) | (step <= lo) | (step >= hi)
+        new = np.where(bad, 0.5 * (lo + hi), step)
+        done = (np.abs(new - x[live]) <= 4 * np.finfo(float).eps * np.maximum(1.0, np.abs(new))) | (r == 0)
+        x[live] = np.where(r == 0, x[live], new)
+        live = live[~done]
+        if live.size == 0:
+            break
+    return x
 
 
 def density(cell: Cell, omega: np.ndarray) -> np.ndarray:
@@ -63,22 +92,7 @@ def density(cell: Cell, omega: np.ndarray) -> np.ndarray:
                 continue
             target = omega[inside]
             # start from the straight line through the ends, then safeguarded Newton in the bracket [a, b]
-            qa, qb = np.full(target.shape, a), np.full(target.shape, b)
-            x = a + (b - a) * (target - wa) / (wb - wa)
-            up = wb > wa
-            for _ in range(STEPS):
-                f, v = _sorted_value(cell, x, j)
-                r = f - target
-                below = (r < 0) == up  # the root lies beyond x (towards b)
-                qa, qb = np.where(below, x, qa), np.where(below, qb, x)
-                with np.errstate(divide="ignore", invalid="ignore"):
-                    step = x - r / v
-                bad = ~np.isfinite(step) | (step <= np.minimum(qa, qb)) | (step >= np.maximum(qa, qb))
-                new = np.where(bad, 0.5 * (qa + qb), step)
-                done = np.abs(new - x) <= 4 * np.finfo(float).eps * np.maximum(1.0, np.abs(x))
-                x = new
-                if done.all():
-                    break
+            x = newton(cell, j, a, b, wa, wb, target)
             _, v = _sorted_value(cell, x, j)
             with np.errstate(divide="ignore"):
                 out[inside, j] += 1.0 / (np.pi * np.abs(v))

@@ -24,8 +24,6 @@ from .cell import Cell
 from .decay import attenuation
 from .spectrum import spectrum
 
-#: Newton steps of the wavenumber search.
-STEPS = 60
 #: A gap mode whose largest cell is at most this many cells from an open end is an edge mode.
 EDGE_CELLS = 2
 
@@ -51,25 +49,11 @@ class FiniteMode:
 
 
 def _solve(cell: Cell, j: int, a: float, b: float, target: np.ndarray) -> np.ndarray:
-    """q in [a, b] with ω_j(q) = target (ω_j monotone there), vectorised safeguarded Newton."""
-    ends = spectrum(cell, np.array([a, b]))
-    wa, wb = ends.omega[:, j]
-    up = wb > wa
-    qa, qb = np.full(target.shape, a), np.full(target.shape, b)
-    x = a + (b - a) * np.clip((target - wa) / (wb - wa), 0.0, 1.0) if wb != wa else np.full(target.shape, a)
-    for _ in range(STEPS):
-        s = spectrum(cell, x)
-        r = s.omega[:, j] - target
-        below = (r < 0) == up
-        qa, qb = np.where(below, x, qa), np.where(below, qb, x)
-        with np.errstate(divide="ignore", invalid="ignore"):
-            step = x - r / s.velocity[:, j]
-        bad = ~np.isfinite(step) | (step <= np.minimum(qa, qb)) | (step >= np.maximum(qa, qb))
-        new = np.where(bad, 0.5 * (qa + qb), step)
-        if np.all(np.abs(new - x) <= 4 * np.finfo(float).eps * np.maximum(1.0, np.abs(x))):
-            return new
-        x = new
-    return x
+    """q in [a, b] with ω_j(q) = target (ω_j monotone there): :func:`.dos.newton`."""
+    from .dos import newton
+
+    wa, wb = spectrum(cell, np.array([a, b])).omega[:, j]
+    return newton(cell, j, a, b, wa, wb, target)
 
 
 def _weight(cell: Cell, psi: np.ndarray, j: int, q: float) -> float:
