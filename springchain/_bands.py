@@ -74,6 +74,8 @@ class Bands:
     damped: object = field(default=None, repr=False)
     sound_speed: float | None = None
     notes: list = field(default_factory=list, repr=False)
+    #: The scene whose finite chain :attr:`finite` names (this scene, or the one given as ``finite=``).
+    finite_scene: Scene | None = field(default=None, repr=False)
 
     @property
     def p(self) -> int:
@@ -111,6 +113,33 @@ class Bands:
 
         return spectrum(self.elements, _q_points(q, POINTS))
 
+    @cached_property
+    def _closed_index(self) -> list[int] | None:
+        """For each branch (continuity order), the index of its closed form in ``dispersion.branches`` (matched
+        by value at a few q: a factorised polynomial lists its branches by factor)."""
+        d = self.dispersion
+        if d.branches is None:
+            return None
+        import numpy as np
+        import sympy as sp
+        from scipy.optimize import linear_sum_assignment
+
+        qs = np.array([0.37, 1.21, 2.53])
+        ours = self.at(qs)
+        from .numeric.bands.spectrum import align
+
+        ours = align(self._grid, ours, self.elements).omega2
+        values = self.cell.values
+        theirs = np.array([[complex(sp.N(b.subs(values).subs(d.q, float(x)), 20)).real for x in qs] for b in d.branches])
+        cost = np.abs(ours.T[:, None, :] - theirs[None, :, :]).sum(axis=2)
+        return list(linear_sum_assignment(cost)[1])
+
+    @cached_property
+    def _grid(self):
+        from .numeric.bands.edges import edges
+
+        return edges(self.elements)[2]
+
     # -- reports --------------------------------------------------------------------------------------
     def to_json(self) -> dict:
         """Exactly what ``springchain bands SCENE --json`` prints (without ``files``)."""
@@ -123,11 +152,7 @@ class Bands:
                                                                                "characteristic_polynomial",
                                                                                "coefficients", "determinant",
                                                                                "closed_form", "cos_q")},
-               "branches": [{**e.as_json(),
-                             "omega2_expr": None if d.branches is None else branches["omega2"][e.branch],
-                             "omega_expr": None if d.frequencies is None else branches["omega"][e.branch],
-                             "group_velocity_expr": None if d.velocities is None else
-                             branches["group_velocity"][e.branch]} for e in self.edges],
+               "branches": [{**e.as_json(), **self._expressions(branches, e.branch)} for e in self.edges],
                "gaps": [g.as_json() for g in self.gaps],
                "sound_speed": self.sound_speed,
                "q_points": int(self.q.shape[0]),
@@ -136,13 +161,22 @@ class Bands:
                "notes": list(self.notes)}
         return out
 
+    def _expressions(self, branches: dict, j: int) -> dict:
+        """The closed forms of branch j (continuity order), or nulls."""
+        k = None if self._closed_index is None else self._closed_index[j]
+        return {"omega2_expr": None if k is None else branches["omega2"][k],
+                "omega_expr": None if k is None else branches["omega"][k],
+                "group_velocity_expr": None if k is None else branches["group_velocity"][k]}
+
     def _finite_json(self) -> dict | None:
         if self.finite is None:
             return None
-        sc = self.scene
-        ends = (sc.chain.left, sc.chain.right) if sc.chain is not None else (sc.cell.left, sc.cell.right)
-        return {"n": sc.n, "cells": sc.n / self.p, "left": str(ends[0]), "right": str(ends[1]),
-                "modes": [m.as_json() for m in self.finite]}
+        sc = self.finite_scene or self.scene
+        ends = ((sc.chain.left, sc.chain.right) if sc.chain is not None else
+                (sc.cell.left, sc.cell.right) if sc.cell is not None else (None, None))
+        cells = sc.n // self.p if sc.n % self.p == 0 else sc.n / self.p
+        return {"scene": sc.name, "n": sc.n, "cells": cells, "left": None if ends[0] is None else str(ends[0]),
+                "right": None if ends[1] is None else str(ends[1]), "modes": [m.as_json() for m in self.finite]}
 
     def _damped_json(self) -> dict | None:
         if self.damped is None:
@@ -181,7 +215,8 @@ class Bands:
             lines.append(f"Sound speed (q -> 0, the lowest branch's group velocity): {self.sound_speed:.12g} cells/s")
         if self.finite is not None:
             kinds = {k: sum(1 for m in self.finite if m.kind == k) for k in ("band", "edge", "defect")}
-            lines += ["", f"The scene's finite chain ({self.scene.n} masses): " +
+            chain = self.finite_scene or self.scene
+            lines += ["", f"The finite chain of {chain.name!r} ({chain.n} masses): " +
                       ", ".join(f"{v} {k} modes" for k, v in kinds.items() if v) + ":"]
             shown = self.finite if len(self.finite) <= 40 else self.finite[:20] + self.finite[-20:]
             for m in shown:
@@ -404,7 +439,7 @@ def bands(scene: str | Path | Scene, q=None, *, points: int = POINTS, finite=Tru
     if not elements.grounded:
         sound = float(spectrum(elements, np.array([0.0])).velocity[0, 0])
     return Bands(sc, cell, elements, qs, spec.omega2, spec.velocity, spec.vectors, ranges, gaps, omega_grid, dos,
-                 imag, real, modes, damped, sound, notes)
+                 imag, real, modes, damped, sound, notes, chain if modes is not None else None)
 
 
 __all__ = ["FINITE_MAX", "MAX_Q", "POINTS", "Bands", "bands"]

@@ -66,7 +66,6 @@ def test_cell_expansion_and_ends():
 
 def test_characteristic_polynomial_is_sympys_determinant_with_positive_coefficients():
     import sympy as sp
-
     from springchain.derive.bands.dispersion import dispersion
     from springchain.derive.bands.model import band_cell
 
@@ -329,10 +328,10 @@ def test_pre_stressed_potential_ring_bands_are_those_of_its_stiffness():
 @pytest.mark.parametrize("name", ["diatomic", "mass_in_mass", "next_nearest", "chain100k"])
 def test_generated_band_functions_against_the_symbolic_forms(name):
     import sympy as sp
-
-    from springchain._modules import system_of
     from springchain.derive.bands.dispersion import dispersion
     from springchain.derive.bands.model import band_cell
+
+    from springchain._modules import system_of
 
     scene = sc.load(name)
     system = system_of(scene)[0]

@@ -153,7 +153,7 @@ class Dispersion:
         x = sp.Symbol("_lambda", positive=True)
         poly = self.polynomial.subs(self.omega ** 2, x)
         try:
-            _, factors = sp.factor_list(sp.expand(poly), x)
+            _, factors = sp.factor_list(sp.expand(poly))  # over every generator (sin(zq/2) too)
         except (sp.PolynomialError, NotImplementedError):
             return None
         degrees = [sp.degree(f, x) for f, _ in factors]
@@ -167,13 +167,15 @@ class Dispersion:
             elif len(cs) == 3:
                 A, B, C = cs
                 disc = sp.sqrt(B ** 2 - 4 * A * C)
-                roots = [2 * C / (-B + disc), (-B + disc) / (2 * A)] if True else []
+                roots = [2 * C / (-B + disc), (-B + disc) / (2 * A)]
             else:
                 continue
             for r in roots:
                 r = sp.factor(r)
                 out += [(r, sp.sqrt(r))] * int(mult)
-        return tuple(out)
+        values = self.cell.values  # branches lowest first near q = 0 (the numeric route's continuity order)
+        return tuple(sorted(out, key=lambda bw: [complex(sp.N(bw[0].subs(values).subs(self.q, x), 20)).real
+                                                 for x in (sp.Rational(1, 1000), sp.Rational(1, 10))]))
 
     @cached_property
     def cos_q(self) -> sp.Expr | None:
