@@ -131,7 +131,8 @@ def chain_period(exprs: list, i: sp.Symbol, params: dict, max_period: int = MAX_
     if not exprs:
         return 1
     rng = random.Random(20240535)
-    sub = {s: sp.Rational(rng.randint(1000, 9000), rng.randint(1000, 9000)) for s in params.values()}
+    others = set(params.values()).union(*(e.free_symbols for e in exprs)) - {i}  # parameters, a potential's d
+    sub = {s: sp.Rational(rng.randint(1000, 9000), rng.randint(1000, 9000)) for s in sorted(others, key=str)}
     samples = []
     with mpmath.workdps(30):
         for e in exprs:  # exact i (lambdify's printers drop the parentheses of a*Mod(i, 2))
@@ -173,7 +174,10 @@ def _from_chain(scene: Scene) -> BandCell:
     model = ChainModel(scene)  # refuses a potential chain out of equilibrium at x = 0, in one line
     i = model.i
     families = [d for d in model.dampers if d[0] in (ALONG, GROUND_FAMILY)]
-    exprs = [model.mass, model.k] + [c for _, _, _, c, _ in families]
+    # everything that repeats: the bands read mass, k (V''(0)) and the dashpot families; the cubic terms and the
+    # whole potential belong to the cell too (the cell follows the scene's symbols)
+    exprs = [model.mass, model.k, model.k3, None if model.law is None else model.law.energy]
+    exprs += [c for _, _, _, c, _ in families]
     p = chain_period(exprs, i, model.params)
     if p is None:
         key = next((k for k, e in (("chain.mass", model.mass), ("chain.k" if model.law is None else
