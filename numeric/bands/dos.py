@@ -32,14 +32,13 @@ def _pieces(cell: Cell, j: int, qs: np.ndarray, w: np.ndarray) -> list[tuple[flo
     """Monotone pieces [q_a, q_b] of band j, with the interior extrema refined."""
     from scipy.optimize import minimize_scalar
 
+    from .edges import turns
+
     bounds = [0.0]
-    d = np.sign(np.diff(w))
-    for k in range(1, qs.shape[0] - 1):
-        if d[k - 1] != 0 and d[k] != 0 and d[k - 1] != d[k]:
-            sign = 1.0 if d[k - 1] < 0 else -1.0  # a minimum, or a maximum
-            res = minimize_scalar(lambda x, sign=sign: sign * _sorted_value(cell, np.array([x]), j)[0][0],
-                                  bounds=(qs[k - 1], qs[k + 1]), method="bounded", options={"xatol": 1e-12})
-            bounds.append(float(res.x))
+    for k, sign in turns(w):  # +1 a minimum, -1 a maximum
+        res = minimize_scalar(lambda x, sign=sign: sign * _sorted_value(cell, np.array([x]), j)[0][0],
+                              bounds=(qs[k - 1], qs[k + 1]), method="bounded", options={"xatol": 1e-12})
+        bounds.append(float(res.x))
     bounds.append(float(np.pi))
     return [(a, b) for a, b in itertools.pairwise(bounds) if b > a]
 

@@ -84,6 +84,27 @@ class Gap:
                 "centre": self.centre, "q_lower": self.q_lower, "q_upper": self.q_upper}
 
 
+def turns(v: np.ndarray, resolution: float = 1e-12) -> list[tuple[int, float]]:
+    """Interior extrema of sampled values ``v`` as ``(index, +1 a minimum / −1 a maximum)``: where the direction
+    changes, steps smaller than ``resolution`` times the largest |v| counting as flat (a flat branch's rounding
+    is no extremum)."""
+    step = np.diff(v)
+    tol = resolution * max(float(np.max(np.abs(v))), np.finfo(float).tiny)
+    direction = np.where(step > tol, 1, np.where(step < -tol, -1, 0))
+    out, last, at = [], 0, 0
+    for k, d in enumerate(direction):
+        if d == 0:
+            continue
+        if last and d != last:  # the turn lies on the samples between the last move and this one
+            lo, hi = at + 1, k
+            seg = v[lo:hi + 1]
+            best = lo + int(np.argmin(seg) if last < 0 else np.argmax(seg))
+            if 0 < best < v.shape[0] - 1:
+                out.append((best, 1.0 if last < 0 else -1.0))
+        last, at = d, k
+    return out
+
+
 def branch_value(cell: Cell, q: float, reference: np.ndarray) -> tuple[float, np.ndarray]:
     """ω² at ``q`` of the branch whose eigenvector is nearest ``reference`` (shape (p,)), and its eigenvector."""
     s = spectrum(cell, np.array([q]))
@@ -121,11 +142,8 @@ def edges(cell: Cell, points: int = POINTS) -> tuple[list[Edge], list[Gap], Spec
         v = spec.omega2[:, j]
         lows = [(float(v[0]), 0.0), (float(v[-1]), float(qs[-1]))]
         highs = list(lows)
-        inner = np.arange(1, qs.shape[0] - 1)
-        for k in inner[(v[1:-1] <= v[:-2]) & (v[1:-1] <= v[2:]) & ~((v[1:-1] == v[:-2]) & (v[1:-1] == v[2:]))]:
-            lows.append(_refine(cell, qs, spec, j, int(k), 1.0))
-        for k in inner[(v[1:-1] >= v[:-2]) & (v[1:-1] >= v[2:]) & ~((v[1:-1] == v[:-2]) & (v[1:-1] == v[2:]))]:
-            highs.append(_refine(cell, qs, spec, j, int(k), -1.0))
+        for k, sign in turns(v):
+            (lows if sign > 0 else highs).append(_refine(cell, qs, spec, j, k, sign))
         lo, hi = min(lows), max(highs)
         out.append(Edge(j, lo[0], lo[1], hi[0], hi[1]))
     return out, gaps_of(out), spec
@@ -144,4 +162,4 @@ def gaps_of(ranges: list[Edge]) -> list[Gap]:
     return gaps
 
 
-__all__ = ["POINTS", "Edge", "Gap", "branch_value", "edges", "gaps_of"]
+__all__ = ["POINTS", "Edge", "Gap", "branch_value", "edges", "gaps_of", "turns"]
