@@ -29,6 +29,7 @@ from .loadgen import chain_load_code
 from .module_text import function, module_head, render
 from .potential_code import chain_law_lines, chain_tension_code
 from .spring_factor import helper_source
+from .bands.codegen import band_section
 
 
 @dataclass(frozen=True)
@@ -373,7 +374,7 @@ def _bidiagonal_omega2(c: _Context) -> list[str]:
 
 #: The section writers of a chain module, in the order they appear in it.
 SECTIONS = (_constants, _masses, _spring_coefficients, _spring_lists, _stencil, _acceleration, _energy,
-            _spring_law, _loads, _damping, _matrices, _spectrum)
+            _spring_law, _loads, _damping, _matrices, _spectrum, band_section)
 
 
 def render_chain_module(model: ChainModel, *, bundled: bool = True) -> str:

@@ -36,6 +36,7 @@ from .modes import ModeSet
 from .potential_code import (dense_acceleration_lines, dense_energy_lines, dense_law_lines,
                              dense_spring_constant_lines)
 from .spring_factor import helper_source
+from .bands.codegen import band_section
 from .stable_forms import stable_closed_forms
 
 #: Scenes with more masses get matrices assembled from the spring list, not printed entry by entry.
@@ -525,7 +526,8 @@ def _spring_laws(c: _Context) -> list[str]:
 #: The section writers of a ``[masses]`` module, in the order they appear in it.
 SECTIONS = (_constants, _element_constants, _mass_and_stiffness, _damping_matrix, _dynamical_matrix,
             _spectrum, _spectrum_helper, _acceleration, _scalar_force, _bound_acceleration, _damping_acceleration,
-            _external_acceleration, _gravity, _forcing_harmonics, _tables_and_ground, _energy, _spring_laws)
+            _external_acceleration, _gravity, _forcing_harmonics, _tables_and_ground, _energy, _spring_laws,
+            band_section)
 
 
 def render_module(model: Model, modes: ModeSet, *, bundled: bool = True) -> str:

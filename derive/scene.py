@@ -63,7 +63,7 @@ _BUILDING = contextvars.ContextVar("springchain_scene_building", default=False)
 MAX_CHAIN = 10**7
 
 TOP_KEYS = ("name", "description", "parameters", "masses", "springs", "dampers", "forces",
-            "gravity", "ground", "damping", "chain", "initial", "simulation")
+            "gravity", "ground", "damping", "chain", "initial", "simulation", "cell")
 SPRING_KEYS = ("between", "k", "k3", "potential")
 DAMPER_KEYS = ("between", "c")
 GRAVITY_KEYS = ("g",)
@@ -151,6 +151,8 @@ class Scene:
     chain_dampers: tuple = ()
     #: Whether the file has an ``[initial]`` table (without one the scene starts at rest).
     initial_given: bool = True
+    #: ``[cell]``: the unit cell of a periodic chain (its copies are the masses and springs above).
+    cell: object = None
     #: What the scene was built from (the TOML data as a dict): :meth:`with_parameters`,
     #: :meth:`with_initial` and ``dataclasses.replace`` rebuild the scene from it, validated.
     source: object = field(default=None, repr=False, compare=False)
@@ -345,7 +347,9 @@ def _build(ld: Loader, sha: str) -> Scene:
     dt, steps, record_every = _simulation(ld)
 
     chain = None
-    if "chain" in data:
+    if "cell" in data:
+        cell, mass_names, mass_exprs, cell_springs, cell_dampers = _cell(ld, pnames, env)
+    elif "chain" in data:
         if "masses" in data or "springs" in data:
             both = "masses" if "masses" in data else "springs"
             raise ld.bad("chain", f"[chain] with [{both}]", "both forms given",
@@ -360,6 +364,8 @@ def _build(ld: Loader, sha: str) -> Scene:
     ends = _Ends(ld, index)
     springs = _springs(ld, ends, pnames, env)
     dampers, chain_dampers = _dampers(ld, ends, chain, pnames, env)
+    if "cell" in data:
+        springs, dampers = cell_springs + springs, cell_dampers + dampers
     if chain is not None and isinstance(data.get("damping"), dict) and "modal" in data["damping"]:
         raise ld.bad("damping.modal", data["damping"]["modal"], "modal damping on a [chain] is not yet supported",
                      "rayleigh = [ALPHA, BETA] or [[dampers]] on a [chain]; modal with [masses]")
@@ -379,7 +385,31 @@ def _build(ld: Loader, sha: str) -> Scene:
                  springs=springs, dampers=dampers, forces=forces,
                  gravity=gravity, chain=chain, x0=x0, v0=v0, dt=dt, steps=steps,
                  record_every=record_every, table_forces=table_forces, ground=ground,
-                 damping=damping, chain_dampers=chain_dampers, initial_given=initial_given, source=data)
+                 damping=damping, chain_dampers=chain_dampers, initial_given=initial_given,
+                 cell=cell if "cell" in data else None, source=data)
+
+
+def _cell(ld: Loader, pnames: frozenset[str], env: dict):
+    """``[cell]`` (:mod:`derive.bands.cell`): the cell, and its finite chain as mass names, mass expressions,
+    springs and dashpots. Refused beside ``[masses]``/``[[springs]]`` (two descriptions of the masses)."""
+    from .bands.cell import expand, parse_cell
+
+    other = next((k for k in ("masses", "springs", "chain") if k in ld.data), None)
+    if other is not None:
+        raise ld.bad("cell", f"[cell] with [{other}]", "both forms given",
+                     "either [cell] (a periodic chain by its unit cell), [chain] or [masses] with [[springs]]")
+    cell = parse_cell(ld, pnames, env, potential_expression)
+    names, exprs, springs, dampers = expand(cell)
+    for a, name in enumerate(cell.names):  # the finite chain's names must stay clear of the parameters
+        clash = next((f"{name}_{c}" for c in range(cell.cells) if f"{name}_{c}" in pnames), None)
+        clash = clash or next((q for c in range(cell.cells) for q in (f"x_{name}_{c}", f"v_{name}_{c}",
+                                                                      f"a_{name}_{c}") if q in pnames), None)
+        if clash:
+            raise ld.bad(f"parameters.{clash}", clash, f"the name of a copy of cell mass {name!r} (or its coordinate)",
+                         f"a parameter name other than {name}_<cell> and x_/v_/a_{name}_<cell>")
+    springs = tuple(Spring(i, j, s.k, s.k3, s.key, s.potential) for s, i, j in springs)
+    dampers = tuple(Damper(i, j, d.k, d.key) for d, i, j in dampers)
+    return cell, names, exprs, springs, dampers
 
 
 def _description(ld: Loader, description) -> str:

@@ -103,6 +103,8 @@ class When(enum.Enum):
     GROUND_HARMONIC = "[ground] acceleration that is constant + harmonic"
     GROUND_MOTION = "[ground] acceleration whose double integral is known"
     GROUND_TABLE = "[ground] given as a table"
+    BANDS = "periodic scenes: [cell], or [chain] whose expressions repeat in i"
+    BAND_CLOSED_FORM = "periodic scenes whose branches have closed forms (BAND_CLOSED_FORM)"
 
 
 @dataclass(frozen=True)
@@ -207,6 +209,21 @@ ITEMS: tuple[Item, ...] = (
     Item("ground_harmonics", _F, "omega (H,), cos_amp (H,), sin_amp (H,), const: a_g(t)", When.GROUND_HARMONIC),
     Item("ground_motion", "(t, **parameters)", "(v_g, x_g), each t.shape, from rest at 0", When.GROUND_MOTION),
     Item("ground_table_acceleration", "(t, _table)", "ndarray t.shape: a_g(t) of the table", When.GROUND_TABLE),
+    # -- periodic chains: the unit cell and its bands ----------------------------------------------
+    Item("CELL_NAMES", _C, "tuple of str, (p,): the unit cell's masses", When.BANDS),
+    Item("CELL_SPRINGS", _C, "tuple of (a, b, reach), (S,): from mass a of cell c to mass b of cell c + reach, "
+         "-1 the ground", When.BANDS),
+    Item("CELL_DAMPERS", _C, "tuple of (a, b, reach): the cell's dashpots", When.BANDS),
+    Item("BAND_CLOSED_FORM", _C, "bool: band_omega2() is a closed form (band_omega, group_velocity exist)",
+         When.BANDS),
+    Item("cell_masses", _F, "ndarray (p,)", When.BANDS),
+    Item("cell_stiffness", _F, "ndarray (S,): linear stiffness of each CELL_SPRINGS spring", When.BANDS),
+    Item("cell_damping", _F, "ndarray (D,): constant of each CELL_DAMPERS dashpot", When.BANDS),
+    Item("cell_rayleigh", _F, "(alpha, beta): Rayleigh damping C = alpha M + beta K (zeros without)", When.BANDS),
+    Item("band_omega2", "(q, **parameters)", "ndarray q.shape + (p,): omega_j^2(q) of each branch", When.BANDS),
+    Item("band_omega", "(q, **parameters)", "ndarray q.shape + (p,): omega_j(q), closed form", When.BAND_CLOSED_FORM),
+    Item("group_velocity", "(q, **parameters)", "ndarray q.shape + (p,): d omega_j / dq [cells/s], closed form",
+         When.BAND_CLOSED_FORM),
 )
 
 #: Items by name.

@@ -178,6 +178,60 @@ def mode_omega(alpha, k, m, n=N):
     return _np.sqrt(_np.broadcast_to(4*k*_np.sin(_np.pi*_j/(2*n + 2))**2/m, (n,)))
 
 
+#: The unit cell (uniform [chain]: one mass per cell): mass names, and springs as (a, b, reach) from mass a of
+#: cell c to mass b of cell c + reach (-1: the ground); dashpots likewise (Rayleigh damping apart).
+CELL_NAMES = ('0',)
+CELL_SPRINGS = ((0, 0, 1),)
+CELL_DAMPERS = ()
+_CELL_SPRINGS = CELL_SPRINGS  # what bodies read (a parameter cannot shadow a private name)
+BAND_CLOSED_FORM = True
+
+
+def cell_masses(alpha, k, m):
+    """Masses of one cell, shape (p,)."""
+    return _np.array([_np.float64(m)])
+
+
+def cell_stiffness(alpha, k, m):
+    """Stiffness of each CELL_SPRINGS spring (V''(0) of a potential), shape (S,)."""
+    return _np.array([_np.float64(k)])
+
+
+def cell_damping(alpha, k, m):
+    """Constant of each CELL_DAMPERS dashpot, shape (D,)."""
+    return _np.zeros(0)
+
+
+def cell_rayleigh(alpha, k, m):
+    """Rayleigh coefficients (alpha, beta) of C = alpha M + beta K (zeros without)."""
+    return _np.float64(0), _np.float64(0)
+
+
+def band_omega2(q, alpha, k, m):
+    """Closed-form ω²_j(q) of each branch [rad²/s²], shape q.shape + (p,)."""
+    _q = _np.asarray(q, dtype=_np.float64)
+    _qa = _np.arctan2(_np.sin(_q), _np.cos(_q))  # q folded into (-pi, pi]
+    _qf = _np.abs(_qa)
+    return _np.stack([_np.broadcast_to(4*k*_np.sin((1/2)*_qf)**2/m, _q.shape)], axis=-1)
+
+
+def band_omega(q, alpha, k, m):
+    """Closed-form ω_j(q) of each branch [rad/s], shape q.shape + (p,) (even in q)."""
+    _q = _np.asarray(q, dtype=_np.float64)
+    _qa = _np.arctan2(_np.sin(_q), _np.cos(_q))  # q folded into (-pi, pi]
+    _qf = _np.abs(_qa)
+    return _np.stack([_np.broadcast_to(2*_np.sqrt(k)*_np.sin((1/2)*_qf)/_np.sqrt(m), _q.shape)], axis=-1)
+
+
+def group_velocity(q, alpha, k, m):
+    """Closed-form group velocity dω_j/dq [cells/s], shape q.shape + (p,) (odd in q; the
+    right-hand limit at q = 0)."""
+    _q = _np.asarray(q, dtype=_np.float64)
+    _qa = _np.arctan2(_np.sin(_q), _np.cos(_q))  # q folded into (-pi, pi]
+    _qf = _np.abs(_qa)
+    return _np.where((_qa < 0)[..., None], -1.0, 1.0) * _np.stack([_np.broadcast_to(_np.sqrt(k)*_np.cos((1/2)*_qf)/_np.sqrt(m), _q.shape)], axis=-1)
+
+
 # Private aliases used by the function bodies above.
 _masses = masses
 _spring_ends = spring_ends
@@ -194,3 +248,10 @@ _stiffness_matrix = stiffness_matrix
 _mass_matrix = mass_matrix
 _omega2 = omega2
 _mode_omega = mode_omega
+_cell_masses = cell_masses
+_cell_stiffness = cell_stiffness
+_cell_damping = cell_damping
+_cell_rayleigh = cell_rayleigh
+_band_omega2 = band_omega2
+_band_omega = band_omega
+_group_velocity = group_velocity

@@ -242,6 +242,40 @@ class System:
         clears the usual case without computing ω_max)."""
         return self.omega_max_bound() * h < limit or self.omega_max * h < limit
 
+    # -- periodic scenes: the unit cell and its bands ---------------------------------------------
+    @property
+    def periodic(self) -> bool:
+        """A periodic scene ([cell], or a [chain] repeating in i): the module has the band section."""
+        return self.has("cell_masses")
+
+    def band_cell(self):
+        """The unit cell's elements at the parameter values (:class:`numeric.bands.cell.Cell`)."""
+        from .bands.cell import Cell
+
+        if not self.periodic:
+            raise ValueError("System.band_cell: the module has no band section (not a periodic scene)")
+        mod, p = self.module, self.params
+        return Cell.from_lists(tuple(mod.CELL_NAMES), mod.cell_masses(**p), tuple(mod.CELL_SPRINGS),
+                               mod.cell_stiffness(**p), tuple(mod.CELL_DAMPERS), mod.cell_damping(**p),
+                               mod.cell_rayleigh(**p))
+
+    @property
+    def band_closed_form(self) -> bool:
+        """Whether the module's ``band_omega2`` is a closed form (``band_omega``, ``group_velocity`` exist)."""
+        return self.has("group_velocity")
+
+    def band_omega2(self, q) -> np.ndarray:
+        """The module's ω²_j(q), shape q.shape + (p,) (closed forms, or float64 eigvalsh without them)."""
+        return np.asarray(self.module.band_omega2(q, **self.params), dtype=float)
+
+    def band_omega(self, q) -> np.ndarray:
+        """The module's closed-form ω_j(q), shape q.shape + (p,)."""
+        return np.asarray(self.module.band_omega(q, **self.params), dtype=float)
+
+    def group_velocity(self, q) -> np.ndarray:
+        """The module's closed-form dω_j/dq [cells/s], shape q.shape + (p,)."""
+        return np.asarray(self.module.group_velocity(q, **self.params), dtype=float)
+
     # -- operators --------------------------------------------------------------------------------
     @cached_property
     def cubic_stiffness(self) -> np.ndarray | None:

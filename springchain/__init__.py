@@ -19,6 +19,7 @@ The public API (each name loads what it needs on first use, so ``import springch
     sc.rayleigh_coefficients("building", zeta=(0.05, 0.05), modes=(1, 3))  # .alpha, .beta, closed forms
     sc.response_spectrum("quake-record", zeta=[0.02, 0.05])   # SD, PSV, PSA (exact); a CSV path or bundled record
     sc.rsa("building_quake", spectrum="quake-record")         # SRSS and CQC peaks
+    b = sc.bands("diatomic")           # periodic chains: b.omega2 (q x branch), b.gaps, b.plot(), b.save(dir)
 
 Subpackages: :mod:`springchain.derive` (SymPy), :mod:`springchain.numeric` (NumPy/SciPy),
 :mod:`springchain.generated` (generated modules of the bundled scenes).
@@ -39,6 +40,7 @@ _LAZY = {
     "scene_from_dict": ".derive.scene",
     "rayleigh_coefficients": "._structural", "response_spectrum": "._structural", "rsa": "._structural",
     "SpectrumResult": "._structural", "RSA": "._structural",
+    "bands": "._bands", "Bands": "._bands",
 }
 
 __all__ = ["__version__", *_LAZY]

@@ -46,7 +46,7 @@ def _code_version() -> str:
     from . import derive as derive_pkg
 
     h = hashlib.sha256()
-    for p in sorted(Path(next(iter(derive_pkg.__path__))).glob("*.py")):
+    for p in sorted(Path(next(iter(derive_pkg.__path__))).rglob("*.py")):  # subpackages (derive/bands) too
         h.update(p.read_bytes())
     return h.hexdigest()[:12]
 

@@ -60,7 +60,7 @@ def _whole(flag):
 
 
 #: The commands that take a SCENE, and so ``--set NAME=VALUE``.
-SCENE_COMMANDS = ("derive", "modes", "simulate", "bench", "plan", "sweep", "frf", "animate", "rsa")
+SCENE_COMMANDS = ("derive", "modes", "simulate", "bench", "plan", "sweep", "frf", "animate", "rsa", "bands")
 
 
 def _set_values(items: list[str]) -> dict[str, float]:
@@ -410,6 +410,45 @@ def add_structural_commands(sub) -> None:
     rs.add_argument("--json", action="store_true", help="print one JSON object and nothing else")
 
 
+# -- periodic chains: bands ---------------------------------------------------------------------
+def cmd_bands(args) -> int:
+    """dispersion relation of a periodic chain: D(q), branches, gaps, Im q, density of states
+
+    The unit cell of a [cell] scene, or of a [chain] whose expressions repeat in i (its period found from the
+    expressions), its Bloch matrix D(q), characteristic polynomial and closed-form branches omega_j(q); at the
+    scene's values, from a route accurate at any contrast: the branches ordered by continuity, band edges and
+    gaps, the attenuation per cell Im q in the gaps, the density of states, the scene's own finite chain with
+    every mode named by band and q (or as an edge/defect mode), and damped bands. Writes DIR/<scene>-bands.npz
+    (q x branch), .json and the band figure .png.
+    """
+    from ._bands import bands
+
+    result = bands(args.scene, points=args.points)
+    paths = result.save(args.out, figures=not args.no_figures)
+    if args.json:
+        print(_dumps({**result.to_json(), "files": [str(p) for p in paths]}, indent=1))
+    elif args.latex:
+        print(result.to_latex(), end="")
+    else:
+        print(result.to_text(), end="")
+        for p in paths:
+            print(f"wrote {p}")
+    return 0
+
+
+def _add_bands(sub) -> None:
+    """``springchain bands``: dispersion relations of periodic chains."""
+    b = _command(sub, "bands", cmd_bands)
+    _scene(b, "diatomic")
+    b.add_argument("--points", type=_positive_int("--points"), default=401, metavar="P",
+                   help="q-points from -pi to pi (default: %(default)s)")
+    g = b.add_mutually_exclusive_group()
+    g.add_argument("--json", action="store_true", help="print one JSON object and nothing else")
+    g.add_argument("--latex", action="store_true", help="print D(q), the polynomial and the branches as LaTeX")
+    _out(b, DEFAULT_OUT, metavar="DIR")
+    b.add_argument("--no-figures", action="store_true", help="write only the NPZ and JSON files")
+
+
 # -- parser: one function per command ---------------------------------------------------------
 def _command(sub, name: str, func) -> argparse.ArgumentParser:
     """The subcommand ``name``, run by ``func``, whose docstring is its ``--help`` text: the first line
@@ -614,7 +653,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--version", action="version", version=f"springchain {__version__}")
     sub = p.add_subparsers(dest="command", required=True, parser_class=_Parser)
     for add in (_add_run, _add_derive, _add_modes, _add_simulate, _add_bench, _add_plan, _add_scaling, _add_sweep,
-                _add_frf, _add_animate, add_structural_commands):
+                _add_frf, _add_animate, add_structural_commands, _add_bands):
         add(sub)
     for name in SCENE_COMMANDS:  # one option, the same on every command that takes a SCENE
         sub.choices[name].add_argument(
@@ -630,7 +669,7 @@ FLAGS = {"dt": "--dt", "steps": "--steps", "record_every": "--record-every", "me
          "input": "--input", "output": "--output", "omega_min": "--omega-min", "omega_max": "--omega-max",
          "points": "--points", "mode": "--mode", "frames": "--frames", "fps": "--fps", "max_n": "--max-n",
          "symbolic_max_n": "--symbolic-max-n", "zeta": "--zeta", "periods": "--periods", "combine": "--combine",
-         "springs": "--springs", "alpha": "--alpha"}
+         "springs": "--springs", "alpha": "--alpha", "q": "--points"}
 
 
 def _flag_for(args, quantity: str | None) -> str | None:
