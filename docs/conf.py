@@ -1,0 +1,153 @@
+"""Sphinx configuration of the springchain documentation: ``sphinx-build -W --keep-going docs docs/_build/html``.
+
+Pages are MyST Markdown (``myst_nb``: pages with ``{code-cell}`` blocks are executed when the site
+is built, so their outputs come from the code); the example gallery is ``sphinx_gallery``
+(``docs/examples/*.py``, executed at build time); the scene, command and API references are
+generated from the code (``_ext/springchain_sphinx.py``, and ``reference/api.rst`` written below from
+``springchain.__all__``).
+"""
+
+from __future__ import annotations
+
+import os
+import sys
+from pathlib import Path
+
+HERE = Path(__file__).resolve().parent
+sys.path.insert(0, str(HERE / "_ext"))
+os.environ.setdefault("SPRINGCHAIN_PROGRESS", "0")  # no progress lines in executed outputs
+os.environ.setdefault("OMP_NUM_THREADS", "1")
+os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
+
+import springchain  # noqa: E402
+
+project = "springchain"
+author = "the springchain authors"
+copyright = "the springchain authors"
+release = version = springchain.__version__
+
+extensions = [
+    "myst_nb",
+    "sphinx.ext.autodoc",
+    "sphinx.ext.autosummary",
+    "sphinx.ext.mathjax",
+    "numpydoc",
+    "sphinx_gallery.gen_gallery",
+    "sphinx_copybutton",
+    "springchain_sphinx",
+]
+
+exclude_patterns = ["_build", "examples/*", "auto_examples/*.ipynb", "auto_examples/*.py",
+                    "auto_examples/*.zip", "benchmarks/*", "**.ipynb_checkpoints", "jupyter_execute"]
+templates_path = ["_templates"]
+source_suffix = {".rst": "restructuredtext", ".md": "myst-nb", ".ipynb": "myst-nb"}
+root_doc = "index"
+
+# -- MyST and executed pages -------------------------------------------------------------------------
+myst_enable_extensions = ["dollarmath", "colon_fence", "deflist"]
+myst_heading_anchors = 3
+nb_execution_mode = os.environ.get("SPRINGCHAIN_DOCS_EXECUTE", "cache")
+nb_execution_cache_path = str(HERE / "_build" / ".jupyter_cache")
+nb_execution_timeout = 600
+nb_execution_raise_on_error = True
+nb_execution_show_tb = True
+nb_execution_in_temp = True
+nb_merge_streams = True
+
+# -- API reference: autosummary of the public namespace ----------------------------------------------
+autosummary_generate = True
+autodoc_typehints = "none"
+autodoc_member_order = "bysource"
+numpydoc_show_class_members = False
+numpydoc_validation_checks: set[str] = set()
+
+
+def _write_api_page() -> None:
+    """``reference/api.rst``: every name of ``springchain.__all__``, functions then classes."""
+    import inspect
+
+    names = [n for n in springchain.__all__ if n != "__version__"]
+    objs = {n: getattr(springchain, n) for n in names}
+    functions = [n for n in names if inspect.isfunction(objs[n])]
+    classes = [n for n in names if inspect.isclass(objs[n]) and not issubclass(objs[n], Exception)]
+    errors = [n for n in names if inspect.isclass(objs[n]) and issubclass(objs[n], Exception)]
+    other = [n for n in names if n not in functions + classes + errors]
+    text = ["..", "   Written by docs/conf.py from springchain.__all__ on every build: do not edit.", "",
+            "API reference", "=============", "",
+            "Everything below is importable from the top of the package (``import springchain as sc``;",
+            "``sc.load``, ``sc.modes``, ...). Each name is loaded on first use, so ``import springchain``",
+            "stays cheap. The list is ``springchain.__all__``: a name added there appears here.", "",
+            ".. currentmodule:: springchain", ""]
+    for title, group in (("Functions", functions), ("Result and scene classes", classes),
+                         ("Errors", errors), ("Other", other)):
+        if not group:
+            continue
+        text += [title, "-" * len(title), "", ".. autosummary::", "   :toctree: generated", ""]
+        text += [f"   {n}" for n in group] + [""]
+    out = HERE / "reference" / "api.rst"
+    new = "\n".join(text)
+    if not out.exists() or out.read_text(encoding="utf-8") != new:
+        out.write_text(new, encoding="utf-8")
+
+
+_write_api_page()
+
+# -- example gallery ---------------------------------------------------------------------------------
+
+
+def springchain_scraper(block, block_vars, gallery_conf):
+    """Figures made without pyplot (springchain never touches pyplot): every matplotlib Figure and
+    every written GIF (``Animation.path``) that a block left in the example's globals, once each."""
+    import shutil
+
+    from matplotlib.figure import Figure
+    from sphinx_gallery.scrapers import figure_rst
+
+    shown = block_vars.setdefault("_springchain_shown", set())
+    paths = []
+    it = block_vars["image_path_iterator"]
+    for value in list(block_vars["example_globals"].values()):
+        values = value if isinstance(value, (list, tuple)) else [value]
+        for v in values:
+            if id(v) in shown:
+                continue
+            if isinstance(v, Figure):
+                path = next(it)
+                v.savefig(path, dpi=80)
+            elif type(v).__name__ == "Animation" and getattr(v, "path", None):
+                path = str(Path(next(it)).with_suffix(".gif"))
+                shutil.copyfile(v.path, path)
+            else:
+                continue
+            shown.add(id(v))
+            paths.append(path)
+    return figure_rst(paths, gallery_conf["src_dir"])
+
+
+sphinx_gallery_conf = {
+    "examples_dirs": "examples",
+    "gallery_dirs": "auto_examples",
+    "filename_pattern": r".*\.py$",
+    "image_scrapers": (springchain_scraper,),
+    "download_all_examples": False,
+    "remove_config_comments": True,
+    "within_subsection_order": "FileNameSortKey",
+    "show_memory": False,
+    "capture_repr": (),
+    "abort_on_example_error": False,
+    "only_warn_on_example_error": False,
+}
+
+# -- HTML ----------------------------------------------------------------------------------------------
+html_theme = "pydata_sphinx_theme"
+html_title = f"springchain {release}"
+html_static_path: list[str] = []
+html_theme_options = {
+    "navigation_with_keys": False,
+    "show_toc_level": 2,
+    "secondary_sidebar_items": ["page-toc"],
+    "footer_start": ["copyright"],
+    "footer_end": [],
+}
+html_show_sourcelink = False
+suppress_warnings = ["mystnb.unknown_mime_type", "config.cache"]
