@@ -96,20 +96,21 @@ _write_api_page()
 
 
 def springchain_scraper(block, block_vars, gallery_conf):
-    """Figures made without pyplot (springchain never touches pyplot): every matplotlib Figure and
-    every written GIF (``Animation.path``) that a block left in the example's globals, once each."""
+    """Figures made without pyplot (springchain never touches pyplot): every matplotlib Figure, every
+    written GIF (``Animation.path``) and every PNG/GIF path that a block left in the example's
+    globals (alone or in a list), shown once each, in the order the globals were bound."""
     import shutil
 
     from matplotlib.figure import Figure
     from sphinx_gallery.scrapers import figure_rst
 
-    shown = block_vars.setdefault("_springchain_shown", set())
+    shown = gallery_conf.setdefault("_springchain_shown", {}).setdefault(block_vars["src_file"], set())
     paths = []
     it = block_vars["image_path_iterator"]
     for value in list(block_vars["example_globals"].values()):
-        values = value if isinstance(value, (list, tuple)) else [value]
-        for v in values:
-            if id(v) in shown:
+        for v in (value if isinstance(value, (list, tuple)) else [value]):
+            key = str(v) if isinstance(v, Path) else id(v)
+            if key in shown:
                 continue
             if isinstance(v, Figure):
                 path = next(it)
@@ -117,9 +118,12 @@ def springchain_scraper(block, block_vars, gallery_conf):
             elif type(v).__name__ == "Animation" and getattr(v, "path", None):
                 path = str(Path(next(it)).with_suffix(".gif"))
                 shutil.copyfile(v.path, path)
+            elif isinstance(v, Path) and v.suffix in (".png", ".gif") and v.is_file():
+                path = str(Path(next(it)).with_suffix(v.suffix))
+                shutil.copyfile(v, path)
             else:
                 continue
-            shown.add(id(v))
+            shown.add(key)
             paths.append(path)
     return figure_rst(paths, gallery_conf["src_dir"])
 
@@ -151,3 +155,16 @@ html_theme_options = {
 }
 html_show_sourcelink = False
 suppress_warnings = ["mystnb.unknown_mime_type", "config.cache"]
+
+
+# -- docstrings ------------------------------------------------------------------------------------
+def _absolute_bars(app, what, name, obj, options, lines):
+    """``|H|`` in a docstring is an absolute value, not a reStructuredText substitution."""
+    import re
+
+    for i, line in enumerate(lines):
+        lines[i] = re.sub(r"(?<![\\|`])\|(?=[^\s|])([^|\n`]{1,40}?)(?<=[^\s|])\|(?![|`])", r"\\|\1\\|", line)
+
+
+def setup(app):
+    app.connect("autodoc-process-docstring", _absolute_bars, priority=400)
