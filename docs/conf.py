@@ -37,7 +37,7 @@ extensions = [
     "springchain_sphinx",
 ]
 
-exclude_patterns = ["_build", "examples/*", "auto_examples/*.ipynb", "auto_examples/*.py",
+exclude_patterns = ["_build", "_generated", "examples/*", "auto_examples/*.ipynb", "auto_examples/*.py",
                     "auto_examples/*.zip", "benchmarks/*", "**.ipynb_checkpoints", "jupyter_execute"]
 templates_path = ["_templates"]
 source_suffix = {".rst": "restructuredtext", ".md": "myst-nb", ".ipynb": "myst-nb"}

@@ -54,7 +54,7 @@ def test_a_key_added_to_the_loader_fails_until_described(monkeypatch, meta):
     assert any("'simulation.units'" in p and "not described" in p for p in problems), problems
     assert any("'bands'" in p and "not described" in p for p in problems), problems
     text = ref.render_scene_reference(meta, ref.loader_keys(meta))
-    assert "``units``" in text and "Not described yet" in text  # listed at once, flagged
+    assert "`units`" in text and "Not described yet" in text  # listed at once, flagged
 
 
 def test_a_described_key_the_loader_does_not_accept_fails(meta, seen):
@@ -151,20 +151,20 @@ def test_every_command_and_flag_is_in_the_command_reference():
     cmds = ref.commands(parser)
     assert {"run", "modes", "derive", "simulate", "bench", "plan", "frf", "sweep", "rsa"} <= set(cmds)
     for name, c in cmds.items():
-        section = text.split(f"springchain {name}\n", 1)[1].split("\n.. _command-", 1)[0]
+        section = text.split(f"(command-{name})=\n", 1)[1].split("\n(command-", 1)[0]
         for a in c["arguments"]:
             shown = a["dest"].upper() if a["positional"] else a["flags"][0]
-            assert f"``{shown}``" in section, (name, shown)
+            assert f"`{shown}`" in section, (name, shown)
         assert c["summary"], name
     assert ref.command_problems(parser) == []
-    assert "``--version``" in text
+    assert "`--version`" in text
 
 
 def test_a_flag_added_to_the_parser_appears_and_without_help_fails():
     parser = ref.parser()
     sub = ref._subparsers(parser)
     sub.choices["simulate"].add_argument("--bands", metavar="B")
-    assert "``--bands``" in ref.render_command_reference(parser)
+    assert "`--bands`" in ref.render_command_reference(parser)
     assert any("--bands" in p and "no help" in p for p in ref.command_problems(parser))
 
 

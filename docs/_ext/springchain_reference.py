@@ -174,57 +174,58 @@ def scene_signature(scene) -> dict:
 
 
 def _table_header(path: str, entry: dict) -> str:
-    kind = entry.get("kind", "table")
     if path == "":
         return "Top level"
     name = path.removesuffix("[]")
-    if kind == "array":
-        return f"[[{name}]]"
+    if entry.get("kind") == "array":
+        return f"`[[{name}]]`"
     if "." in path:
-        return f"{path} (inline table)"
-    return f"[{name}]"
+        return f"`{path}` (inline table)"
+    return f"`[{name}]`"
 
 
-def _cell(text) -> str:
-    """One list-table cell: a block of reStructuredText on one logical line."""
-    return " ".join(str(text).split()) or "—"
+def _md(text) -> str:
+    """Text for a Markdown table cell: one line, ``|`` escaped, Sphinx roles in MyST form."""
+    text = " ".join(str(text).split()) or "—"
+    text = re.sub(r":(doc|ref):`([^`]+)`", r"{\1}`\2`", text)
+    return text.replace("|", "\\|")
+
+
+def anchor(path: str) -> str:
+    """The label of a table's section (``scene-simulation``, ``scene-springs``, ``scene-top``)."""
+    return "scene-" + (re.sub(r"[^a-z0-9]+", "-", path.lower()).strip("-") or "top")
 
 
 def render_scene_reference(meta: dict | None = None, seen: dict[str, set[str]] | None = None) -> str:
-    """reStructuredText of the scene reference: per table its meaning, example and a key table."""
+    """MyST Markdown of the scene reference: per table its meaning, a key table and its example."""
     meta = meta or scene_meta()
     seen = seen if seen is not None else loader_keys(meta)
     tables = meta["tables"]
-    order = list(tables) + sorted(k for k in seen.get("", set()) if k not in tables
-                                  and k not in tables.get("", {}).get("keys", {}))
+    top_tables = {path.removesuffix("[]") for path in tables if path and "." not in path}
+    order = list(tables) + sorted(k for k in seen.get("", set()) if k not in top_tables
+                                  and k not in tables.get("", {}).get("keys", {}) and k not in tables)
     lines: list[str] = []
     for path in order:
         entry = tables.get(path, {"meaning": "**Not described yet** (accepted by the loader)."})
-        title = _table_header(path, entry)
-        anchor = "scene-" + (re.sub(r"[^a-z0-9]+", "-", path.lower()).strip("-") or "top")
-        lines += [f".. _{anchor}:", "", title, "-" * max(len(title), 3), "", _cell(entry.get("meaning", "")), ""]
+        lines += [f"({anchor(path)})=", f"### {_table_header(path, entry)}", "", _md(entry.get("meaning", "")), ""]
         if entry.get("kind") == "map":
-            lines += [_cell(entry.get("entries", "")), ""]
+            lines += [_md(entry.get("entries", "")), ""]
         keys = dict(entry.get("keys", {}))
-        for extra in sorted(seen.get(path, set()) - set(keys)):
-            keys[extra] = {"meaning": "**Not described yet** (accepted by the loader)."}
+        extra = seen.get(path, set()) - set(keys) - (top_tables if path == "" else set())
+        for key in sorted(extra):
+            keys[key] = {"meaning": "**Not described yet** (accepted by the loader)."}
         if keys:
-            lines += [".. list-table::", "   :header-rows: 1", "   :widths: 14 14 12 8 36 26", "",
-                      "   * - key", "     - type", "     - default", "     - units", "     - meaning",
-                      "     - example"]
+            lines += ["| key | type | default | units | meaning | example |", "| --- | --- | --- | --- | --- | --- |"]
             for key, info in keys.items():
-                lines += [f"   * - ``{key}``", f"     - {_cell(info.get('type', ''))}",
-                          f"     - {_cell(info.get('default', ''))}", f"     - {_cell(info.get('units', ''))}",
-                          f"     - {_cell(info.get('meaning', ''))}",
-                          f"     - {'``' + info['example'] + '``' if info.get('example') else '—'}"]
+                example = f"`{info['example']}`" if info.get("example") else "—"
+                lines.append(f"| `{key}` | {_md(info.get('type', ''))} | {_md(info.get('default', ''))} | "
+                             f"{_md(info.get('units', ''))} | {_md(info.get('meaning', ''))} | {_md(example)} |")
             lines.append("")
-        for label, caption in (("example", "Example"), ("example_chain", "Example in a ``[chain]`` scene")):
+        for label, caption in (("example", "Example"), ("example_chain", "Example in a `[chain]` scene")):
             if label in entry:
                 form = "chain" if label == "example_chain" else entry.get("form", "masses")
-                lines += [f"{caption} (merged into the {form} scene at the top of this page, it loads as shown; "
-                          "the test suite loads it):", "", ".. code-block:: toml", ""]
-                lines += ["   " + ln if ln else "" for ln in entry[label].strip("\n").splitlines()]
-                lines.append("")
+                lines += [f"{caption} (with the `{form}` base scene above it loads as shown; the tests load it):", "",
+                          "```toml", entry[label].strip("\n"), "```", ""]
     return "\n".join(lines)
 
 
@@ -282,46 +283,44 @@ def command_problems(p: argparse.ArgumentParser | None = None) -> list[str]:
     return problems
 
 
-def _literal(value) -> str:
-    return "``" + str(value).replace("`", "'") + "``"
+def _code(value) -> str:
+    return "`" + str(value).replace("`", "'") + "`"
+
+
+def _help(text: str) -> str:
+    """argparse help as a Markdown table cell: ``|`` escaped everywhere, ``*`` outside code spans."""
+    parts = re.split(r"(`[^`]+`)", " ".join(text.split()))
+    return "".join((q if q.startswith("`") else q.replace("*", "\\*")).replace("|", "\\|") for q in parts)
 
 
 def render_command_reference(p: argparse.ArgumentParser | None = None) -> str:
-    """reStructuredText of every command: summary, description, usage and a table of its arguments."""
+    """MyST Markdown of every command: summary, description, usage and a table of its arguments."""
     p = p or parser()
-    lines = ["Global options: " + ", ".join(_literal(f) for f in sorted(global_flags(p))) + ".", ""]
+    lines = ["Options of `springchain` itself: " + ", ".join(_code(f) for f in sorted(global_flags(p))) + ".", ""]
     for name, c in commands(p).items():
-        title = f"springchain {name}"
-        lines += [f".. _command-{name}:", "", title, "-" * len(title), "", f"*{_cell(c['summary'])}.*", ""]
+        lines += [f"(command-{name})=", f"## `springchain {name}`", "", f"*{_help(c['summary'])}.*", ""]
         if c["description"]:
-            lines += [_cell(c["description"]), ""]
-        lines += [".. code-block:: text", "", "   " + " ".join(c["usage"].split()), ""]
-        lines += [".. list-table::", "   :header-rows: 1", "   :widths: 22 16 62", "",
-                  "   * - argument", "     - default", "     - meaning"]
+            lines += [_help(c["description"]), ""]
+        lines += ["```text", " ".join(c["usage"].split()), "```", ""]
+        lines += ["| argument | default | meaning |", "| --- | --- | --- |"]
         for a in c["arguments"]:
-            flag = ", ".join(_literal(f) for f in a["flags"]) if not a["positional"] else _literal(a["dest"].upper())
-            if a["metavar"] and not a["positional"]:
-                flag += " " + _literal(a["metavar"])
-            elif a["choices"] and not a["positional"] and not a["flag_only"] and len(a["choices"]) <= 4:
-                flag += " " + _literal("{" + ",".join(map(str, a["choices"])) + "}")
-            notes = []
-            if a["required"] and not a["positional"]:
-                notes.append("required")
-            if a["nargs"] in ("*", "+") or a.get("default") is None and a["flags"][0] in ("--set",):
-                pass
-            default = "—" if a["default"] in (None, False) or a["flag_only"] else _literal(a["default"])
+            if a["positional"]:
+                flag = _code(a["dest"].upper())
+            else:
+                flag = ", ".join(_code(f) for f in a["flags"])
+                if a["metavar"]:
+                    flag += " " + _code(a["metavar"])
+                elif a["choices"] and not a["flag_only"] and len(a["choices"]) <= 4:
+                    flag += " " + _code("{" + ",".join(map(str, a["choices"])) + "}")
             if a["required"]:
                 default = "required"
-            text = _cell(a["help"]) + (f" ({', '.join(notes)})" if notes and not a["positional"] and default != "required" else "")
-            lines += [f"   * - {flag}", f"     - {default}", f"     - {_escape(text)}"]
+            elif a["default"] in (None, False) or a["flag_only"]:
+                default = "—"
+            else:
+                default = _code(a["default"])
+            lines.append(f"| {flag} | {default} | {_help(a['help'])} |")
         lines.append("")
     return "\n".join(lines)
-
-
-def _escape(text: str) -> str:
-    """Help text as reStructuredText: backquotes, stars and underscores shown as written."""
-    text = re.sub(r"`([^`]+)`", r"``\1``", text)
-    return re.sub(r"(?<![`\w])([*_|])", r"\\\1", text)
 
 
 #: ``springchain CMD ...`` in prose or code: the command and the rest of its line.
@@ -334,8 +333,9 @@ _CODE = re.compile(r"^```.*?^```|``[^`\n]+``|`[^`\n]+`", re.S | re.M)
 
 def code_of(text: str, python: bool = False) -> str:
     """The code in a page: fenced and indented blocks and inline literals (all of a Python file)."""
-    if python:
-        return re.sub(r"^\s*(?:import|from) springchain.*$", "", text, flags=re.M)
+    if python:  # the code, without docstrings and comments (prose)
+        text = re.sub(r'"""(?:.|\n)*?"""', "", text)
+        return re.sub(r"#.*$", "", text, flags=re.M)
     code = "\n".join(m.group(0) for m in _CODE.finditer(text))
     return re.sub(r"(?:^|\s)#\s.*$", "", code, flags=re.M)  # comments are prose
 

@@ -1,61 +1,74 @@
-"""Sphinx directives that render the references from the code (see :mod:`springchain_reference`).
+"""Sphinx glue: the generated reference pages and the benchmark tables, written before the build reads.
 
-* ``scene-reference``: every scene table and key the loader accepts, with ``scene_keys.toml``'s
-  meaning; a key without a description, or a description without a key, is a warning;
-* ``command-reference``: every command and argument of ``springchain.cli.build_parser()``;
-* ``include-benchmark``: a file a benchmark script wrote (``docs/benchmarks/NAME.md``), or a
-  warning naming the command that writes it.
+At ``builder-inited`` this writes, into ``docs/_generated/`` (not under version control):
+
+* ``scene-keys.md`` — every scene table and key the loader accepts, described by
+  ``reference/scene_keys.toml`` (:mod:`springchain_reference`);
+* ``commands.md`` — every command and argument of ``springchain.cli.build_parser()``;
+* ``benchmarks.md`` — per script in ``benchmarks/``, the file it wrote with ``--markdown``
+  (``docs/benchmarks/<script>.md``: machine, date, command, tables), or the command that writes it.
+
+The pages include them (MyST ``{include}``). Every problem — a key or a flag in the code but not
+described, or described but not in the code; a flag without help — is a Sphinx warning, so the
+build (run with ``-W``) fails on it.
 """
 
 from __future__ import annotations
 
-from docutils import nodes
-from docutils.statemachine import StringList
+import ast
+from pathlib import Path
+
 from sphinx.util import logging
-from sphinx.util.docutils import SphinxDirective
-from sphinx.util.nodes import nested_parse_with_titles
 
 import springchain_reference as ref
 
 logger = logging.getLogger(__name__)
+OUT = ref.DOCS / "_generated"
+BENCHMARKS = ref.ROOT / "benchmarks"
+RESULTS = ref.DOCS / "benchmarks"
 
 
-class _Rendered(SphinxDirective):
-    has_content = False
-
-    def rst(self) -> tuple[str, list[str]]:
-        raise NotImplementedError
-
-    def run(self):
-        text, problems = self.rst()
-        for p in problems:
-            logger.warning(p, location=(self.env.docname, self.lineno))
-        node = nodes.section() if "\n---" in text or "\n===" in text else nodes.container()
-        node.document = self.state.document
-        nested_parse_with_titles(self.state, StringList(text.splitlines(), source=self.env.docname), node)
-        return node.children
+def _write(name: str, text: str) -> None:
+    OUT.mkdir(exist_ok=True)
+    path = OUT / name
+    if not path.exists() or path.read_text(encoding="utf-8") != text:
+        path.write_text(text, encoding="utf-8")
 
 
-class SceneReference(_Rendered):
-    def rst(self):
-        self.env.note_dependency(str(ref.SCENE_KEYS))
-        meta = ref.scene_meta()
-        seen = ref.loader_keys(meta)
-        base = ["The examples below are merged into one of these two scenes (their top-level tables replaced):", "",
-                ".. code-block:: toml", "   :caption: the [masses] form", ""]
-        base += ["   " + ln if ln else "" for ln in meta["base"]["masses"].strip().splitlines()]
-        base += ["", ".. code-block:: toml", "   :caption: the [chain] form", ""]
-        base += ["   " + ln if ln else "" for ln in meta["base"]["chain"].strip().splitlines()]
-        return "\n".join(base) + "\n\n" + ref.render_scene_reference(meta, seen), ref.scene_problems(meta, seen)
+def scene_page() -> tuple[str, list[str]]:
+    meta = ref.scene_meta()
+    seen = ref.loader_keys(meta)
+    base = ["Each table's example below is merged into one of these two scenes (its top-level tables replaced):",
+            "", "```{code-block} toml", ":caption: the masses form", "", meta["base"]["masses"].strip(), "```", "",
+            "```{code-block} toml", ":caption: the chain form", "", meta["base"]["chain"].strip(), "```", ""]
+    return "\n".join(base) + "\n" + ref.render_scene_reference(meta, seen), ref.scene_problems(meta, seen)
 
 
-class CommandReference(_Rendered):
-    def rst(self):
-        p = ref.parser()
-        return ref.render_command_reference(p), ref.command_problems(p)
+def benchmarks_page() -> str:
+    lines = []
+    for script in sorted(BENCHMARKS.glob("[a-z]*.py")):
+        doc = ast.get_docstring(ast.parse(script.read_text(encoding="utf-8"))) or ""
+        title = doc.strip().splitlines()[0] if doc.strip() else script.stem
+        lines += [f"## `benchmarks/{script.name}`", "", title, ""]
+        result = RESULTS / f"{script.stem}.md"
+        if result.is_file():
+            lines += [result.read_text(encoding="utf-8").strip(), ""]
+        else:
+            lines += ["Not run for this documentation yet; to add its tables here, run from the repository root:", "",
+                      "```bash", f"python benchmarks/{script.name} --markdown docs/benchmarks/{script.stem}.md", "```", ""]
+    return "\n".join(lines)
+
+
+def generate(app) -> None:
+    text, problems = scene_page()
+    _write("scene-keys.md", text)
+    p = ref.parser()
+    _write("commands.md", ref.render_command_reference(p))
+    _write("benchmarks.md", benchmarks_page())
+    for problem in problems + ref.command_problems(p):
+        logger.warning(problem, type="springchain", subtype="reference")
 
 
 def setup(app):
-    app.add_directive("scene-reference", SceneReference)
-    app.add_directive("command-reference", CommandReference)
+    app.connect("builder-inited", generate)
     return {"parallel_read_safe": True, "parallel_write_safe": True}
