@@ -188,7 +188,8 @@ def _md(text) -> str:
     """Text for a Markdown table cell: one line, ``|`` escaped, Sphinx roles in MyST form."""
     text = " ".join(str(text).split()) or "—"
     text = re.sub(r":(doc|ref):`([^`]+)`", r"{\1}`\2`", text)
-    return text.replace("|", "\\|")
+    parts = re.split(r"(`[^`]+`)", text)
+    return "".join(q if q.startswith("`") else q.replace("<", "\\<") for q in parts).replace("|", "\\|")
 
 
 def anchor(path: str) -> str:
@@ -290,7 +291,8 @@ def _code(value) -> str:
 def _help(text: str) -> str:
     """argparse help as a Markdown table cell: ``|`` escaped everywhere, ``*`` outside code spans."""
     parts = re.split(r"(`[^`]+`)", " ".join(text.split()))
-    return "".join((q if q.startswith("`") else q.replace("*", "\\*")).replace("|", "\\|") for q in parts)
+    return "".join((q if q.startswith("`") else q.replace("*", "\\*").replace("<", "\\<")).replace("|", "\\|")
+                   for q in parts)
 
 
 def render_command_reference(p: argparse.ArgumentParser | None = None) -> str:
