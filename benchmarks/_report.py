@@ -85,6 +85,8 @@ def body(text: str) -> str:
     out, block, table = [], [], []
 
     def flush():
+        while block and not block[-1].strip():
+            block.pop()
         if block:
             out.extend(["```text", *block, "```", ""])
             block.clear()

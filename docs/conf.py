@@ -44,7 +44,43 @@ source_suffix = {".rst": "restructuredtext", ".md": "myst-nb", ".ipynb": "myst-n
 root_doc = "index"
 
 # -- MyST and executed pages -------------------------------------------------------------------------
-myst_enable_extensions = ["dollarmath", "colon_fence", "deflist"]
+myst_enable_extensions = ["dollarmath", "colon_fence", "deflist", "substitution"]
+
+#: Limits the pages quote, read from the code (``{{ NAME }}`` in a page): each number is written once.
+CODE_NUMBERS = {
+    "MAX_DENSE": "springchain.generated.contract:MAX_DENSE",
+    "MAX_MPMATH_MODES": "springchain.derive.accurate:MAX_MPMATH_MODES",
+    "MAX_MODES_LISTED": "springchain.derive.chain:MAX_MODES_LISTED",
+    "MODES_LISTED_EACH_END": "springchain.derive.chain:MODES_LISTED_EACH_END",
+    "MAX_SYMBOLIC_BLOCK": "springchain.derive.modes:MAX_SYMBOLIC_BLOCK",
+    "MAX_ROOT_OPS": "springchain.derive.modes:MAX_ROOT_OPS",
+    "MAX_DET_TERMS": "springchain.derive.work:MAX_DET_TERMS",
+    "MAX_ZETA_OPS": "springchain.derive.damping_report:MAX_ZETA_OPS",
+    "TRANSFER_MAX_MASSES": "springchain.derive.transfer:MAX_MASSES",
+    "DAMPED_CHAIN_MAX": "springchain.numeric.chain_damped:DENSE_MAX",
+    "DAMPED_CHAIN_MP_MAX": "springchain.numeric.chain_damped:MP_MAX",
+    "LOADED_CHAIN_EXACT_MAX": "springchain.numeric.system:LOADED_CHAIN_EXACT_MAX",
+    "MODAL_MP_MAX_MASSES": "springchain.numeric.modal_exact:MP_MAX_MASSES",
+    "FRF_MPMATH_MAX_MASSES": "springchain.numeric.frf_dense:MPMATH_MAX_MASSES",
+    "PLAN_MAX_MASSES": "springchain.numeric.plan:MAX_MASSES",
+    "COMPILED_FORCE_MIN_N": "springchain.numeric.fast:COMPILED_FORCE_MIN_N",
+    "SWEEP_IN_PROCESS_SECONDS": "springchain._sweep:IN_PROCESS_SECONDS",
+    "NEWMARK_DENSE_MAX": "springchain.numeric.integrators.newmark:DENSE_MAX",
+}
+
+
+def _code_numbers() -> dict[str, str]:
+    import importlib
+
+    out = {}
+    for name, where in CODE_NUMBERS.items():
+        module, attr = where.split(":")
+        value = getattr(importlib.import_module(module), attr)
+        out[name] = f"{value:g}" if isinstance(value, float) else f"{value:,}".replace(",", " ")
+    return out
+
+
+myst_substitutions = _code_numbers()
 myst_heading_anchors = 3
 nb_execution_mode = os.environ.get("SPRINGCHAIN_DOCS_EXECUTE", "cache")
 nb_execution_cache_path = str(HERE / "_build" / ".jupyter_cache")
