@@ -175,6 +175,10 @@ sphinx_gallery_conf = {
     "show_memory": False,
     "capture_repr": (),
     "abort_on_example_error": False,
+    # each API page shows the gallery examples that use it (reference/generated/*.examples)
+    "backreferences_dir": "reference/generated",
+    "doc_module": ("springchain",),
+    "inspect_global_variables": True,
     "only_warn_on_example_error": False,
 }
 
