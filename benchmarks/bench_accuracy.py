@@ -1,4 +1,5 @@
-"""Issue 18: each output's worst error before and after the accurate routes, and what they cost.
+"""The accurate routes: each output's worst error by the accurate route and by the plain float64
+route, and what each costs.
 
 Run from the repository root (BLAS is pinned to one thread before NumPy loads)::
 

@@ -1,4 +1,4 @@
-"""Small scenes at compiled speed (issue 22): what a step, an accuracy and the exact solution cost.
+"""Small scenes at compiled speed: what a step, an accuracy and the exact solution cost.
 
 Run ``python benchmarks/bench_small.py [--steps 1000000] [--t-end 1000] [--json]``. In one process,
 with BLAS pinned to one thread, side by side:

@@ -48,7 +48,7 @@ def benchmarks_page() -> str:
     lines = []
     for script in sorted(BENCHMARKS.glob("[a-z]*.py")):
         doc = ast.get_docstring(ast.parse(script.read_text(encoding="utf-8"))) or ""
-        title = doc.strip().splitlines()[0] if doc.strip() else script.stem
+        title = doc.strip().split("\n\n")[0].replace("\n", " ") if doc.strip() else script.stem
         lines += [f"## `benchmarks/{script.name}`", "", title, ""]
         result = RESULTS / f"{script.stem}.md"
         if result.is_file():
