@@ -42,6 +42,7 @@ exclude_patterns = ["_build", "_generated", "examples/*", "auto_examples/*.ipynb
 templates_path = ["_templates"]
 source_suffix = {".rst": "restructuredtext", ".md": "myst-nb", ".ipynb": "myst-nb"}
 root_doc = "index"
+smartquotes = False  # "--flag" stays two hyphens in prose
 
 # -- MyST and executed pages -------------------------------------------------------------------------
 myst_enable_extensions = ["dollarmath", "colon_fence", "deflist", "substitution"]
