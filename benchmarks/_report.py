@@ -59,9 +59,9 @@ def _commit() -> str:
         return "unknown"
 
 
-def header(script: str, argv: list[str], load_before: float) -> str:
-    """The provenance lines: command, date, machine, load, versions."""
-    now = datetime.datetime.now(datetime.timezone.utc).strftime("%Y-%m-%d %H:%M UTC")
+def header(script: str, argv: list[str], load_before: float, started: datetime.datetime) -> str:
+    """The provenance lines: command, date (the run's start), machine, load, versions."""
+    now = started.strftime("%Y-%m-%d %H:%M UTC")
     memory = ""
     with contextlib.suppress(OSError, ValueError):
         kb = int(next(ln for ln in Path("/proc/meminfo").read_text().splitlines()
@@ -129,9 +129,10 @@ def recorded(path: str | None, script: str, argv: list[str] | None = None):
         return
     argv = sys.argv[1:] if argv is None else list(argv)
     load = os.getloadavg()[0] if hasattr(os, "getloadavg") else float("nan")
+    started = datetime.datetime.now(datetime.timezone.utc)
     tee = _Tee(sys.stdout)
     with contextlib.redirect_stdout(tee):
         yield
     Path(path).parent.mkdir(parents=True, exist_ok=True)
-    Path(path).write_text(header(script, argv, load) + "\n" + body(tee.buffer_.getvalue()), encoding="utf-8")
+    Path(path).write_text(header(script, argv, load, started) + "\n" + body(tee.buffer_.getvalue()), encoding="utf-8")
     print(f"wrote {path}", file=sys.stderr)

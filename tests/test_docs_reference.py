@@ -191,3 +191,43 @@ def test_readme_command_table_lists_every_command():
     readme = (ROOT / "README.md").read_text(encoding="utf-8")
     rows = re.findall(r"^\| `springchain ([a-z]+)", readme, re.M)
     assert set(rows) == set(ref.commands()), sorted(rows)
+
+
+# -- benchmark tables: written by the scripts, with their provenance ------------------------------------
+def _report_module():
+    spec = importlib.util.spec_from_file_location("springchain_benchmarks__report_test", ROOT / "benchmarks" / "_report.py")
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+def test_every_benchmark_script_writes_its_markdown_file():
+    scripts = sorted((ROOT / "benchmarks").glob("[a-z]*.py"))
+    assert len(scripts) >= 10
+    for script in scripts:
+        text = script.read_text(encoding="utf-8")
+        assert "_report.add_option(" in text and "_report.recorded(" in text, script.name
+
+
+def test_benchmark_tables_in_the_docs_name_their_script_command_machine_and_date():
+    results = sorted((ROOT / "docs" / "benchmarks").glob("*.md"))
+    assert results, "the Benchmarks page includes at least one script-written table"
+    for f in results:
+        head = f.read_text(encoding="utf-8").splitlines()[:6]
+        assert head[0] == f"<!-- written by benchmarks/{f.stem}.py --markdown: do not edit; run the command to regenerate -->", f
+        assert head[1].startswith(f"- **command:** `python benchmarks/{f.stem}.py ") and "--markdown" in head[1], f
+        assert head[2].startswith("- **date:** ") and head[3].startswith("- **machine:** "), f
+        assert (ROOT / "benchmarks" / f"{f.stem}.py").is_file(), f
+
+
+def test_report_keeps_tables_and_fences_text(tmp_path, capsys):
+    report = _report_module()
+    out = tmp_path / "x.md"
+    with report.recorded(str(out), "benchmarks/x.py", ["--n", "3"]):
+        print("N = 3, two rounds")
+        print("| a | b |\n|---|---|\n| 1 | 2 |")
+        print("ratio 1.5")
+    assert "N = 3, two rounds" in capsys.readouterr().out  # still printed
+    text = out.read_text(encoding="utf-8")
+    assert "- **command:** `python benchmarks/x.py --n 3`" in text
+    assert "```text\nN = 3, two rounds\n```\n\n| a | b |\n|---|---|\n| 1 | 2 |\n\n```text\nratio 1.5\n```" in text
