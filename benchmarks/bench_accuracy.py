@@ -324,7 +324,7 @@ def main(argv=None) -> int:
             print(json.dumps(rows, indent=1))
             return 0
         fmt = lambda v: "–" if v is None else f"{v:.2g}"  # noqa: E731
-        print("| output | contrast | worst error before | after | s before | s after | cost |")
+        print("| output | contrast | worst error, plain float64 route | accurate route | s plain | s accurate | cost |")
         print("|---|---|---|---|---|---|---|")
         for r in rows:
             cost = (f"{r['seconds_after'] / r['seconds_before']:.1f}×" if r.get("seconds_before") and r.get("seconds_after")
