@@ -1,4 +1,5 @@
-"""Issue 18: each output's worst error before and after the accurate routes, and what they cost.
+"""The accurate routes: each output's worst error by the accurate route and by the plain float64
+route, and what each costs.
 
 Run from the repository root (BLAS is pinned to one thread before NumPy loads)::
 
@@ -34,6 +35,14 @@ from pathlib import Path  # noqa: E402
 
 import numpy as np  # noqa: E402
 import scipy.linalg  # noqa: E402
+import importlib.util
+
+# the shared ``--markdown FILE`` option (benchmarks/_report.py), loaded by path: the scripts are not a package
+_spec = importlib.util.spec_from_file_location("springchain_benchmarks__report", Path(__file__).with_name("_report.py"))
+_report = sys.modules.get(_spec.name) or importlib.util.module_from_spec(_spec)
+if _spec.name not in sys.modules:
+    sys.modules[_spec.name] = _report
+    _spec.loader.exec_module(_report)
 
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT / "tests"))
@@ -303,24 +312,26 @@ def bench_modes_json(tmp: Path) -> list[dict]:
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--json", action="store_true", help="print the rows as JSON")
+    _report.add_option(ap)
     args = ap.parse_args(argv)
-    with tempfile.TemporaryDirectory() as d:
-        tmp = Path(d)
-        os.environ.setdefault("SPRINGCHAIN_CACHE", str(tmp / "cache"))
-        rows = (bench_frf(tmp) + bench_chain_frf() + bench_loaded(tmp) + bench_chain(tmp) + bench_zeta(tmp)
-                + bench_modes_json(tmp))
-    if args.json:
-        print(json.dumps(rows, indent=1))
+    with _report.recorded(args.markdown, __file__, argv):
+        with tempfile.TemporaryDirectory() as d:
+            tmp = Path(d)
+            os.environ.setdefault("SPRINGCHAIN_CACHE", str(tmp / "cache"))
+            rows = (bench_frf(tmp) + bench_chain_frf() + bench_loaded(tmp) + bench_chain(tmp) + bench_zeta(tmp)
+                    + bench_modes_json(tmp))
+        if args.json:
+            print(json.dumps(rows, indent=1))
+            return 0
+        fmt = lambda v: "–" if v is None else f"{v:.2g}"  # noqa: E731
+        print("| output | contrast | worst error, plain float64 route | accurate route | s plain | s accurate | cost |")
+        print("|---|---|---|---|---|---|---|")
+        for r in rows:
+            cost = (f"{r['seconds_after'] / r['seconds_before']:.1f}×" if r.get("seconds_before") and r.get("seconds_after")
+                    else "–")
+            print(f"| {r['output']} | {r['contrast']:.0e} | {fmt(r['before'])} | {fmt(r['after'])} | "
+                  f"{fmt(r.get('seconds_before'))} | {fmt(r.get('seconds_after'))} | {cost} |")
         return 0
-    fmt = lambda v: "–" if v is None else f"{v:.2g}"  # noqa: E731
-    print("| output | contrast | worst error before | after | s before | s after | cost |")
-    print("|---|---|---|---|---|---|---|")
-    for r in rows:
-        cost = (f"{r['seconds_after'] / r['seconds_before']:.1f}×" if r.get("seconds_before") and r.get("seconds_after")
-                else "–")
-        print(f"| {r['output']} | {r['contrast']:.0e} | {fmt(r['before'])} | {fmt(r['after'])} | "
-              f"{fmt(r.get('seconds_before'))} | {fmt(r.get('seconds_after'))} | {cost} |")
-    return 0
 
 
 if __name__ == "__main__":

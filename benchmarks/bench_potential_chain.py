@@ -23,6 +23,14 @@ import time
 from pathlib import Path
 
 import numpy as np
+import importlib.util
+
+# the shared ``--markdown FILE`` option (benchmarks/_report.py), loaded by path: the scripts are not a package
+_spec = importlib.util.spec_from_file_location("springchain_benchmarks__report", Path(__file__).with_name("_report.py"))
+_report = sys.modules.get(_spec.name) or importlib.util.module_from_spec(_spec)
+if _spec.name not in sys.modules:
+    sys.modules[_spec.name] = _report
+    _spec.loader.exec_module(_report)
 
 TARGET = 2.0
 
@@ -82,16 +90,18 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--steps", type=int, default=20)
     p.add_argument("--rounds", type=int, default=7)
     p.add_argument("--json", action="store_true")
+    _report.add_option(p)
     args = p.parse_args(argv)
-    r = measure(args.n, args.steps, args.rounds)
-    if args.json:
-        print(json.dumps(r, indent=2))
+    with _report.recorded(args.markdown, __file__, argv):
+        r = measure(args.n, args.steps, args.rounds)
+        if args.json:
+            print(json.dumps(r, indent=2))
+            return 0
+        print(f"N = {r['n']}, {r['steps_per_call']} steps per call, min of {r['rounds']} interleaved rounds, one thread")
+        for name, s in r["seconds_per_step"].items():
+            print(f"  {name:10s} {s * 1e3:8.3f} ms per step  ({r['ns_per_mass_step'][name]:.2f} ns per mass and step)")
+        print(f"  FPUT-beta / linear = {r['ratio']:.2f}  (target <= {TARGET:g}: {'met' if r['met'] else 'NOT met'})")
         return 0
-    print(f"N = {r['n']}, {r['steps_per_call']} steps per call, min of {r['rounds']} interleaved rounds, one thread")
-    for name, s in r["seconds_per_step"].items():
-        print(f"  {name:10s} {s * 1e3:8.3f} ms per step  ({r['ns_per_mass_step'][name]:.2f} ns per mass and step)")
-    print(f"  FPUT-beta / linear = {r['ratio']:.2f}  (target <= {TARGET:g}: {'met' if r['met'] else 'NOT met'})")
-    return 0
 
 
 if __name__ == "__main__":

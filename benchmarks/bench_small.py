@@ -1,4 +1,4 @@
-"""Small scenes at compiled speed (issue 22): what a step, an accuracy and the exact solution cost.
+"""Small scenes at compiled speed: what a step, an accuracy and the exact solution cost.
 
 Run ``python benchmarks/bench_small.py [--steps 1000000] [--t-end 1000] [--json]``. In one process,
 with BLAS pinned to one thread, side by side:
@@ -34,6 +34,16 @@ import math
 import time
 
 import numpy as np
+import importlib.util
+import sys
+from pathlib import Path
+
+# the shared ``--markdown FILE`` option (benchmarks/_report.py), loaded by path: the scripts are not a package
+_spec = importlib.util.spec_from_file_location("springchain_benchmarks__report", Path(__file__).with_name("_report.py"))
+_report = sys.modules.get(_spec.name) or importlib.util.module_from_spec(_spec)
+if _spec.name not in sys.modules:
+    sys.modules[_spec.name] = _report
+    _spec.loader.exec_module(_report)
 
 ACCURACIES = tuple(10.0 ** -k for k in range(3, 11))
 STEP_METHODS = ("verlet", "yoshida4", "blanes-moan4", "blanes-moan6", "kahan-li8")
@@ -270,44 +280,46 @@ def main(argv=None) -> int:
     ap.add_argument("--steps", type=int, default=1_000_000, help="Verlet steps on the seed (default 10^6)")
     ap.add_argument("--t-end", type=float, default=1000.0, help="Duffing horizon T (default 1000)")
     ap.add_argument("--json", action="store_true", help="print the results as JSON")
+    _report.add_option(ap)
     args = ap.parse_args(argv)
-    from springchain.numeric.compiled.run import compile_seconds
-    from springchain.numeric.timing import single_threaded_blas
+    with _report.recorded(args.markdown, __file__, argv):
+        from springchain.numeric.compiled.run import compile_seconds
+        from springchain.numeric.timing import single_threaded_blas
 
-    import springchain.numeric.compiled.run as compiled_run
+        import springchain.numeric.compiled.run as compiled_run
 
-    compiled_run.COMPILE_MIN_EVALS = 0  # every run compiled: its compile is warm-up, reported separately
-    say = (lambda *a: None) if args.json else print
-    with single_threaded_blas():
-        t0 = time.perf_counter()
-        v = verlet_per_step(args.steps)
-        say(f"1. Verlet on the seed, {v['steps']:.0e} steps, every 1000th recorded by both: springchain "
-            f"{v['springchain_ns']:.1f} ns/step, hand-written numba {v['hand_numba_ns']:.1f} ns/step "
-            f"(ratio {v['ratio']:.2f}; target ≤ 2); frames differ by {v['final_state_difference']:.1e} "
-            f"(|x| up to {v['largest_position']:.1e})")
-        e = exact_vs_floor()
-        say(f"3. seed exact solution, S = {e['frames']}: sin/cos floor {e['sincos_floor_us']:.1f} µs; "
-            f"evaluation {e['evaluation_us']:.0f} µs (ratio {e['ratio']:.1f}; target ≤ 3); "
-            f"with the spectrum's set-up {e['with_setup_us']:.0f} µs ({e['ratio_with_setup']:.1f}); "
-            f"springchain.simulate {e['api_us']:.0f} µs ({e['ratio_api']:.1f})")
-        d = duffing(args.t_end, say)
-        total = time.perf_counter() - t0
-    say(f"2. Duffing, T = {d['t_end']:g}: seconds to reach each accuracy (error at t = T)")
-    say("| accuracy | best springchain method | seconds | SciPy DOP853 (user's call) | × | compiled DOP853 | × |")
-    say("|---|---|---|---|---|---|---|")
+        compiled_run.COMPILE_MIN_EVALS = 0  # every run compiled: its compile is warm-up, reported separately
+        say = (lambda *a: None) if args.json else print
+        with single_threaded_blas():
+            t0 = time.perf_counter()
+            v = verlet_per_step(args.steps)
+            say(f"1. Verlet on the seed, {v['steps']:.0e} steps, every 1000th recorded by both: springchain "
+                f"{v['springchain_ns']:.1f} ns/step, hand-written numba {v['hand_numba_ns']:.1f} ns/step "
+                f"(ratio {v['ratio']:.2f}; target ≤ 2); frames differ by {v['final_state_difference']:.1e} "
+                f"(|x| up to {v['largest_position']:.1e})")
+            e = exact_vs_floor()
+            say(f"3. seed exact solution, S = {e['frames']}: sin/cos floor {e['sincos_floor_us']:.1f} µs; "
+                f"evaluation {e['evaluation_us']:.0f} µs (ratio {e['ratio']:.1f}; target ≤ 3); "
+                f"with the spectrum's set-up {e['with_setup_us']:.0f} µs ({e['ratio_with_setup']:.1f}); "
+                f"springchain.simulate {e['api_us']:.0f} µs ({e['ratio_api']:.1f})")
+            d = duffing(args.t_end, say)
+            total = time.perf_counter() - t0
+        say(f"2. Duffing, T = {d['t_end']:g}: seconds to reach each accuracy (error at t = T)")
+        say("| accuracy | best springchain method | seconds | SciPy DOP853 (user's call) | × | compiled DOP853 | × |")
+        say("|---|---|---|---|---|---|---|")
 
-    def f(x, spec=".3g"):
-        return "not reached" if x is None else format(x, spec)
+        def f(x, spec=".3g"):
+            return "not reached" if x is None else format(x, spec)
 
-    for r in d["rows"]:
-        say(f"| {r['accuracy']:.0e} | {r['best'] or '—'} | {f(r['best_seconds'], '.2e')} | "
-            f"{f(r['scipy_dop853_seconds'], '.2e')} | {f(r['vs_scipy_dop853'], '.0f')} | "
-            f"{f(r['compiled_dop853_seconds'], '.2e')} | {f(r['vs_compiled_dop853'], '.1f')} |")
-    say(f"compile (or disk-cache load) of the compiled loops: {compile_seconds():.1f} s, once, in no timing; "
-        f"whole benchmark {total:.0f} s")
-    if args.json:
-        print(json.dumps({"verlet": v, "exact": e, "duffing": d, "compile_seconds": compile_seconds()}, indent=1))
-    return 0
+        for r in d["rows"]:
+            say(f"| {r['accuracy']:.0e} | {r['best'] or '—'} | {f(r['best_seconds'], '.2e')} | "
+                f"{f(r['scipy_dop853_seconds'], '.2e')} | {f(r['vs_scipy_dop853'], '.0f')} | "
+                f"{f(r['compiled_dop853_seconds'], '.2e')} | {f(r['vs_compiled_dop853'], '.1f')} |")
+        say(f"compile (or disk-cache load) of the compiled loops: {compile_seconds():.1f} s, once, in no timing; "
+            f"whole benchmark {total:.0f} s")
+        if args.json:
+            print(json.dumps({"verlet": v, "exact": e, "duffing": d, "compile_seconds": compile_seconds()}, indent=1))
+        return 0
 
 
 if __name__ == "__main__":

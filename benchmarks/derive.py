@@ -34,6 +34,14 @@ from pathlib import Path
 
 from springchain import symbolic_cost
 from springchain.symbolic_cost import Route
+import importlib.util
+
+# the shared ``--markdown FILE`` option (benchmarks/_report.py), loaded by path: the scripts are not a package
+_spec = importlib.util.spec_from_file_location("springchain_benchmarks__report", Path(__file__).with_name("_report.py"))
+_report = sys.modules.get(_spec.name) or importlib.util.module_from_spec(_spec)
+if _spec.name not in sys.modules:
+    sys.modules[_spec.name] = _report
+    _spec.loader.exec_module(_report)
 
 #: Work ratio LagrangesMethod / [[springs]] required at N = 40 and 80.
 WORK_TARGET = 10.0
@@ -138,15 +146,17 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--command-sizes", type=int, nargs="*", default=list(DEFAULT_COMMAND_SIZES))
     parser.add_argument("--repeats", type=int, default=3)
     parser.add_argument("--json", action="store_true")
+    _report.add_option(parser)
     args = parser.parse_args(argv)
-    say = (lambda line: None) if args.json else (lambda line: print(line, file=sys.stderr, flush=True))
-    commands = command_table(args.command_sizes, max(args.repeats, 1), say) if args.command_sizes else []
-    work = work_table(args.sizes, say)
-    if args.json:
-        print(json.dumps({"work": work, "commands": commands}, indent=1))
-    else:
-        print(markdown(work, commands), end="")
-    return 0
+    with _report.recorded(args.markdown, __file__, argv):
+        say = (lambda line: None) if args.json else (lambda line: print(line, file=sys.stderr, flush=True))
+        commands = command_table(args.command_sizes, max(args.repeats, 1), say) if args.command_sizes else []
+        work = work_table(args.sizes, say)
+        if args.json:
+            print(json.dumps({"work": work, "commands": commands}, indent=1))
+        else:
+            print(markdown(work, commands), end="")
+        return 0
 
 
 if __name__ == "__main__":

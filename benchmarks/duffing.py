@@ -35,6 +35,15 @@ import math
 import sys
 
 import numpy as np
+import importlib.util
+from pathlib import Path
+
+# the shared ``--markdown FILE`` option (benchmarks/_report.py), loaded by path: the scripts are not a package
+_spec = importlib.util.spec_from_file_location("springchain_benchmarks__report", Path(__file__).with_name("_report.py"))
+_report = sys.modules.get(_spec.name) or importlib.util.module_from_spec(_spec)
+if _spec.name not in sys.modules:
+    sys.modules[_spec.name] = _report
+    _spec.loader.exec_module(_report)
 
 ACCURACIES = tuple(10.0 ** -k for k in range(3, 11))
 TARGET = 3.0
@@ -197,18 +206,20 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--frames", type=int, default=10, help="error measured at frames+1 equally spaced times")
     ap.add_argument("--budget", type=float, default=0.5, help="seconds of timed repeats per run")
     ap.add_argument("--json", action="store_true", help="print the result as JSON instead of the table")
+    _report.add_option(ap)
     args = ap.parse_args(argv)
-    if not (args.t_end > 0 and args.frames >= 1):
-        ap.error("--t-end must be > 0 and --frames >= 1")
-    result = run(args.t_end, args.frames, args.budget, progress=lambda s: print(s, file=sys.stderr, flush=True))
-    if args.json:
-        print(json.dumps(result, indent=1))
+    with _report.recorded(args.markdown, __file__, argv):
+        if not (args.t_end > 0 and args.frames >= 1):
+            ap.error("--t-end must be > 0 and --frames >= 1")
+        result = run(args.t_end, args.frames, args.budget, progress=lambda s: print(s, file=sys.stderr, flush=True))
+        if args.json:
+            print(json.dumps(result, indent=1))
+            return 0
+        print(f"duffing, T = {result['t_end']:g}, error = max position error over {result['frames']} frames")
+        print(f"reference: {result['reference']}; DOP853's tightest run differs by {result['dop853_tightest_error']:.1e}")
+        print("ratios = DOP853 cost / method cost at equal accuracy (log-log interpolated on each sweep)")
+        print(markdown(result))
         return 0
-    print(f"duffing, T = {result['t_end']:g}, error = max position error over {result['frames']} frames")
-    print(f"reference: {result['reference']}; DOP853's tightest run differs by {result['dop853_tightest_error']:.1e}")
-    print("ratios = DOP853 cost / method cost at equal accuracy (log-log interpolated on each sweep)")
-    print(markdown(result))
-    return 0
 
 
 if __name__ == "__main__":  # pragma: no cover

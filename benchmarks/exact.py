@@ -15,6 +15,16 @@ import statistics
 import timeit
 
 import numpy as np
+import importlib.util
+import sys
+from pathlib import Path
+
+# the shared ``--markdown FILE`` option (benchmarks/_report.py), loaded by path: the scripts are not a package
+_spec = importlib.util.spec_from_file_location("springchain_benchmarks__report", Path(__file__).with_name("_report.py"))
+_report = sys.modules.get(_spec.name) or importlib.util.module_from_spec(_spec)
+if _spec.name not in sys.modules:
+    sys.modules[_spec.name] = _report
+    _spec.loader.exec_module(_report)
 
 TARGET = 3.0
 
@@ -54,18 +64,20 @@ def measure(scene: str = "seed", rounds: int = 7, number: int = 200) -> dict:
 def main(argv: list[str] | None = None) -> int:
     p = argparse.ArgumentParser(prog="python benchmarks/exact.py", description=__doc__.split("\n\n")[0])
     p.add_argument("--json", action="store_true", help="print JSON")
+    _report.add_option(p)
     args = p.parse_args(argv)
-    r = measure()
-    if args.json:
-        print(json.dumps(r, indent=1))
-    else:
-        s = r["seconds"]
-        print(f"{r['scene']}: S = {r['S']} times, N = {r['N']} masses\n"
-              f"  exact solution   {s['exact']['median'] * 1e6:8.1f} µs (min {s['exact']['min'] * 1e6:.1f})\n"
-              f"  cos + sin alone  {s['trig']['median'] * 1e6:8.1f} µs (min {s['trig']['min'] * 1e6:.1f})\n"
-              f"  ratio {r['ratio_median']:.2f}× (median of per-round ratios), target ≤ {TARGET:g}× — "
-              + ("met" if r["met"] else "MISSED"))
-    return 0
+    with _report.recorded(args.markdown, __file__, argv):
+        r = measure()
+        if args.json:
+            print(json.dumps(r, indent=1))
+        else:
+            s = r["seconds"]
+            print(f"{r['scene']}: S = {r['S']} times, N = {r['N']} masses\n"
+                  f"  exact solution   {s['exact']['median'] * 1e6:8.1f} µs (min {s['exact']['min'] * 1e6:.1f})\n"
+                  f"  cos + sin alone  {s['trig']['median'] * 1e6:8.1f} µs (min {s['trig']['min'] * 1e6:.1f})\n"
+                  f"  ratio {r['ratio_median']:.2f}× (median of per-round ratios), target ≤ {TARGET:g}× — "
+                  + ("met" if r["met"] else "MISSED"))
+        return 0
 
 
 if __name__ == "__main__":

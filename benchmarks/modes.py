@@ -23,6 +23,15 @@ import timeit
 from pathlib import Path
 
 import numpy as np
+import importlib.util
+import sys
+
+# the shared ``--markdown FILE`` option (benchmarks/_report.py), loaded by path: the scripts are not a package
+_spec = importlib.util.spec_from_file_location("springchain_benchmarks__report", Path(__file__).with_name("_report.py"))
+_report = sys.modules.get(_spec.name) or importlib.util.module_from_spec(_spec)
+if _spec.name not in sys.modules:
+    sys.modules[_spec.name] = _report
+    _spec.loader.exec_module(_report)
 
 HARD = """name = "walls_six_alternating"
 description = "issue 9: six equal masses between walls, springs alternating k and 1e8 k"
@@ -93,18 +102,20 @@ def measure(rounds: int = 7, number: int = 2000) -> list[dict]:
 def main(argv: list[str] | None = None) -> int:
     p = argparse.ArgumentParser(prog="python benchmarks/modes.py", description=__doc__.split("\n\n")[0])
     p.add_argument("--json", action="store_true", help="print JSON")
+    _report.add_option(p)
     args = p.parse_args(argv)
-    rows = measure()
-    if args.json:
-        print(json.dumps(rows, indent=1))
+    with _report.recorded(args.markdown, __file__, argv):
+        rows = measure()
+        if args.json:
+            print(json.dumps(rows, indent=1))
+            return 0
+        for r in rows:
+            s, e = r["seconds"], r["error"]
+            route = "closed form kept" if r["closed_form_kept"] else "spring-factor SVD in the module"
+            print(f"{r['scene']} (N = {r['N']}, {route}):\n"
+                  f"  before: float64 closed form  {s['before']['median'] * 1e6:8.1f} µs   worst rel. error {e['before']:.1e}\n"
+                  f"  after:  generated omega2()   {s['after']['median'] * 1e6:8.1f} µs   worst rel. error {e['after']:.1e}")
         return 0
-    for r in rows:
-        s, e = r["seconds"], r["error"]
-        route = "closed form kept" if r["closed_form_kept"] else "spring-factor SVD in the module"
-        print(f"{r['scene']} (N = {r['N']}, {route}):\n"
-              f"  before: float64 closed form  {s['before']['median'] * 1e6:8.1f} µs   worst rel. error {e['before']:.1e}\n"
-              f"  after:  generated omega2()   {s['after']['median'] * 1e6:8.1f} µs   worst rel. error {e['after']:.1e}")
-    return 0
 
 
 if __name__ == "__main__":

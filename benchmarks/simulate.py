@@ -23,6 +23,15 @@ import time
 from pathlib import Path
 
 import numpy as np
+import importlib.util
+import sys
+
+# the shared ``--markdown FILE`` option (benchmarks/_report.py), loaded by path: the scripts are not a package
+_spec = importlib.util.spec_from_file_location("springchain_benchmarks__report", Path(__file__).with_name("_report.py"))
+_report = sys.modules.get(_spec.name) or importlib.util.module_from_spec(_spec)
+if _spec.name not in sys.modules:
+    sys.modules[_spec.name] = _report
+    _spec.loader.exec_module(_report)
 
 TARGETS = {"uniform": 1.5, "index-dependent": 2.5}
 
@@ -115,10 +124,12 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--n", type=int, default=1_000_000, help="masses (default: %(default)s)")
     p.add_argument("--rounds", type=int, default=5, help="interleaved rounds (default: %(default)s)")
     p.add_argument("--json", action="store_true", help="print JSON instead of a Markdown table")
+    _report.add_option(p)
     args = p.parse_args(argv)
-    result = measure(args.n, max(1, args.rounds))
-    print(json.dumps(result, indent=1) if args.json else markdown(result), end="" if not args.json else "\n")
-    return 0
+    with _report.recorded(args.markdown, __file__, argv):
+        result = measure(args.n, max(1, args.rounds))
+        print(json.dumps(result, indent=1) if args.json else markdown(result), end="" if not args.json else "\n")
+        return 0
 
 
 if __name__ == "__main__":

@@ -25,6 +25,16 @@ for var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
 
 import numpy as np  # noqa: E402
 import scipy.fft  # noqa: E402
+import importlib.util
+import sys
+from pathlib import Path
+
+# the shared ``--markdown FILE`` option (benchmarks/_report.py), loaded by path: the scripts are not a package
+_spec = importlib.util.spec_from_file_location("springchain_benchmarks__report", Path(__file__).with_name("_report.py"))
+_report = sys.modules.get(_spec.name) or importlib.util.module_from_spec(_spec)
+if _spec.name not in sys.modules:
+    sys.modules[_spec.name] = _report
+    _spec.loader.exec_module(_report)
 
 
 def measure(n: int, rounds: int) -> dict:
@@ -52,16 +62,18 @@ def main(argv=None) -> int:
     p.add_argument("--n", type=int, default=1_000_000, help="transform length (default 10^6)")
     p.add_argument("--rounds", type=int, default=5, help="interleaved rounds (default 5)")
     p.add_argument("--json", action="store_true", help="print JSON")
+    _report.add_option(p)
     args = p.parse_args(argv)
-    r = measure(args.n, args.rounds)
-    if args.json:
-        print(json.dumps(r, indent=2))
+    with _report.recorded(args.markdown, __file__, argv):
+        r = measure(args.n, args.rounds)
+        if args.json:
+            print(json.dumps(r, indent=2))
+            return 0
+        print(f"DST-I, n = {r['n']} (chirp route: {r['chirp_route']}), median of {r['rounds']} interleaved rounds")
+        for k, v in r["median_seconds"].items():
+            print(f"  {k:<15s} {v:8.3f} s")
+        print(f"  max |pocketfft - chirp| / ||x|| = {r['max_difference_over_norm']:.1e}")
         return 0
-    print(f"DST-I, n = {r['n']} (chirp route: {r['chirp_route']}), median of {r['rounds']} interleaved rounds")
-    for k, v in r["median_seconds"].items():
-        print(f"  {k:<15s} {v:8.3f} s")
-    print(f"  max |pocketfft - chirp| / ||x|| = {r['max_difference_over_norm']:.1e}")
-    return 0
 
 
 if __name__ == "__main__":

@@ -21,6 +21,15 @@ import subprocess
 import sys
 import tempfile
 import time
+import importlib.util
+from pathlib import Path
+
+# the shared ``--markdown FILE`` option (benchmarks/_report.py), loaded by path: the scripts are not a package
+_spec = importlib.util.spec_from_file_location("springchain_benchmarks__report", Path(__file__).with_name("_report.py"))
+_report = sys.modules.get(_spec.name) or importlib.util.module_from_spec(_spec)
+if _spec.name not in sys.modules:
+    sys.modules[_spec.name] = _report
+    _spec.loader.exec_module(_report)
 
 #: (label, argv after the interpreter) of each timed command.
 COMMANDS = {
@@ -77,10 +86,12 @@ def main(argv: list[str] | None = None) -> int:
     p = argparse.ArgumentParser(prog="python benchmarks/startup.py", description=__doc__.split("\n\n")[0])
     p.add_argument("--repeats", type=int, default=7, help="interleaved rounds (default: %(default)s)")
     p.add_argument("--json", action="store_true", help="print JSON instead of a Markdown table")
+    _report.add_option(p)
     args = p.parse_args(argv)
-    result = measure(max(1, args.repeats))
-    print(json.dumps(result, indent=1) if args.json else markdown(result), end="" if not args.json else "\n")
-    return 0
+    with _report.recorded(args.markdown, __file__, argv):
+        result = measure(max(1, args.repeats))
+        print(json.dumps(result, indent=1) if args.json else markdown(result), end="" if not args.json else "\n")
+        return 0
 
 
 if __name__ == "__main__":

@@ -1,6 +1,6 @@
 """Scene files: load, validate at the boundary, and hold as immutable data.
 
-A scene is a TOML file (see README, "Scene format"). Every key is checked
+A scene is a TOML file (see the scene format reference, docs/reference/scene-format.md). Every key is checked
 when the file is loaded; a bad scene raises :class:`~derive.errors.SceneError`
 whose one-line message names the file, the key, the bad value and what would
 be accepted::
@@ -295,7 +295,7 @@ class SceneSource(dict):
 
 
 def scene_from_dict(data: dict, *, file: str = DICT_FILE) -> Scene:
-    """A scene from a dict with the TOML schema (see README, "Scene format").
+    """A scene from a dict with the TOML schema (see docs/reference/scene-format.md).
 
     Parameters
     ----------

@@ -36,7 +36,7 @@ from .array_record import array_record
 from .elements import Elements
 from .frf_dense import _mp, mp_modes
 
-#: Largest scene whose modal quantities are computed in mpmath (cost measured in the README's rsa section).
+#: Largest scene whose modal quantities are computed in mpmath (the cost grows with the digits the scene's contrast needs).
 MP_MAX_MASSES = 24
 #: Two successive precisions agreeing to this relative difference settle a value.
 SETTLED = 1e-17

@@ -19,7 +19,7 @@ from .strict_json import dumps
 from .sweep_driver import read
 
 QUANTILES = (0.05, 0.25, 0.5, 0.75, 0.95)
-#: What ``participation_ratio`` means (README, summary.json and the figure say the same).
+#: What ``participation_ratio`` means (the sweep chapter of the guide, summary.json and the figure say the same).
 PR_CONVENTION = ("normalised: 1 / (N * sum_i psi_i^4) of each mass-weighted mode psi (sum_i psi_i^2 = 1), i.e. "
                  "the participation number 1 / sum_i psi_i^4 divided by N: 1 for a mode spread evenly over all N "
                  "masses, 1/N for a mode on one mass")

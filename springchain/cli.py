@@ -497,7 +497,7 @@ def _add_modes(sub) -> None:
     m = _command(sub, "modes", cmd_modes)
     _scene(m)
     g = m.add_mutually_exclusive_group()
-    g.add_argument("--json", action="store_true", help="print one JSON object (see README) and nothing else")
+    g.add_argument("--json", action="store_true", help="print one JSON object (its fields: the guide's Modes chapter) and nothing else")
     g.add_argument("--latex", action="store_true", help="print the derivation as LaTeX (amsmath)")
 
 

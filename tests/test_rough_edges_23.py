@@ -301,5 +301,5 @@ def test_participation_ratio_convention_is_documented(tmp_path):
     assert "1 / (N * sum_i psi_i^4)" in conv and "divided by N" in conv
     pr = np.asarray(r.summary["participation_ratio"]["mean"])
     assert np.all((pr > 1 / 20) & (pr <= 1.0))  # normalised: 1/N ... 1
-    readme = (ROOT / "README.md").read_text(encoding="utf-8")
-    assert "1/(N Σψ⁴)" in readme
+    guide = (ROOT / "docs" / "guide" / "sweeps.md").read_text(encoding="utf-8")  # the user guide's sweep chapter
+    assert "1/(N Σψ⁴)" in guide
