@@ -1,0 +1,80 @@
+"""∂ω²/∂p in closed form, where the modes are closed-form.
+
+A closed-form ω² (a root of a factor of the characteristic polynomial, valid for every parameter
+value) is an analytic branch, so its derivative is ``sp.diff(ω², p)``; a repeated closed-form root
+stays repeated for every value (both branches share the derivative). Values are evaluated like
+the printed ω²: in mpmath with the parameters as exact binary fractions, correctly rounded
+(:func:`derive.accurate.value`). Uniform ``[chain]`` scenes differentiate their family ω²_j(j, n).
+Expressions longer than :data:`MAX_OPS` operations are not kept (the numeric value stands).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import sympy as sp
+
+from ..accurate import NotAccurate, exact_values, value
+
+#: Largest derivative (SymPy operation count) kept as a closed form.
+MAX_OPS = 400
+
+
+@dataclass(frozen=True)
+class ClosedForm:
+    """∂ω²/∂p of each closed-form mode.
+
+    Attributes
+    ----------
+    modes : list of (dict, dict) or None
+        Per mode in ascending order (repeated modes listed once per independent shape):
+        ``({p: expression}, {p: value})``, or None for a mode without a closed form.
+    family : dict or None
+        A uniform chain's ``{p: ∂ω²_j/∂p}`` in ``j`` and ``n``.
+    """
+
+    modes: list
+    family: dict | None = None
+
+
+def _simplify(expr: sp.Expr) -> sp.Expr | None:
+    if sp.count_ops(expr) > 4 * MAX_OPS:
+        return None
+    out = sp.factor(sp.cancel(expr)) if not expr.has(sp.cos, sp.acos, sp.sin) else expr
+    return out if sp.count_ops(out) <= MAX_OPS else None
+
+
+def closed_form_derivatives(model, modes, parameters: tuple[str, ...]) -> ClosedForm:
+    """Closed-form ∂ω²/∂p of a scene's modes (see the module docstring).
+
+    Parameters
+    ----------
+    model : Model or ChainModel
+    modes : ModeSet or ChainModes
+    parameters : tuple of str
+    """
+    syms = model.params
+    if model.scene.chain is not None:
+        if getattr(modes, "omega2", None) is None:
+            return ClosedForm([], None)
+        return ClosedForm([], {p: _simplify(sp.diff(modes.omega2, syms[p])) for p in parameters})
+    subs = exact_values(syms, model.scene.parameters)
+    out = []
+    for mode in modes.modes:
+        if not mode.exact or mode.rigid:
+            entry = None if not mode.rigid else ({p: sp.Integer(0) for p in parameters}, {p: 0.0 for p in parameters})
+        else:
+            exprs, values = {}, {}
+            for p in parameters:
+                d = _simplify(sp.diff(mode.omega2, syms[p]))
+                exprs[p] = d
+                try:
+                    values[p] = None if d is None else value(d, subs)
+                except NotAccurate:
+                    values[p] = None
+            entry = (exprs, values)
+        out.extend([entry] * mode.multiplicity)
+    return ClosedForm(out, None)
+
+
+__all__ = ["ClosedForm", "closed_form_derivatives", "MAX_OPS"]
