@@ -152,4 +152,26 @@ def _settle(d_w2: np.ndarray, d_phi: np.ndarray, omega2: np.ndarray, masses: np.
     return d_w2, d_phi
 
 
-__all__ = ["ModeSensitivities", "compute", "open_chain", "DENSE_MAX", "CLUSTER_RTOL"]
+
+
+def mode_shapes(system: System, wanted: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """``(positions, ω², M-normalised shapes (N, J))`` of the modes ``wanted`` (default all), without
+    derivatives: the accurate spectrum (dense scenes), or bisection and refined shapes (open chains,
+    O(n) per mode)."""
+    masses, ends, k = system.masses, system.spring_ends, system.stiffness
+    n = masses.shape[0]
+    wanted = np.arange(n) if wanted is None else np.asarray(wanted, dtype=np.intp)
+    if open_chain(system) and n > 64:
+        from .chain import chain_modes
+
+        modes, _ = chain_modes(ddm.Stencil(masses, ends), ends, k, wanted)
+        return modes.index, modes.omega2_values, modes.shape_values
+    if n > DENSE_MAX:
+        raise RunRefused(f"mode shapes of a {'ring' if system.chain else 'scene'} of {n} masses: accepted: at "
+                         f"most {DENSE_MAX} masses, or an open [chain]")
+    spec = system.spectrum
+    shapes = spec.shapes
+    return wanted, spec.omega2[wanted], shapes[:, wanted]
+
+
+__all__ = ["ModeSensitivities", "compute", "mode_shapes", "open_chain", "DENSE_MAX", "CLUSTER_RTOL"]
