@@ -81,6 +81,8 @@ class Setup:
 
     def at(self, values: dict[str, float] | None = None, wanted=None):
         """The numeric sensitivities at ``values`` (default the scene's) of modes ``wanted``."""
+        import numpy as np
+
         from .numeric.sensitivity.compute import compute
         from .numeric.sensitivity.derivatives import ElementDerivatives
         from .numeric.system import System
@@ -89,6 +91,12 @@ class Setup:
         vals.update(values or {})
         system = self.system if values is None else System.from_module(
             self.system.module, vals, tables=self.system.tables, ground_table=self.system.ground_table)
+        if values is not None and not (np.all(system.masses > 0) and np.all(system.stiffness >= 0)):
+            from .numeric.errors import RunRefused
+
+            shown = ", ".join(f"{k} = {v:.6g}" for k, v in (values or {}).items())
+            raise RunRefused(f"at {shown} a mass or spring constant of {self.scene.name!r} is not positive; "
+                             "accepted: parameter values that keep every mass > 0 and every spring >= 0")
         dm, dk, d2m, d2k = self.law.at(vals, system.spring_ends, system.n)
         derivs = ElementDerivatives(self.parameters, tuple(float(vals[p]) for p in self.parameters), dm, dk, d2m, d2k)
         return compute(system, derivs, default_modes(system.n) if wanted is None else wanted)

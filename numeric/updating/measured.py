@@ -10,6 +10,8 @@ Format (one row per measured mode, any order; ``#`` starts a comment line)::
 * ``omega`` (rad/s) or ``frequency`` (Hz) — required, finite and > 0;
 * ``omega_std`` / ``frequency_std`` — optional standard deviations (> 0) in the same unit; without them
   the fit weighs frequencies by their relative error and estimates one noise level from the residual;
+* ``shape_std`` — optional standard deviation of each shape value after the shape is normalised to 1 at
+  its largest sensor (needed with ``omega_std`` when shapes are given);
 * every other column is a sensor: a mass name (an index 0 … n−1 for ``[chain]`` scenes), its value the
   measured mode shape there (any scale and sign; all sensor columns filled, or the shape left out of a
   row by leaving all of them empty).
@@ -36,7 +38,7 @@ MAX_BYTES = 8 * 2**20
 #: Plain decimal numbers (no nan, inf, hex, underscores).
 NUMBER = re.compile(r"^[+-]?(\d+\.?\d*|\.\d+)([eE][+-]?\d+)?$")
 #: Column names that are not sensors.
-RESERVED = ("omega", "omega_std", "frequency", "frequency_std")
+RESERVED = ("omega", "omega_std", "frequency", "frequency_std", "shape_std")
 ACCEPTED = ("a CSV file with a header row: omega (rad/s) or frequency (Hz), optionally omega_std / frequency_std, "
             "and one column per sensor mass holding the measured shape")
 
@@ -63,6 +65,14 @@ class Measured:
     omega_std: np.ndarray | None = field(default=None, repr=False)
     sensors: tuple[str, ...] = ()
     shapes: np.ndarray | None = field(default=None, repr=False)
+    #: Standard deviation of the normalised shape values of each row, shape (R,), or None.
+    shape_std: np.ndarray | None = field(default=None, repr=False)
+
+    def first(self, rows: int) -> "Measured":
+        """The first ``rows`` measured modes."""
+        cut = lambda a: None if a is None else (a[..., :rows])  # noqa: E731
+        return Measured(self.file, self.omega[:rows], cut(self.omega_std), self.sensors, cut(self.shapes),
+                        cut(self.shape_std))
 
     @property
     def rows(self) -> int:
@@ -146,7 +156,7 @@ def read_measured(path: str | Path) -> Measured:
         raise _refuse(file, "file", "no data rows")
     sensors = tuple(h for h in header if h not in RESERVED)
     scale = 2 * np.pi if hz else 1.0
-    omega, sd, shapes = [], [], []
+    omega, sd, shapes, ssd = [], [], [], []
     for line, row in rows:
         if len(row) != len(header):
             raise _refuse(file, f"line {line}", f"{len(row)} cells for {len(header)} columns")
@@ -154,6 +164,9 @@ def read_measured(path: str | Path) -> Measured:
         omega.append(scale * number(cells[col], file, line, col, positive=True))
         if std in cells:
             sd.append(scale * number(cells[std], file, line, std, positive=True))
+        if "shape_std" in cells:
+            ssd.append(number(cells["shape_std"], file, line, "shape_std", positive=True) if cells["shape_std"]
+                       else np.nan)
         values = [cells[s] for s in sensors]
         if sensors and all(v == "" for v in values):
             shapes.append([np.nan] * len(sensors))
@@ -163,7 +176,8 @@ def read_measured(path: str | Path) -> Measured:
                 raise _refuse(file, f"line {line}", "a measured shape that is zero at every sensor")
             shapes.append(shape)
     return Measured(file, np.array(omega), np.array(sd) if std in header else None, sensors,
-                    np.array(shapes, dtype=float).T if sensors else None)
+                    np.array(shapes, dtype=float).T if sensors else None,
+                    np.array(ssd) if "shape_std" in header else None)
 
 
 __all__ = ["Measured", "read_measured", "rows_of", "number", "NUMBER", "RESERVED"]
