@@ -167,7 +167,9 @@ class Update:
         return {"singular_values": [float(v) for v in s], "relative": [float(v) / top for v in s],
                 "directions": [{p: float(v) for p, v in zip(self.parameters, self.fit.directions[:, i])}
                                for i in range(len(self.parameters))],
-                "unidentifiable": [describe(v, self.parameters) for v in self.fit.unidentifiable]}
+                "unidentifiable": [describe(v, self.parameters) for v in self.fit.unidentifiable],
+                "identifiable": [{"combination": describe(v, self.parameters), "value": val, "standard_error": se}
+                                 for v, val, se in self.fit.combinations]}
 
     def to_json(self) -> dict:
         """What ``springchain update ... --json`` prints."""
@@ -219,6 +221,9 @@ class Update:
         if ident["unidentifiable"]:
             for combo in ident["unidentifiable"]:
                 lines.append(f"  not identifiable from these data: {combo} (kept at its starting value)")
+            for rec in ident["identifiable"]:
+                lines.append(f"  fixed by the data: {rec['combination']} = {rec['value']:.10g} "
+                             f"+- {rec['standard_error']:.3g}")
         else:
             lines.append("  every parameter is fixed by the data")
         lines += ["", f"{'measured omega':>15}{'mode':>6}{'before':>16}{'error':>10}{'after':>16}{'error':>10}"

@@ -2,7 +2,8 @@
 
 1. ω_j by bisection on the Golub–Kahan form of the bidiagonal spring factor
    (:func:`numeric.chain_spectrum`: relatively accurate, O(n) per value, the values ``modes`` prints);
-2. a first shape by two steps of inverse iteration on the tridiagonal ``K − λ_j M`` (banded LU);
+2. a first shape from the twisted factorisation of ``K − λ_j M`` (stationary qd transforms of the
+   subtraction-free ``LDLᵀ`` of K from both ends, :class:`.solvers.ChainSolver`);
 3. Newton's correction with double-double residuals from the elements (:func:`.refine.refine_cluster`)
    whose corrector is Nelson's deleted-row system (:class:`.solvers.ChainSolver`): O(n) per step.
 
@@ -60,24 +61,13 @@ def chain_modes(stencil: ddm.Stencil, ends: np.ndarray, k: np.ndarray, wanted: n
     solver = ChainSolver(masses, _positions(n, ends, k))
     wanted = np.unique(np.asarray(wanted, dtype=np.intp))
     omega = omega_at(f, wanted)
-    root = np.sqrt(masses)
     index, lam, cols, rig, lab, settled = [], [], [], [], [], []
     for j, w in zip(wanted.tolist(), omega.tolist()):
         if j < f.rigid:
             cols.append(rigid_shape(stencil, np.ones(n)))
             index.append(j), lam.append((0.0, 0.0)), rig.append(True), lab.append(0), settled.append(0.0)
             continue
-        lam0 = w * w
-        x = solver.inverse_iteration(lam0, seed=j)
-        t = int(np.argmax(np.abs(x * root)))
-        # the shape with x_t = 1 from Nelson's own system: every row but t of (K − λM) x = 0
-        col = np.zeros(n)
-        if t > 0:
-            col[t - 1] = -solver.off[t - 1]
-        if t < n - 1:
-            col[t + 1] = -solver.off[t]
-        x = solver.solve(col, lam0, t)
-        x[t] = 1.0
+        x, t = solver.vector(w * w)  # the twisted factorisation's vector (x_t = 1)
         q, xs, last = refine_cluster(stencil, k, x[:, None],
                                      lambda rr, lm, tw=t: solver.solve(rr, lm, tw))
         index.append(j), lam.append(q[0]), cols.append(xs[0]), rig.append(False), lab.append(j)

@@ -140,7 +140,7 @@ class Nelson:
                 break
             v = ddm.add(v, ddm.dd(dv))
             last = size
-            if size <= 1e-30 * max(float(np.max(np.abs(v[0]), initial=0.0)), 1e-300):
+            if size <= 1e-26 * max(float(np.max(np.abs(v[0]), initial=0.0)), 1e-300):
                 break
         return v
 

@@ -27,7 +27,7 @@ from . import double_double as ddm
 #: spring-factor ω² are accurate to ~2e-15, so this is 50 times their error.
 CLUSTER_RTOL = 1e-13
 #: A correction below this (M-norm; shapes have norm 1) ends the refinement.
-SETTLED = 1e-27
+SETTLED = 1e-24
 #: Most refinement steps.
 MAX_STEPS = 8
 

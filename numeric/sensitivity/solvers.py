@@ -15,7 +15,6 @@ rounding never reaches a result; they must only be close enough to contract.
 from __future__ import annotations
 
 import numpy as np
-import scipy.linalg
 
 
 class ModalSolver:
@@ -57,8 +56,58 @@ class ModalSolver:
         return w / (self.root if w.ndim == 1 else self.root[:, None])
 
 
+def _series_pivots(k: np.ndarray) -> np.ndarray:
+    """Pivots of ``K = L D Lᵀ`` of an open chain (top-down, subtraction-free): ``D_i = w_i + k_{i+1}``
+    with ``w_0 = k_0`` and ``w_{i+1} = w_i k_{i+1} / (w_i + k_{i+1})`` — the stiffness from mass i to the
+    left wall through the springs before it (springs in series); ``L_{i+1,i} = −k_{i+1}/D_i``.
+
+    Parameters
+    ----------
+    k : ndarray, shape (n + 1,)
+        Spring constant at each position (0 the left wall, n the right wall).
+    """
+    n = k.shape[0] - 1
+    kk = k.tolist()
+    D = [0.0] * n
+    w = kk[0]
+    for i in range(n):
+        D[i] = w + kk[i + 1]
+        w = w * kk[i + 1] / D[i] if D[i] > 0 else 0.0
+    return np.array(D)
+
+
+def _shifted(k: np.ndarray, D: np.ndarray, masses: np.ndarray, lam: float) -> tuple[np.ndarray, np.ndarray]:
+    """``K − λM = L₊ D₊ L₊ᵀ`` by the stationary qd transform of the representation ``(L, D)`` of K with
+    the diagonal shift ``λ m_i`` (dstqds of LAPACK's MRRR, generalised to a diagonal shift):
+    ``D₊_i = D_i + s_i``, ``L₊_i = −k_{i+1}/D₊_i``, ``s_{i+1} = k_{i+1}² s_i / (D₊_i D_i) − λ m_{i+1}``,
+    ``s_0 = −λ m_0``. Mixed relatively stable: the pivots are those of a chain with relatively perturbed
+    springs and masses, so small λ next to stiff springs keep their accuracy (a float64 LU of ``K − λM``
+    does not). Zero pivots become ±tiny."""
+    n = masses.shape[0]
+    kk, dd, mm = k.tolist(), D.tolist(), masses.tolist()
+    Dp = [0.0] * n
+    Lp = [0.0] * max(n - 1, 0)
+    tiny = np.finfo(float).tiny
+    s = -lam * mm[0]
+    for i in range(n):
+        dp = dd[i] + s
+        if dp == 0.0:
+            dp = tiny
+        Dp[i] = dp
+        if i < n - 1:
+            k1 = kk[i + 1]
+            Lp[i] = -k1 / dp
+            s = (k1 * k1 / (dp * dd[i])) * s - lam * mm[i + 1] if dd[i] > 0 else -lam * mm[i + 1]
+    return np.array(Dp), np.array(Lp)
+
+
 class ChainSolver:
     """Nelson's deleted-row system of an open chain (walls or free ends), O(n) per solve.
+
+    ``K − λM`` with row and column t deleted splits into its leading block (masses 0 … t−1) and trailing
+    block (t+1 … n−1). The leading block's factorisation is the first t steps of the stationary qd
+    transform of K's subtraction-free ``LDLᵀ`` (:func:`_shifted`); the trailing block's, the same on the
+    reversed chain. Each solve is then two LAPACK ``dpttrs`` substitutions.
 
     Parameters
     ----------
@@ -70,52 +119,59 @@ class ChainSolver:
 
     def __init__(self, masses: np.ndarray, position_stiffness: np.ndarray):
         self.masses = np.asarray(masses, dtype=float)
-        k = np.asarray(position_stiffness, dtype=float)
+        self.k = np.asarray(position_stiffness, dtype=float)
         self.n = int(self.masses.shape[0])
-        self.diag_k = k[:-1] + k[1:]  # sums of non-negative numbers: each to half an ulp
-        self.off = -k[1:-1]
+        self.off = -self.k[1:-1]  # K_{i,i+1}
+        self._D = _series_pivots(self.k)
+        self._Dr = _series_pivots(self.k[::-1].copy())
+        self._lam = None
 
-    def _band(self, lam: float, lo: int, hi: int) -> np.ndarray:
-        """``K − λM`` rows/columns lo … hi−1 in LAPACK band storage, shape (3, hi − lo)."""
-        ab = np.zeros((3, hi - lo))
-        ab[1] = self.diag_k[lo:hi] - lam * self.masses[lo:hi]
-        ab[0, 1:] = self.off[lo:hi - 1]
-        ab[2, :-1] = self.off[lo:hi - 1]
-        return ab
+    def _prepare(self, lam: float) -> None:
+        if self._lam != lam:
+            self._top = _shifted(self.k, self._D, self.masses, lam)
+            self._bottom = _shifted(self.k[::-1].copy(), self._Dr, self.masses[::-1].copy(), lam)
+            self._lam = lam
+
+    @staticmethod
+    def _pt(D: np.ndarray, L: np.ndarray, size: int, b: np.ndarray) -> np.ndarray:
+        from scipy.linalg.lapack import dpttrs
+
+        if size == 1:
+            return b / D[0]
+        x, info = dpttrs(D[:size], L[:size - 1], b)
+        return x if info == 0 else np.full_like(b, np.nan)
 
     def solve(self, r: np.ndarray, lam: float, twist: int) -> np.ndarray:
-        """``v`` with ``v_t = 0`` and every row of ``(K − λM) v = r`` but row ``t`` (NaN where a block is
-        exactly singular in float64)."""
+        """``v`` with ``v_t = 0`` and every row of ``(K − λM) v = r`` but row ``t``."""
+        self._prepare(lam)
         r = np.asarray(r, dtype=float)
         v = np.zeros_like(r)
-        for lo, hi in ((0, twist), (twist + 1, self.n)):
-            if hi > lo:
-                try:
-                    v[lo:hi] = scipy.linalg.solve_banded((1, 1), self._band(lam, lo, hi), r[lo:hi],
-                                                         check_finite=False)
-                except np.linalg.LinAlgError:
-                    v[lo:hi] = np.nan
+        t, n = twist, self.n
+        if t > 0:
+            v[:t] = self._pt(*self._top, t, np.ascontiguousarray(r[:t]))
+        if t < n - 1:
+            v[t + 1:] = self._pt(*self._bottom, n - t - 1, np.ascontiguousarray(r[t + 1:][::-1]))[::-1]
         return v
 
-    def inverse_iteration(self, lam: float, seed: int = 0) -> np.ndarray:
-        """A first approximation of the mode at ``λ`` (two steps of inverse iteration with the full
-        banded LU), shape (n,)."""
-        rng = np.random.default_rng(seed)
-        shift = lam
-        x = rng.standard_normal(self.n)
-        for attempt in range(8):
-            ab = self._band(shift, 0, self.n)
-            try:
-                with np.errstate(all="ignore"):
-                    y = scipy.linalg.solve_banded((1, 1), ab, x, check_finite=False)
-                    y = scipy.linalg.solve_banded((1, 1), ab, y / np.linalg.norm(y), check_finite=False)
-            except np.linalg.LinAlgError:
-                y = None
-            if y is not None and np.all(np.isfinite(y)) and np.linalg.norm(y) > 0:
-                return y / np.linalg.norm(y)
-            # λ an exact eigenvalue of the float64 matrix: move the shift by a few ulps
-            shift = lam * (1 + 2.0 ** (attempt - 50)) if lam else 2.0 ** (attempt - 1074 + 60)
-        return x / np.linalg.norm(x)
+    def twist(self, lam: float) -> int:
+        """The twist index: where ``γ_k = D₊_k + D₋_k − (K_kk − λ m_k)`` is smallest in magnitude (the
+        mode's largest component, MRRR's choice)."""
+        self._prepare(lam)
+        diag = self.k[:-1] + self.k[1:] - lam * self.masses
+        gamma = self._top[0] + self._bottom[0][::-1] - diag
+        return int(np.argmin(np.abs(gamma)))
+
+    def vector(self, lam: float) -> tuple[np.ndarray, int]:
+        """The mode at ``λ`` with ``x_t = 1`` at the twist index t (every row but t of ``(K − λM)x = 0``)."""
+        t = self.twist(lam)
+        col = np.zeros(self.n)
+        if t > 0:
+            col[t - 1] = -self.off[t - 1]
+        if t < self.n - 1:
+            col[t + 1] = -self.off[t]
+        x = self.solve(col, lam, t)
+        x[t] = 1.0
+        return x, t
 
 
 __all__ = ["ModalSolver", "ChainSolver"]

@@ -109,6 +109,8 @@ class Fit:
     dof: int = 0
     status: str = ""
     evaluations: int = 0
+    #: With unidentifiable directions: the identifiable ones ``(v (P,), v·log p, its standard error)``.
+    combinations: list = field(default_factory=list, repr=False)
 
 
 def describe(direction: np.ndarray, names: tuple[str, ...]) -> str:
@@ -198,8 +200,13 @@ def solve(problem: Problem) -> Fit:
         corr = cov / np.outer(se_log, se_log)
     corr[involved, :] = np.nan
     corr[:, involved] = np.nan
+    combos = []
+    if V_null.shape[1]:
+        for i in range(V_id.shape[1]):
+            v = V_id[:, i] * (1.0 if V_id[np.argmax(np.abs(V_id[:, i])), i] > 0 else -1.0)
+            combos.append((v, float(v @ theta), float(np.sqrt(max(v @ cov @ v, 0.0)))))
     return Fit(p_end, se, corr, cov, s, V, [V_null[:, i] for i in range(V_null.shape[1])], ~involved, r0, r1,
-               scale, chi2, dof, str(status), count[0])
+               scale, chi2, dof, str(status), count[0], combos)
 
 
 __all__ = ["Problem", "Fit", "solve", "describe", "IDENTIFIABLE_RTOL"]
