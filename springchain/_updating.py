@@ -239,16 +239,26 @@ class Update:
         return "\n".join(lines) + "\n"
 
 
-def update(scene: str | Path | Scene, measured: str | Path, parameters, bounds=(), modes: int | None = None,
-           out: str | Path | None = DEFAULT_OUT, figure: bool = True) -> Update:
+def prepare(scene: str | Path | Scene, parameters):
+    """What :func:`update` builds before fitting (generated module, symbolic element derivatives), for many
+    fits of one scene: ``update(..., setup=prepare(scene, "k1,k2"))``."""
+    from ._sensitivity import Setup, parameter_list
+
+    sc = load(scene)
+    return Setup(sc, parameter_list(sc, parameters), closed_forms=False)
+
+
+def update(scene: str | Path | Scene, measured, parameters, bounds=(), modes: int | None = None,
+           out: str | Path | None = DEFAULT_OUT, figure: bool = True, setup=None) -> Update:
     """Fit scene parameters to measured natural frequencies (and shapes) by least squares.
 
     Parameters
     ----------
     scene : str, Path or Scene
-    measured : str or Path
+    measured : str, Path or Measured
         Measured-modes CSV (:mod:`springchain.numeric.updating.measured`: ``omega`` or ``frequency``,
-        optional ``omega_std``/``frequency_std`` and ``shape_std``, one column per sensor mass).
+        optional ``omega_std``/``frequency_std`` and ``shape_std``, one column per sensor mass), or
+        a :class:`~springchain.numeric.updating.measured.Measured`.
     parameters : str or sequence of str
         The scene parameters to fit (``"k1,k2"``).
     bounds : sequence of str
@@ -258,6 +268,8 @@ def update(scene: str | Path | Scene, measured: str | Path, parameters, bounds=(
     out : str or Path or None
         Folder of ``<scene>-updated.toml`` and ``<scene>-update.png``; None writes nothing.
     figure : bool
+    setup : optional
+        From :func:`prepare` (the same scene and parameters): skips the set-up in repeated fits.
 
     Returns
     -------
@@ -273,7 +285,7 @@ def update(scene: str | Path | Scene, measured: str | Path, parameters, bounds=(
 
     from ._sensitivity import Setup, default_modes, parameter_list
     from .numeric.updating.fit import Problem, solve
-    from .numeric.updating.measured import read_measured
+    from .numeric.updating.measured import Measured, read_measured
     from .numeric.updating.residuals import pair, weighted
 
     sc = load(scene)
@@ -281,7 +293,7 @@ def update(scene: str | Path | Scene, measured: str | Path, parameters, bounds=(
     if not names:
         raise SceneError(sc.file, "parameters", "none given; accepted: the scene parameters to fit, e.g. "
                                                 + ",".join(sc.parameter_names[:2]))
-    m = read_measured(measured)
+    m = measured if isinstance(measured, Measured) else read_measured(measured)
     if modes is not None:
         if modes > m.rows:
             raise SceneError(m.file, "modes", f"{modes}: more modes asked than measured ({m.rows} rows); accepted: "
@@ -297,7 +309,8 @@ def update(scene: str | Path | Scene, measured: str | Path, parameters, bounds=(
                                               "accepted: shape_std on every row with a shape, or no standard "
                                               "deviations at all")
     sensors = _sensor_index(sc, m.sensors, m.file) if m.sensors else []
-    setup = Setup(sc, names, closed_forms=False)
+    if setup is None or setup.scene.sha256 != sc.sha256 or setup.parameters != names:
+        setup = Setup(sc, names, closed_forms=False)
     candidates = default_modes(setup.system.n)
     first = setup.at(None, candidates)
     elastic = ~first.rigid
@@ -372,7 +385,7 @@ def update(scene: str | Path | Scene, measured: str | Path, parameters, bounds=(
                   np.sqrt(r0.omega2[s0]), np.sqrt(r1.omega2[s1]), mac0, mac1, tuple(files), tuple(notes))
 
 
-__all__ = ["update", "Update", "updated_text", "write_updated", "parse_bounds"]
+__all__ = ["update", "prepare", "Update", "updated_text", "write_updated", "parse_bounds"]
 
 
 # -- reconstruct --------------------------------------------------------------------------------------

@@ -127,7 +127,8 @@ class ChainSolver:
         self._lam = None
 
     def _prepare(self, lam: float) -> None:
-        if self._lam != lam:
+        # a corrector needs no exact shift: λ refined by a few ulps keeps the factorisation (two O(n) passes)
+        if self._lam is None or abs(lam - self._lam) > 1e-12 * abs(lam):
             self._top = _shifted(self.k, self._D, self.masses, lam)
             self._bottom = _shifted(self.k[::-1].copy(), self._Dr, self.masses[::-1].copy(), lam)
             self._lam = lam
