@@ -194,3 +194,29 @@ def test_mac_pairs_modes_optimally_at_shared_masses(tmp_path):
     assert r.a.dofs == ("floor1", "floor3")
     assert [(i, j) for i, j, _ in r.pairs] == [(0, 1), (2, 0)]
     assert all(v > 1 - 1e-14 for _, _, v in r.pairs)
+
+
+def test_sweep_follows_branches_by_mac_crossing_and_veering(tmp_path):
+    """A one-parameter grid sweep reports mode branches followed by shape: two uncoupled oscillators cross
+    (the ranks exchange, each branch keeps its shape), weakly coupled ones veer (the ranks stay, the shapes
+    exchange: the MAC of a branch with itself drops)."""
+    def scene(name, coupled):
+        springs = [{"between": ["wall", "a"], "k": "k1"}, {"between": ["b", "wall"], "k": "k2"}]
+        if coupled:
+            springs.append({"between": ["a", "b"], "k": "c"})
+        path = tmp_path / f"{name}.toml"
+        path.write_text(scene_toml(name, {"m": 1.0, "k1": 1.0, "k2": 1.0, "c": 0.02}, masses={"a": "m", "b": "m"},
+                                   springs=springs))
+        return path
+
+    kw = dict(vary=["k2=grid(0.5, 1.5, 20)"], samples=1, workers=1, progress=False)
+    cross = sc.sweep(scene("cross", False), out=tmp_path / "c", **kw).summary["branches"]
+    assert [c["branches"] for c in cross["crossings"]] == [[0, 1]] and cross["veerings"] == []
+    assert cross["crossings"][0]["at"][0] < 1.0 < cross["crossings"][0]["at"][1]
+    w = np.array(cross["omega2"])  # branch 0 is mass b (ω² = k2) all along, though it becomes the higher mode
+    assert np.allclose(w[:, 0], np.linspace(0.5, 1.5, 20), rtol=1e-14, atol=0)
+    veer = sc.sweep(scene("veer", True), out=tmp_path / "v", **kw)
+    b = veer.summary["branches"]
+    assert b["crossings"] == [] and [v["branches"] for v in b["veerings"]] == [[0, 1]]
+    assert min(min(row) for row in b["mac_next"]) < 0.9
+    assert (tmp_path / "v" / "branches.png").stat().st_size > 0 and veer.figures[-1].name == "branches.png"
