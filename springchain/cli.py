@@ -467,12 +467,14 @@ def cmd_update(args) -> int:
 
 
 def cmd_reconstruct(args) -> int:
-    """masses and springs of a wall-free chain from its two spectra (Jacobi inverse eigenvalue problem)
+    """masses and springs of a fixed-free chain from its two spectra (Jacobi inverse eigenvalue problem)
 
     FILE (CSV): a column omega2_free (n values: the chain fixed to a wall at mass 1, free at mass n) and a
-    column omega2_clamped (n - 1 values: the same chain with mass n clamped as well); values may be quoted
-    decimal strings of any length (50 digits recover the chain to 1e-12). The spectra must interlace. The
-    Jacobi matrix is rebuilt by Lanczos in extended precision and the one free scale fixed by --total-mass.
+    column omega2_clamped (n - 1 values: the same chain with mass n clamped as well), or instead of the
+    latter end_component (the free-end components of the mass-normalised shapes, which fix the scale too);
+    values may be quoted decimal strings of any length (50 digits recover the chain to 1e-12). The spectra
+    must interlace. The Jacobi matrix is rebuilt by Lanczos in extended precision and the one free scale
+    fixed by --total-mass.
     Prints the masses and springs (k1 is the wall spring), a condition estimate and the error bound it
     implies for float64 input, and writes DIR/<name>.toml.
     """
@@ -493,7 +495,9 @@ def add_updating_commands(sub) -> None:
     _json(mc)
     up = _command(sub, "update", cmd_update)
     _scene(up, "building")
-    up.add_argument("--measured", required=True, metavar="FILE", help="measured modes (CSV, see --help of the command)")
+    up.add_argument("--measured", required=True, metavar="FILE",
+                    help="measured modes: CSV with omega (rad/s) or frequency (Hz), optional omega_std / "
+                         "frequency_std and shape_std, and one column per sensor mass holding the shape")
     up.add_argument("--parameters", required=True, metavar="P,Q,...", help="the scene parameters to fit")
     up.add_argument("--bounds", action="append", metavar="NAME=LO:HI",
                     help="bounds of a fitted parameter, repeatable (default: 0 < value, no upper bound)")
@@ -502,9 +506,11 @@ def add_updating_commands(sub) -> None:
     _out(up, DEFAULT_OUT, metavar="DIR")
     _json(up)
     rc = _command(sub, "reconstruct", cmd_reconstruct)
-    rc.add_argument("spectra", help="CSV with columns omega2_free (n values) and omega2_clamped (n - 1 values)")
-    rc.add_argument("--total-mass", type=_positive_float("--total-mass"), required=True, metavar="M",
-                    help="the chain's total mass (fixes the one scale the spectra leave free)")
+    rc.add_argument("spectra", help="CSV with columns omega2_free (n values) and omega2_clamped (n - 1 values) or "
+                                    "end_component (n values)")
+    rc.add_argument("--total-mass", type=_positive_float("--total-mass"), metavar="M",
+                    help="the chain's total mass (fixes the one scale two spectra leave free; not needed with "
+                         "end_component)")
     rc.add_argument("--name", default="reconstructed", help="name of the scene written (default: %(default)s)")
     _out(rc, DEFAULT_OUT, metavar="DIR")
     _json(rc)

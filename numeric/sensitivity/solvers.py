@@ -14,7 +14,13 @@ rounding never reaches a result; they must only be close enough to contract.
 
 from __future__ import annotations
 
+import functools
+
 import numpy as np
+
+#: Chains at least this long run the two O(n) recurrences compiled by numba (compiled once, cached on
+#: disk); shorter ones in plain Python (no compilation in a small scene's process).
+COMPILED_MIN_N = 5000
 
 
 class ModalSolver:
@@ -67,6 +73,11 @@ def _series_pivots(k: np.ndarray) -> np.ndarray:
         Spring constant at each position (0 the left wall, n the right wall).
     """
     n = k.shape[0] - 1
+    kernel = _compiled("pivots") if n >= COMPILED_MIN_N else None
+    if kernel is not None:
+        out = np.empty(n)
+        kernel(np.ascontiguousarray(k, dtype=float), out)
+        return out
     kk = k.tolist()
     D = [0.0] * n
     w = kk[0]
@@ -74,6 +85,42 @@ def _series_pivots(k: np.ndarray) -> np.ndarray:
         D[i] = w + kk[i + 1]
         w = w * kk[i + 1] / D[i] if D[i] > 0 else 0.0
     return np.array(D)
+
+
+def _pivots_kernel(k, D):
+    """:func:`_series_pivots` on arrays (the body numba compiles)."""
+    n = k.shape[0] - 1
+    w = k[0]
+    for i in range(n):
+        D[i] = w + k[i + 1]
+        w = w * k[i + 1] / D[i] if D[i] > 0 else 0.0
+
+
+def _shifted_kernel(k, D, m, lam, Dp, Lp, tiny):
+    """:func:`_shifted` on arrays (the body numba compiles)."""
+    n = m.shape[0]
+    s = -lam * m[0]
+    for i in range(n):
+        dp = D[i] + s
+        if dp == 0.0:
+            dp = tiny
+        Dp[i] = dp
+        if i < n - 1:
+            k1 = k[i + 1]
+            Lp[i] = -k1 / dp
+            s = (k1 * k1 / (dp * D[i])) * s - lam * m[i + 1] if D[i] > 0 else -lam * m[i + 1]
+
+
+@functools.lru_cache(maxsize=None)
+def _compiled(name: str):
+    """The numba-compiled kernel ``name`` (None without numba)."""
+    fn = {"pivots": _pivots_kernel, "shifted": _shifted_kernel}[name]
+    try:
+        import numba
+
+        return numba.njit(cache=True)(fn)
+    except Exception:  # no numba, or a numba that fails to load: plain Python
+        return None
 
 
 def _shifted(k: np.ndarray, D: np.ndarray, masses: np.ndarray, lam: float) -> tuple[np.ndarray, np.ndarray]:
@@ -84,6 +131,11 @@ def _shifted(k: np.ndarray, D: np.ndarray, masses: np.ndarray, lam: float) -> tu
     springs and masses, so small λ next to stiff springs keep their accuracy (a float64 LU of ``K − λM``
     does not). Zero pivots become ±tiny."""
     n = masses.shape[0]
+    kernel = _compiled("shifted") if n >= COMPILED_MIN_N else None
+    if kernel is not None:
+        Dp, Lp = np.empty(n), np.empty(max(n - 1, 0))
+        kernel(k, D, masses, float(lam), Dp, Lp, np.finfo(float).tiny)
+        return Dp, Lp
     kk, dd, mm = k.tolist(), D.tolist(), masses.tolist()
     Dp = [0.0] * n
     Lp = [0.0] * max(n - 1, 0)
