@@ -160,6 +160,22 @@ def mac(a, b, masses=None) -> MAC:
     from .numeric.sensitivity.mac import mac_matrix, pair
 
     sa, sb = mode_set(a, None), mode_set(b, None)
+    arrays = [s.label == "array" for s in (sa, sb)]
+    named = tuple(str(m).strip() for m in (masses.split(",") if isinstance(masses, str) else masses)) \
+        if masses is not None else None
+    for i, s in enumerate((sa, sb)):  # an array takes the other set's degrees of freedom (or masses=) by height
+        other = (sb, sa)[i]
+        if arrays[i] and not arrays[1 - i]:
+            dofs = named if named is not None and len(named) == len(s.dofs) else other.dofs
+            if len(dofs) != len(s.dofs):
+                raise SceneError(None, "masses", f"an array of {len(s.dofs)} rows against {other.label} with "
+                                 f"{len(other.dofs)} degrees of freedom; accepted: as many rows, or masses=... "
+                                 "naming one mass per row")
+            s = ModeSet(s.label, tuple(dofs), s.shapes, s.omega, s.modes)
+            sa, sb = (s, sb) if i == 0 else (sa, s)
+    if all(arrays) and len(sa.dofs) != len(sb.dofs):
+        raise SceneError(None, "mac", f"arrays of {len(sa.dofs)} and {len(sb.dofs)} rows; accepted: shapes sampled "
+                                      "at the same degrees of freedom (as many rows)")
     if sa.label == sb.label:
         sa, sb = ModeSet(sa.label + " (a)", sa.dofs, sa.shapes, sa.omega, sa.modes), \
             ModeSet(sb.label + " (b)", sb.dofs, sb.shapes, sb.omega, sb.modes)

@@ -435,13 +435,13 @@ class Reconstruction:
 def read_spectra(path: str | Path):
     """``(free, clamped or None, end components or None)`` as decimal texts from a spectra CSV (one line on error)."""
     from .numeric.errors import RunRefused
-    from .numeric.updating.measured import NUMBER, _text, rows_of
+    from .numeric.updating.measured import NUMBER, read_text, rows_of
 
     file = str(path)
     accepted = ("a CSV file with the columns omega2_free (n values) and omega2_clamped (n - 1 values, the last "
                 "cell empty) or end_component (n values); values are decimal numbers (quoted strings of any "
                 "length are fine)")
-    header, rows = rows_of(_text(Path(path), file), file)
+    header, rows = rows_of(read_text(Path(path), file), file)
     if "omega2_free" not in header or ("omega2_clamped" in header) == ("end_component" in header) \
             or len(set(header)) != len(header) or len(header) != 2:
         raise RunRefused(f"{file}: header: {', '.join(header)!r}; accepted: {accepted}", "spectra")

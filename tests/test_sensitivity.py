@@ -194,6 +194,11 @@ def test_mac_pairs_modes_optimally_at_shared_masses(tmp_path):
     assert r.a.dofs == ("floor1", "floor3")
     assert [(i, j) for i, j, _ in r.pairs] == [(0, 1), (2, 0)]
     assert all(v > 1 - 1e-14 for _, _, v in r.pairs)
+    # an array of shapes takes the scene's masses by height (or masses=...); mismatched heights are refused
+    assert [(i, j) for i, j, _ in sc.mac(shapes[[0, 2]], "building", masses="floor1,floor3").pairs] == \
+        [(0, 0), (1, 1), (2, 2)]
+    with pytest.raises(sc.SceneError, match="as many rows"):
+        sc.mac(shapes[:2], shapes)
 
 
 def test_sweep_follows_branches_by_mac_crossing_and_veering(tmp_path):

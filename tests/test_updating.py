@@ -249,6 +249,9 @@ def test_float64_spectra_state_a_bound_that_holds_and_bad_spectra_are_refused(tm
     one_line_error(status, out, err, "'nan' is not a decimal number")
     status, out, err = run_cli(["reconstruct", path], capsys)
     assert status == 2 and "--total-mass" in err
+    bad.write_text("omega2_free,omega2_clamped\n1." + "1" * 5000 + ",1.5\n2.0,\n")  # bounded work: refused
+    status, out, err = run_cli(["reconstruct", bad, "--total-mass", "2"], capsys)
+    one_line_error(status, out, err, "significant digits")
 
 
 def test_one_spectrum_and_end_components_fix_the_chain_and_its_scale(tmp_path):

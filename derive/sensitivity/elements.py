@@ -15,6 +15,7 @@ masses i and i+1 is k(i), a left wall spring k(−1), a right wall or the ring c
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -22,6 +23,12 @@ import sympy as sp
 
 from ..accurate import exact_values, value
 from ..errors import SceneError
+
+
+@functools.lru_cache(maxsize=256)
+def _numpy_function(expr: sp.Expr, symbols: tuple):
+    """``expr`` as a NumPy function of ``symbols`` (an index-dependent chain derivative), built once."""
+    return sp.lambdify(list(symbols), expr, modules="numpy")
 
 
 def _value(expr: sp.Expr, subs: dict) -> float:
@@ -56,8 +63,8 @@ class ElementLaw:
     def _chain_values(self, expr: sp.Expr, at: np.ndarray, subs: dict, values: dict) -> np.ndarray:
         if not expr.has(self.index):
             return np.full(at.shape[0], _value(expr, subs))
-        names = sorted(values)
-        f = sp.lambdify([self.index] + [self.symbols[k] for k in names], expr, modules="numpy")
+        names = tuple(sorted(values))
+        f = _numpy_function(expr, (self.index,) + tuple(self.symbols[k] for k in names))
         out = f(at.astype(float), *[float(values[k]) for k in names])
         return np.broadcast_to(np.asarray(out, dtype=float), at.shape).copy()
 

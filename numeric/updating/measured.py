@@ -89,7 +89,8 @@ def _refuse(file: str, where: str, why: str) -> RunRefused:
     return RunRefused(f"{file}: {where}: {why}; accepted: {ACCEPTED}", "measured")
 
 
-def _text(path: Path, file: str) -> str:
+def read_text(path: Path, file: str) -> str:
+    """The file's text (UTF-8, at most :data:`MAX_BYTES`), refused in one line otherwise."""
     try:
         if not path.is_file():
             raise _refuse(file, "file", "not a regular file")
@@ -137,7 +138,7 @@ def read_measured(path: str | Path) -> Measured:
         non-positive frequencies, ragged rows, duplicate columns, no rows).
     """
     file = str(path)
-    header, rows = rows_of(_text(Path(path), file), file)
+    header, rows = rows_of(read_text(Path(path), file), file)
     if len(set(header)) != len(header):
         dup = next(h for h in header if header.count(h) > 1)
         raise _refuse(file, "header", f"column {dup!r} appears twice")
@@ -180,4 +181,4 @@ def read_measured(path: str | Path) -> Measured:
                     np.array(ssd) if "shape_std" in header else None)
 
 
-__all__ = ["Measured", "read_measured", "rows_of", "number", "NUMBER", "RESERVED"]
+__all__ = ["Measured", "read_measured", "read_text", "rows_of", "number", "NUMBER", "RESERVED"]

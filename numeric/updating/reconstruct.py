@@ -38,6 +38,9 @@ from ..errors import RunRefused
 
 #: Digits of a float64's shortest representation: inputs with no more digits than this are float64 data.
 FLOAT64_DIGITS = 17
+#: Most significant digits of an input value, and most masses (the work is O(n³) operations at that precision).
+MAX_DIGITS = 200
+MAX_MASSES = 200
 
 
 @dataclass(frozen=True)
@@ -269,6 +272,13 @@ def reconstruct(lam_text: list[str], mu_text: list[str] | None, total_mass: floa
     import numpy as np
 
     texts = lam_text + (mu_text or []) + (end_text or [])
+    if len(lam_text) > MAX_MASSES:
+        raise RunRefused(f"{file}: {len(lam_text)} values in omega2_free; accepted: at most {MAX_MASSES} masses",
+                         "spectra")
+    longest = max(significant_digits(t) for t in texts)
+    if longest > MAX_DIGITS:
+        raise RunRefused(f"{file}: a value of {longest} significant digits; accepted: at most {MAX_DIGITS}",
+                         "spectra")
     digits = min(significant_digits(t) for t in texts)
     dps = max(40, digits + 20)
     u = 0.5 * 2.0 ** -52 if digits <= FLOAT64_DIGITS else 0.5 * 10.0 ** (1 - digits)
