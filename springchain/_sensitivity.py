@@ -173,6 +173,16 @@ class Sensitivities:
 
         return sstr(e), values.get(p)
 
+    def _closed_shape(self, slot: int) -> dict | None:
+        """``{p: [text of ∂φ_i/∂p]}`` of a simple closed-form mode (listed mode ``slot``), else None."""
+        c = self.closed
+        j = int(self.result.index[slot])
+        if c is None or not c.shapes or j >= len(c.shapes) or c.shapes[j] is None or self.result.repeated[slot] > 1:
+            return None
+        from .derive.printing import sstr
+
+        return {p: [sstr(e) for e in exprs] for p, exprs in c.shapes[j].items()}
+
     def _value(self, p_i: int, slot: int) -> float:
         """∂ω²/∂p of a listed mode: the closed form's exact value for a simple mode, else the numeric one."""
         r = self.result
@@ -212,6 +222,9 @@ class Sensitivities:
             closed = {p: self._closed(slot, p)[0] for p in r.parameters}
             if any(v is not None for v in closed.values()):
                 rec["d_omega2_expr"] = closed
+            shape_exprs = self._closed_shape(slot)
+            if shape_exprs is not None:
+                rec["d_shape_expr"] = shape_exprs
             if n <= MAX_SHAPE_MASSES:
                 rec["shape"] = r.shapes[:, slot].tolist()
                 rec["d_shape"] = {p: r.d_shapes[i, :, slot].tolist() for i, p in enumerate(r.parameters)}
@@ -298,8 +311,12 @@ def sensitivities(scene: str | Path | Scene, parameters=None, modes=None) -> Sen
         wanted = np.asarray(list(modes), dtype=np.intp)
         if wanted.size == 0 or wanted.min() < 0 or wanted.max() >= sc.n:
             raise SceneError(sc.file, "modes", f"{show(list(modes))}: accepted: mode positions 0 ... {sc.n - 1}")
+    from .numeric.progress import phase
+
     notes = []
-    result = setup.at(None, wanted)
+    count = len(wanted) if wanted is not None else len(default_modes(sc.n))
+    with phase(f"sensitivities of {sc.name!r}: {count} modes x {len(setup.parameters)} parameters"):
+        result = setup.at(None, wanted)
     if modes is None and sc.n > MAX_ALL_MODES:
         notes.append(f"{sc.n} masses: the {MODES_EACH_END} lowest and {MODES_EACH_END} highest modes are listed "
                      f"(modes=[...] chooses others)")

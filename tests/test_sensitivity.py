@@ -143,6 +143,11 @@ def test_closed_forms_and_ranking_of_the_reference_scene():
     assert m1["d_omega2_expr"] == {"k": "1/m", "m": "-k/m**2"}
     assert m2["d_omega2_expr"] == {"k": "5/(3*m)", "m": "-5*k/(3*m**2)"}
     assert m2["d_omega2"]["k"] == 5 / 3
+    # mode 1: s = (1, 0, -1), sᵀMs = 2m, φ = s/√(2m): ∂φ/∂m = −s/(2√2 m^(3/2)), by hand; ∂φ/∂k = 0
+    assert m1["d_shape_expr"]["m"] == ["-sqrt(2)/(4*m**(3/2))", "0", "sqrt(2)/(4*m**(3/2))"]
+    assert m1["d_shape_expr"]["k"] == ["0", "0", "0"] and m1["d_shape"]["k"] == [0.0, 0.0, 0.0]
+    h = 1 / (2 * 2**0.5)
+    assert np.allclose(m1["d_shape"]["m"], [-h, 0.0, h], rtol=1e-15, atol=0)
     assert [row["parameter"] for row in data["ranking"]] == ["k", "m"]
     assert data["ranking"][0]["max_abs_normalised"] == 1.0
     text = s.to_text()

@@ -81,7 +81,7 @@ def test_exact_synthetic_data_recover_the_parameters_to_1e_10(tmp_path):
     assert back.parameters["k4"] == pytest.approx(2.1e7, rel=1e-10) and back.parameters["m"] == 2.0e4
 
 
-def test_noisy_data_land_within_the_reported_uncertainty_at_the_nominal_rate():
+def test_noisy_data_land_within_the_reported_uncertainty_at_the_nominal_rate(tmp_path):
     """60 noise draws (σ = 0.2 % of each frequency, 1 % on each normalised shape value at two floors) on a
     three-storey building, three stiffnesses fitted each time.
 
@@ -99,13 +99,11 @@ def test_noisy_data_land_within_the_reported_uncertainty_at_the_nominal_rate():
     omega, phi = true_modes(text)
     sensors = ("f2", "f3")
     shapes = phi[[1, 2]] / np.max(np.abs(phi[[1, 2]]), axis=0)
-    import tempfile
-    from pathlib import Path
-
-    folder = Path(tempfile.mkdtemp())
-    path = folder / "storeys.toml"
+    path = tmp_path / "storeys.toml"
     path.write_text(text)
-    setup = sc._updating.prepare(path, "k1,k2,k3")
+    from springchain._updating import prepare
+
+    setup = prepare(path, "k1,k2,k3")
     rng = np.random.default_rng(2024)
     seeds, d_all, misses = 60, [], np.zeros(3, int)
     joint = 0

@@ -29,12 +29,17 @@ class ClosedForm:
     modes : list of (dict, dict) or None
         Per mode in ascending order (repeated modes listed once per independent shape):
         ``({p: expression}, {p: value})``, or None for a mode without a closed form.
+    shapes : list of dict or None
+        Per mode: ``{p: [∂φ_i/∂p expression, ...]}`` of the mass-normalised closed-form shape
+        ``φ = ±s/√(sᵀMs)`` (sign: the largest mass-weighted component positive at the scene's values),
+        for simple modes whose derivatives stay below :data:`MAX_OPS` operations; None otherwise.
     family : dict or None
         A uniform chain's ``{p: ∂ω²_j/∂p}`` in ``j`` and ``n``.
     """
 
     modes: list
     family: dict | None = None
+    shapes: list | None = None
 
 
 def _simplify(expr: sp.Expr) -> sp.Expr | None:
@@ -59,8 +64,10 @@ def closed_form_derivatives(model, modes, parameters: tuple[str, ...]) -> Closed
             return ClosedForm([], None)
         return ClosedForm([], {p: _simplify(sp.diff(modes.omega2, syms[p])) for p in parameters})
     subs = exact_values(syms, model.scene.parameters)
-    out = []
+    out, shapes = [], []
     for mode in modes.modes:
+        d_shape = _shape_derivatives(model, mode, parameters, subs) if mode.multiplicity == 1 else None
+        shapes.extend([d_shape] * mode.multiplicity)
         if not mode.exact or mode.rigid:
             entry = None if not mode.rigid else ({p: sp.Integer(0) for p in parameters}, {p: 0.0 for p in parameters})
         else:
@@ -74,7 +81,34 @@ def closed_form_derivatives(model, modes, parameters: tuple[str, ...]) -> Closed
                     values[p] = None
             entry = (exprs, values)
         out.extend([entry] * mode.multiplicity)
-    return ClosedForm(out, None)
+    return ClosedForm(out, None, shapes)
+
+
+def _shape_derivatives(model, mode, parameters: tuple[str, ...], subs: dict) -> dict | None:
+    """``{p: [∂φ_i/∂p]}`` of a simple closed-form mode's mass-normalised shape, or None (too long, numeric)."""
+    if not mode.exact or not mode.shapes:
+        return None
+    shape = [sp.sympify(c) for c in mode.shapes[0]]
+    if any(c.is_Float for c in shape):
+        return None
+    norm2 = sp.Add(*[m * c**2 for m, c in zip(model.masses, shape)])
+    try:
+        weighted = [value(sp.sqrt(m) * c, subs) for m, c in zip(model.masses, shape)]
+    except NotAccurate:
+        return None
+    big = max(range(len(shape)), key=lambda i: abs(weighted[i]))
+    sign = -1 if weighted[big] < 0 else 1
+    phi = [sign * c / sp.sqrt(norm2) for c in shape]
+    out = {}
+    for p in parameters:
+        comps = []
+        for c in phi:
+            d = _simplify(sp.diff(c, model.params[p])) if sp.count_ops(c) <= MAX_OPS else None
+            if d is None:
+                return None
+            comps.append(d)
+        out[p] = comps
+    return out
 
 
 __all__ = ["ClosedForm", "closed_form_derivatives", "MAX_OPS"]
