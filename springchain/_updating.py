@@ -248,6 +248,21 @@ def prepare(scene: str | Path | Scene, parameters):
     return Setup(sc, parameter_list(sc, parameters), closed_forms=False)
 
 
+def _read_measured(path):
+    """A measured-modes CSV, or a measured FRF reduced to modes by peak and quadrature picking
+    (:mod:`numeric.updating.frf_peaks`): ``(Measured, note or None)``."""
+    from .numeric.updating.frf_peaks import is_frf, modes_from_frf, read_frf
+    from .numeric.updating.measured import read_measured, read_text, rows_of
+
+    header, _ = rows_of(read_text(Path(path), str(path)), str(path))
+    if not is_frf(header):
+        return read_measured(path), None
+    m = modes_from_frf(*read_frf(path))
+    return m, (f"{m.file}: a measured FRF; {m.rows} resonance peaks picked at omega = "
+               + ", ".join(f"{w:.6g}" for w in m.omega) + " rad/s (one mode plus a constant fitted around each peak: "
+               "frequencies and shapes)")
+
+
 def update(scene: str | Path | Scene, measured, parameters, bounds=(), modes: int | None = None,
            out: str | Path | None = DEFAULT_OUT, figure: bool = True, setup=None) -> Update:
     """Fit scene parameters to measured natural frequencies (and shapes) by least squares.
@@ -257,8 +272,10 @@ def update(scene: str | Path | Scene, measured, parameters, bounds=(), modes: in
     scene : str, Path or Scene
     measured : str, Path or Measured
         Measured-modes CSV (:mod:`springchain.numeric.updating.measured`: ``omega`` or ``frequency``,
-        optional ``omega_std``/``frequency_std`` and ``shape_std``, one column per sensor mass), or
-        a :class:`~springchain.numeric.updating.measured.Measured`.
+        optional ``omega_std``/``frequency_std`` and ``shape_std``, one column per sensor mass), a measured
+        FRF CSV (``omega`` or ``frequency``, ``<mass>.re`` and ``<mass>.im`` per sensor: modes by peak and
+        quadrature picking, :mod:`springchain.numeric.updating.frf_peaks`), or a
+        :class:`~springchain.numeric.updating.measured.Measured`.
     parameters : str or sequence of str
         The scene parameters to fit (``"k1,k2"``).
     bounds : sequence of str
@@ -285,7 +302,7 @@ def update(scene: str | Path | Scene, measured, parameters, bounds=(), modes: in
 
     from ._sensitivity import Setup, default_modes, parameter_list
     from .numeric.updating.fit import Problem, solve
-    from .numeric.updating.measured import Measured, read_measured
+    from .numeric.updating.measured import Measured
     from .numeric.updating.residuals import pair, weighted
 
     sc = load(scene)
@@ -293,7 +310,11 @@ def update(scene: str | Path | Scene, measured, parameters, bounds=(), modes: in
     if not names:
         raise SceneError(sc.file, "parameters", "none given; accepted: the scene parameters to fit, e.g. "
                                                 + ",".join(sc.parameter_names[:2]))
-    m = measured if isinstance(measured, Measured) else read_measured(measured)
+    frf_note = None
+    if isinstance(measured, Measured):
+        m = measured
+    else:
+        m, frf_note = _read_measured(measured)
     if modes is not None:
         if modes > m.rows:
             raise SceneError(m.file, "modes", f"{modes}: more modes asked than measured ({m.rows} rows); accepted: "
@@ -340,7 +361,7 @@ def update(scene: str | Path | Scene, measured, parameters, bounds=(), modes: in
         return weighted(m, p, r.omega2[slots], r.d_omega2[:, slots], shapes, d_shapes, known)
 
     fit = solve(Problem(names, start, residual, lower, upper, known))
-    notes = []
+    notes = [frf_note] if frf_note else []
     r0, s0, sh0, _ = model(start)
     r1, s1, sh1, _ = model(fit.values)
     from .numeric.sensitivity.mac import mac_matrix
