@@ -360,7 +360,7 @@ def update(scene: str | Path | Scene, measured, parameters, bounds=(), modes: in
         r, slots, shapes, d_shapes = model(p)
         return weighted(m, p, r.omega2[slots], r.d_omega2[:, slots], shapes, d_shapes, known)
 
-    fit = solve(Problem(names, start, residual, lower, upper, known))
+    fit = solve(Problem(names, start, residual, lower, upper, known, int(with_shapes.size) if sensors else 0))
     notes = [frf_note] if frf_note else []
     r0, s0, sh0, _ = model(start)
     r1, s1, sh1, _ = model(fit.values)

@@ -5,8 +5,9 @@ p is a unit of θ). The residuals are weighted so that each has unit variance wh
 
 * a frequency: ``(ω_j(θ) − ω̃_j) / σ_j`` (``σ_j`` = ``omega_std``), or, without standard deviations, the
   relative error ``(ω_j(θ) − ω̃_j) / ω̃_j`` with one noise level estimated from the fit;
-* a shape at the sensors, each normalised to its value at the sensor where the measured shape is largest
-  (the reference sensor c): ``(φ_i/φ_c − ψ_i/ψ_c) / σ_s`` for the other sensors i.
+* a shape at the sensors: the measured shape ψ (scaled to 1 in magnitude at its largest sensor) minus the
+  multiple of the model's shape φ that fits it best, ``(ψ − α φ) / σ_s`` with the modal scale factor
+  ``α = φᵀψ/φᵀφ`` — what the model cannot explain by a scale, free of any division by a noisy value.
 
 Their Jacobian is exact: ``∂ω/∂θ = p (∂ω²/∂p) / (2ω)`` and the shape derivatives of Nelson's method
 (:mod:`numeric.sensitivity`). SciPy's trust-region reflective ``least_squares`` minimises the sum of
@@ -53,6 +54,9 @@ class Problem:
         Bounds on p (0 and inf when none).
     known_noise : bool
         Whether the weights are the measurement's standard deviations (else one noise level is estimated).
+    constrained : int
+        Residual directions that vanish whatever the parameters (one per shape: ψ − αφ ⟂ φ), taken off the
+        degrees of freedom.
     """
 
     names: tuple[str, ...]
@@ -61,6 +65,7 @@ class Problem:
     lower: np.ndarray
     upper: np.ndarray
     known_noise: bool
+    constrained: int = 0
 
 
 @dataclass(frozen=True)
@@ -137,7 +142,7 @@ def solve(problem: Problem) -> Fit:
     r0, J0 = problem.residual(problem.start)
     if not (np.all(np.isfinite(r0)) and np.all(np.isfinite(J0))):
         raise RunRefused("update: the residuals or their Jacobian are not finite at the starting parameters")
-    m = r0.shape[0]
+    m = r0.shape[0] - problem.constrained
     _, s, vt = np.linalg.svd(J0, full_matrices=True)
     s = np.concatenate([s, np.zeros(P - s.shape[0])]) if s.shape[0] < P else s
     V = vt.T

@@ -10,8 +10,8 @@ Format (one row per measured mode, any order; ``#`` starts a comment line)::
 * ``omega`` (rad/s) or ``frequency`` (Hz) — required, finite and > 0;
 * ``omega_std`` / ``frequency_std`` — optional standard deviations (> 0) in the same unit; without them
   the fit weighs frequencies by their relative error and estimates one noise level from the residual;
-* ``shape_std`` — optional standard deviation of each shape value after the shape is normalised to 1 at
-  its largest sensor (needed with ``omega_std`` when shapes are given);
+* ``shape_std`` — optional standard deviation of each shape value once the shape is scaled to 1 in
+  magnitude at its largest sensor (needed with ``omega_std`` when shapes are given);
 * every other column is a sensor: a mass name (an index 0 … n−1 for ``[chain]`` scenes), its value the
   measured mode shape there (any scale and sign; all sensor columns filled, or the shape left out of a
   row by leaving all of them empty).

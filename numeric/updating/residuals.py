@@ -91,13 +91,16 @@ def weighted(measured: Measured, values: np.ndarray, omega2: np.ndarray, d_omega
     if shapes is not None and measured.shapes is not None:
         for row in measured.with_shapes():
             psi = measured.shapes[:, row]
-            c = int(np.argmax(np.abs(psi)))
-            others = np.arange(psi.shape[0]) != c
+            psi = psi / np.max(np.abs(psi))  # the measured shape, 1 in magnitude at its largest sensor
             phi = shapes[:, row]
             dphi = d_shapes[:, :, row] * p[:, None]  # ∂φ/∂θ, (P, D)
             s = measured.shape_std[row] if known_noise else 1.0
-            r.append((phi[others] / phi[c] - psi[others] / psi[c]) / s)
-            J.append(((dphi[:, others] * phi[c] - phi[None, others] * dphi[:, c:c + 1]) / phi[c] ** 2).T / s)
+            # ψ − α φ with the modal scale factor α = φᵀψ/φᵀφ: the part of ψ no multiple of φ explains
+            nn = phi @ phi
+            alpha = (phi @ psi) / nn
+            r.append((psi - alpha * phi) / s)
+            d_alpha = (dphi @ psi - 2 * alpha * (dphi @ phi)) / nn  # (P,)
+            J.append(-(dphi * alpha + d_alpha[:, None] * phi[None, :]).T / s)
     return np.concatenate(r), np.vstack(J)
 
 
