@@ -18,6 +18,10 @@ from ..accurate import NotAccurate, exact_values, value
 
 #: Largest derivative (SymPy operation count) kept as a closed form.
 MAX_OPS = 400
+#: Largest derivative SymPy is asked to simplify (``cancel``/``factor``; a size cap, never a time).
+MAX_SIMPLIFY_OPS = 60
+#: Largest shape component (operations) whose derivative is sought in closed form.
+MAX_SHAPE_OPS = 40
 
 
 @dataclass(frozen=True)
@@ -43,10 +47,17 @@ class ClosedForm:
 
 
 def _simplify(expr: sp.Expr) -> sp.Expr | None:
-    if sp.count_ops(expr) > 4 * MAX_OPS:
+    """A readable form of a derivative, or None when it is longer than :data:`MAX_OPS` operations.
+
+    Only small rational expressions go through ``cancel``/``factor`` (:data:`MAX_SIMPLIFY_OPS`): the work is
+    bounded by size, so the same scene costs the same on any machine."""
+    ops = sp.count_ops(expr)
+    if ops > MAX_OPS:
         return None
-    out = sp.factor(sp.cancel(expr)) if not expr.has(sp.cos, sp.acos, sp.sin) else expr
-    return out if sp.count_ops(out) <= MAX_OPS else None
+    if ops <= MAX_SIMPLIFY_OPS and not expr.has(sp.cos, sp.acos, sp.sin):
+        out = sp.factor(sp.cancel(expr))
+        return out if sp.count_ops(out) <= ops else expr
+    return expr
 
 
 def closed_form_derivatives(model, modes, parameters: tuple[str, ...]) -> ClosedForm:
@@ -89,7 +100,7 @@ def _shape_derivatives(model, mode, parameters: tuple[str, ...], subs: dict) -> 
     if not mode.exact or not mode.shapes:
         return None
     shape = [sp.sympify(c) for c in mode.shapes[0]]
-    if any(c.is_Float for c in shape):
+    if any(c.is_Float for c in shape) or any(sp.count_ops(c) > MAX_SHAPE_OPS for c in shape):
         return None
     norm2 = sp.Add(*[m * c**2 for m, c in zip(model.masses, shape)])
     try:
@@ -103,7 +114,7 @@ def _shape_derivatives(model, mode, parameters: tuple[str, ...], subs: dict) -> 
     for p in parameters:
         comps = []
         for c in phi:
-            d = _simplify(sp.diff(c, model.params[p])) if sp.count_ops(c) <= MAX_OPS else None
+            d = _simplify(sp.diff(c, model.params[p]))
             if d is None:
                 return None
             comps.append(d)
