@@ -77,11 +77,12 @@ def written(out: Path, chain: bool, figures: bool = True) -> tuple[dict, list[Pa
     return json.loads(summary.read_text(encoding="utf-8")), paths
 
 
-def summarise(out: Path, scene: str, law: dict | None = None, figures: bool = True) -> tuple[dict, list[Path]]:
+def summarise(out: Path, scene: str, law: dict | None = None, figures: bool = True,
+              extra: dict | None = None) -> tuple[dict, list[Path]]:
     """Write DIR/summary.json and (``figures``) the figures; return (summary, figure paths).
 
     Reads the ω² column (and, for chains, the participation ratio and γ) of the finished
-    parts: S × N numbers each.
+    parts: S × N numbers each. ``extra`` entries (e.g. ``branches``) are added to the summary.
     """
     out = Path(out)
     import pyarrow.parquet as pq
@@ -108,6 +109,7 @@ def summarise(out: Path, scene: str, law: dict | None = None, figures: bool = Tr
             summary["inverse_localisation_length"]["note"] = GAMMA_MISSING
         if law:
             summary["matsuda_ishii"] = dict(law, formula="gamma = sigma2 * omega^2 / (8 * k * mbar)")
+    summary.update(extra or {})
     paths = _figures(out, scene, omega, pr, (centres, g_mean), law) if figures else []
     atomic_write_text(out / "summary.json", dumps(summary, indent=1) + "\n")  # strict: NaN (e.g. γ of a ring) as null
     return summary, paths

@@ -20,6 +20,10 @@ The public API (each name loads what it needs on first use, so ``import springch
     sc.response_spectrum("quake-record", zeta=[0.02, 0.05])   # SD, PSV, PSA (exact); a CSV path or bundled record
     sc.rsa("building_quake", spectrum="quake-record")         # SRSS and CQC peaks
     b = sc.bands("diatomic")           # periodic chains: b.omega2 (q x branch), b.gaps, b.plot(), b.save(dir)
+    sc.sensitivities("seed", parameters="k,m")              # d omega^2/dp, d phi/dp (Nelson), ranking
+    sc.mac("building", "measured.csv")                      # MAC matrix and optimal pairing
+    sc.update("building", "measured.csv", parameters="k")   # least-squares model updating
+    sc.reconstruct("spectra.csv", total_mass=3.0)           # a chain from its two spectra
 
 Subpackages: :mod:`springchain.derive` (SymPy), :mod:`springchain.numeric` (NumPy/SciPy),
 :mod:`springchain.generated` (generated modules of the bundled scenes).
@@ -41,6 +45,8 @@ _LAZY = {
     "rayleigh_coefficients": "._structural", "response_spectrum": "._structural", "rsa": "._structural",
     "SpectrumResult": "._structural", "RSA": "._structural",
     "bands": "._bands", "Bands": "._bands",
+    "sensitivities": "._sensitivity", "Sensitivities": "._sensitivity", "mac": "._mac", "MAC": "._mac",
+    "update": "._updating", "Update": "._updating", "reconstruct": "._updating", "Reconstruction": "._updating",
 }
 
 __all__ = ["__version__", *_LAZY]

@@ -127,6 +127,23 @@ def _law(scene: Scene, system, disorder, vary) -> dict | None:
     return {"k": k, "mbar": m * d.mean(), "sigma2": m * m * d.variance()}
 
 
+def _branches(spec) -> dict | None:
+    """Mode branches of a one-parameter grid sweep, followed by MAC (:mod:`numeric.sensitivity.tracking`)."""
+    from .numeric import realisations
+    from .numeric.sensitivity.tracking import grid_branches
+
+    return grid_branches(spec, realisations)
+
+
+def _branches_figure(branches: dict, scene: str, out: Path) -> Path:
+    from .numeric import plots
+    from .numeric.sensitivity.tracking import branches_figure
+
+    path = Path(out) / "branches.png"
+    plots.save(branches_figure(branches, scene), path)
+    return path
+
+
 def sweep(scene: str | Path | Scene, vary=(), disorder=(), samples: int = 100, *, seed: int = 0,
           batch: int | None = None, workers: int | None = None, scheduler: str | None = None,
           out: str | Path | None = None, figures: bool = True, progress: bool = True, client=None) -> SweepResult:
@@ -253,8 +270,13 @@ def sweep(scene: str | Path | Scene, vary=(), disorder=(), samples: int = 100, *
                          f"LocalCluster, {workers or os.cpu_count() or 1} worker processes" if own else
                          "in-process (Dask's synchronous scheduler)")}
     done = None if run["computed"] else sweep_summary.written(out, sc.chain is not None, figures)
+    branches = None if done else _branches(spec)
     summary, drawn = done or sweep_summary.summarise(out, sc.name,
-                                                    _law(sc, system, disorder, vary) if sc.chain else None, figures)
+                                                    _law(sc, system, disorder, vary) if sc.chain else None, figures,
+                                                    {"branches": branches} if branches else None)
+    if figures and summary.get("branches"):  # a resumed sweep keeps its branches figure (drawn if deleted)
+        path = Path(out) / "branches.png"
+        drawn = list(drawn) + [path if done and path.is_file() else _branches_figure(summary["branches"], sc.name, out)]
     run["summary"] = "kept" if done else "written"
     return SweepResult(out, summary["samples"], summary, tuple(drawn), run, manifest)
 

@@ -60,7 +60,7 @@ def _whole(flag):
 
 
 #: The commands that take a SCENE, and so ``--set NAME=VALUE``.
-SCENE_COMMANDS = ("derive", "modes", "simulate", "bench", "plan", "sweep", "frf", "animate", "rsa", "bands")
+SCENE_COMMANDS = ("derive", "modes", "simulate", "bench", "plan", "sweep", "frf", "animate", "rsa", "bands", "update")
 
 
 def _set_values(items: list[str]) -> dict[str, float]:
@@ -122,6 +122,8 @@ def cmd_modes(args) -> int:
     """
     from ._api import modes
 
+    if getattr(args, "sensitivity", False) or getattr(args, "parameters", None) is not None:
+        return cmd_modes_sensitivity(args)
     m = modes(args.scene)
     if args.json:
         print(_dumps(m.to_json(), indent=2))
@@ -447,6 +449,109 @@ def _add_bands(sub) -> None:
     g.add_argument("--latex", action="store_true", help="print D(q), the polynomial and the branches as LaTeX")
     _out(b, DEFAULT_OUT, metavar="DIR")
     b.add_argument("--no-figures", action="store_true", help="write only the NPZ and JSON files")
+# -- sensitivities, MAC, model updating, reconstruction (issue 36) ------------------------------
+def add_sensitivity_options(m) -> None:
+    """``modes --sensitivity [--parameters P,Q]``."""
+    m.add_argument("--sensitivity", action="store_true",
+                   help="print d omega^2/dp, p/omega^2 d omega^2/dp and d phi/dp (Nelson's method, mass-normalised "
+                        "shapes) of every listed mode for each parameter, and the parameters ranked by influence; "
+                        "with --json one JSON object (shapes and their derivatives up to 40 masses)")
+    m.add_argument("--parameters", metavar="P,Q,...",
+                   help="the parameters of --sensitivity (default: every parameter the masses and springs use)")
+
+
+def cmd_modes_sensitivity(args) -> int:
+    """``modes SCENE --sensitivity``: the sensitivity report."""
+    from ._sensitivity import sensitivities
+
+    if args.latex:
+        raise SceneError(None, "--sensitivity", "with --latex: accepted: --sensitivity alone (text) or with --json")
+    result = sensitivities(args.scene, parameters=args.parameters)
+    print(_dumps(result.to_json(), indent=1) if args.json else result.to_text(), end="\n" if args.json else "")
+    return 0
+
+
+def cmd_mac(args) -> int:
+    """modal assurance criterion between two mode sets, optimally paired
+
+    MAC(a, b) = (a.b)^2 / ((a.a)(b.b)) between every mode of A and of B, and the pairing that maximises
+    the summed MAC (Hungarian method). A and B are scenes (their mass-normalised shapes) or measured-modes
+    CSV files (header omega or frequency, then one column per sensor mass); sets are compared at the
+    masses they share, or at --masses.
+    """
+    from ._mac import mac
+
+    result = mac(args.a, args.b, masses=args.masses)
+    print(_dumps(result.to_json(), indent=1) if args.json else result.to_text(), end="\n" if args.json else "")
+    return 0
+
+
+def cmd_update(args) -> int:
+    """fit scene parameters to measured modes (least squares on analytic sensitivities)
+
+    Pair the measured modes (CSV: omega or frequency [Hz], optional omega_std, optional shapes at sensor
+    masses) with the scene's by MAC (or frequency), fit the chosen parameters by least squares (SciPy's
+    trust-region method on the analytic Jacobian, parameters in log scale), and print the updated values
+    with standard errors and correlations, an identifiability report (singular values of the weighted
+    Jacobian, combinations the data do not fix), the before/after frequency and MAC tables. Writes
+    DIR/<scene>-updated.toml (atomically) and DIR/<scene>-update.png.
+    """
+    from ._updating import update
+
+    result = update(args.scene, args.measured, parameters=args.parameters, bounds=args.bounds or (),
+                    modes=args.modes, out=args.out)
+    print(_dumps(result.to_json(), indent=1) if args.json else result.to_text(), end="\n" if args.json else "")
+    return 0
+
+
+def cmd_reconstruct(args) -> int:
+    """masses and springs of a fixed-free chain from its two spectra (Jacobi inverse eigenvalue problem)
+
+    FILE (CSV): a column omega2_free (n values: the chain fixed to a wall at mass 1, free at mass n) and a
+    column omega2_clamped (n - 1 values: the same chain with mass n clamped as well), or instead of the
+    latter end_component (the free-end components of the mass-normalised shapes, which fix the scale too);
+    values may be quoted decimal strings of any length (50 digits recover the chain to 1e-12). The spectra
+    must interlace. The Jacobi matrix is rebuilt by Lanczos in extended precision and the one free scale
+    fixed by --total-mass.
+    Prints the masses and springs (k1 is the wall spring), a condition estimate and the error bound it
+    implies for float64 input, and writes DIR/<name>.toml.
+    """
+    from ._updating import reconstruct
+
+    result = reconstruct(args.spectra, total_mass=args.total_mass, out=args.out, name=args.name)
+    print(_dumps(result.to_json(), indent=1) if args.json else result.to_text(), end="\n" if args.json else "")
+    return 0
+
+
+def add_updating_commands(sub) -> None:
+    """The ``mac``, ``update`` and ``reconstruct`` subcommands."""
+    mc = _command(sub, "mac", cmd_mac)
+    mc.add_argument("a", help="a scene (file or bundled name) or a measured-modes CSV file")
+    mc.add_argument("b", help="a scene (file or bundled name) or a measured-modes CSV file")
+    mc.add_argument("--masses", metavar="M1,M2,...",
+                    help="compare at these masses only (indices for [chain] scenes; default: those both sets have)")
+    _json(mc)
+    up = _command(sub, "update", cmd_update)
+    _scene(up, "building")
+    up.add_argument("--measured", required=True, metavar="FILE",
+                    help="measured modes: CSV with omega (rad/s) or frequency (Hz), optional omega_std / "
+                         "frequency_std and shape_std, and one column per sensor mass holding the shape")
+    up.add_argument("--parameters", required=True, metavar="P,Q,...", help="the scene parameters to fit")
+    up.add_argument("--bounds", action="append", metavar="NAME=LO:HI",
+                    help="bounds of a fitted parameter, repeatable (default: 0 < value, no upper bound)")
+    up.add_argument("--modes", type=_positive_int("--modes"), metavar="K",
+                    help="use the first K measured modes (rows) only (default: all)")
+    _out(up, DEFAULT_OUT, metavar="DIR")
+    _json(up)
+    rc = _command(sub, "reconstruct", cmd_reconstruct)
+    rc.add_argument("spectra", help="CSV with columns omega2_free (n values) and omega2_clamped (n - 1 values) or "
+                                    "end_component (n values)")
+    rc.add_argument("--total-mass", type=_positive_float("--total-mass"), metavar="M",
+                    help="the chain's total mass (fixes the one scale two spectra leave free; not needed with "
+                         "end_component)")
+    rc.add_argument("--name", default="reconstructed", help="name of the scene written (default: %(default)s)")
+    _out(rc, DEFAULT_OUT, metavar="DIR")
+    _json(rc)
 
 
 # -- parser: one function per command ---------------------------------------------------------
@@ -499,6 +604,7 @@ def _add_modes(sub) -> None:
     g = m.add_mutually_exclusive_group()
     g.add_argument("--json", action="store_true", help="print one JSON object (its fields: the guide's Modes chapter) and nothing else")
     g.add_argument("--latex", action="store_true", help="print the derivation as LaTeX (amsmath)")
+    add_sensitivity_options(m)
 
 
 def _add_simulate(sub) -> None:
@@ -653,7 +759,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--version", action="version", version=f"springchain {__version__}")
     sub = p.add_subparsers(dest="command", required=True, parser_class=_Parser)
     for add in (_add_run, _add_derive, _add_modes, _add_simulate, _add_bench, _add_plan, _add_scaling, _add_sweep,
-                _add_frf, _add_animate, add_structural_commands, _add_bands):
+                _add_frf, _add_animate, add_structural_commands, _add_bands, add_updating_commands):
         add(sub)
     for name in SCENE_COMMANDS:  # one option, the same on every command that takes a SCENE
         sub.choices[name].add_argument(

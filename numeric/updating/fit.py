@@ -1,0 +1,217 @@
+"""Least-squares model updating on analytic sensitivities, with honest uncertainties.
+
+The unknowns are ``θ = log p`` of the fitted parameters (positive by construction; a relative change of
+p is a unit of θ). The residuals are weighted so that each has unit variance when the noise is known:
+
+* a frequency: ``(ω_j(θ) − ω̃_j) / σ_j`` (``σ_j`` = ``omega_std``), or, without standard deviations, the
+  relative error ``(ω_j(θ) − ω̃_j) / ω̃_j`` with one noise level estimated from the fit;
+* a shape at the sensors: the measured shape ψ (scaled to 1 in magnitude at its largest sensor) minus the
+  multiple of the model's shape φ that fits it best, ``(ψ − α φ) / σ_s`` with the modal scale factor
+  ``α = φᵀψ/φᵀφ`` — what the model cannot explain by a scale, free of any division by a noisy value.
+
+Their Jacobian is exact: ``∂ω/∂θ = p (∂ω²/∂p) / (2ω)`` and the shape derivatives of Nelson's method
+(:mod:`numeric.sensitivity`). SciPy's trust-region reflective ``least_squares`` minimises the sum of
+squares (bounds on p become bounds on θ).
+
+**Identifiability.** The singular values ``s_1 ≥ … ≥ s_P`` of the weighted Jacobian at the start say
+what the data can fix: a direction ``v_i`` with ``s_i ≤ IDENTIFIABLE_RTOL · s_1`` changes no residual
+(to first order) — e.g. two springs acting in parallel, or k and m together when only frequencies are
+measured. Such a combination is named (``+0.707·log k1 − 0.707·log k2``), kept at its starting value
+(the fit runs in the identifiable subspace ``θ = θ₀ + V z``) and its parameters get no standard error,
+instead of a wild value along a flat valley.
+
+**Uncertainty.** ``Cov(θ) = s² V Σ⁻² Vᵀ`` on the identifiable subspace, with ``s² = 1`` when the noise is
+known and ``s² = RSS/(m − rank)`` otherwise; ``SE(p) = p·SE(θ)`` (first order), correlations from Cov(θ).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Callable
+
+import numpy as np
+
+from ..errors import RunRefused
+
+#: Singular values below this fraction of the largest: directions the data do not fix.
+IDENTIFIABLE_RTOL = 1e-8
+#: A parameter belongs to an unidentifiable combination when its weight there exceeds this.
+INVOLVED = 1e-3
+
+
+@dataclass(frozen=True)
+class Problem:
+    """A weighted least-squares problem in ``θ = log p``.
+
+    Attributes
+    ----------
+    names : tuple of str
+    start : ndarray, shape (P,)
+        Starting parameter values (> 0).
+    residual : callable
+        ``residual(p) -> (r (m,), J (m, P))``: weighted residuals and their Jacobian with respect to θ.
+    lower, upper : ndarray, shape (P,)
+        Bounds on p (0 and inf when none).
+    known_noise : bool
+        Whether the weights are the measurement's standard deviations (else one noise level is estimated).
+    constrained : int
+        Residual directions that vanish whatever the parameters (one per shape: ψ − αφ ⟂ φ), taken off the
+        degrees of freedom.
+    """
+
+    names: tuple[str, ...]
+    start: np.ndarray
+    residual: Callable
+    lower: np.ndarray
+    upper: np.ndarray
+    known_noise: bool
+    constrained: int = 0
+
+
+@dataclass(frozen=True)
+class Fit:
+    """The result of :func:`solve`.
+
+    Attributes
+    ----------
+    values : ndarray, shape (P,)
+    standard_errors : ndarray, shape (P,)
+        NaN for parameters in an unidentifiable combination.
+    correlations : ndarray, shape (P, P)
+        NaN rows/columns for those parameters.
+    covariance_log : ndarray, shape (P, P)
+        Cov(log p).
+    singular_values : ndarray, shape (P,)
+        Of the weighted Jacobian at the start, descending.
+    directions : ndarray, shape (P, P)
+        The matching right singular vectors (columns), in log-parameter units.
+    unidentifiable : list of ndarray
+        Directions (P,) the data do not fix.
+    identifiable : ndarray of bool, shape (P,)
+    residual_start, residual_end : ndarray, shape (m,)
+    noise_scale : float
+        s (1 when the noise is known).
+    chi2 : float
+        Sum of squared weighted residuals at the end.
+    dof : int
+        Residuals minus identifiable parameters.
+    status : str
+    evaluations : int
+    """
+
+    values: np.ndarray = field(repr=False)
+    standard_errors: np.ndarray = field(repr=False)
+    correlations: np.ndarray = field(repr=False)
+    covariance_log: np.ndarray = field(repr=False)
+    singular_values: np.ndarray = field(repr=False)
+    directions: np.ndarray = field(repr=False)
+    unidentifiable: list = field(repr=False)
+    identifiable: np.ndarray = field(repr=False)
+    residual_start: np.ndarray = field(repr=False)
+    residual_end: np.ndarray = field(repr=False)
+    noise_scale: float = 1.0
+    chi2: float = 0.0
+    dof: int = 0
+    status: str = ""
+    evaluations: int = 0
+    #: With unidentifiable directions: the identifiable ones ``(v (P,), v·log p, its standard error)``.
+    combinations: list = field(default_factory=list, repr=False)
+
+
+def describe(direction: np.ndarray, names: tuple[str, ...]) -> str:
+    """A combination of log-parameters as text: ``+0.707·log k1 − 0.707·log k2`` (sign: first term positive)."""
+    v = np.asarray(direction, dtype=float)
+    big = np.flatnonzero(np.abs(v) > INVOLVED * np.max(np.abs(v)))
+    v = v * (1.0 if v[big[0]] > 0 else -1.0)
+    return " ".join(f"{'+' if v[i] > 0 else '-'}{abs(v[i]):.3g}·log {names[i]}" for i in big)
+
+
+def solve(problem: Problem) -> Fit:
+    """Fit, then report values, standard errors, correlations and identifiability (module docstring).
+
+    Raises
+    ------
+    RunRefused
+        Fewer residuals than identifiable parameters with the noise unknown; residuals that are not finite
+        at the start.
+    """
+    from scipy.optimize import least_squares
+
+    P = len(problem.names)
+    theta0 = np.log(problem.start)
+    r0, J0 = problem.residual(problem.start)
+    if not (np.all(np.isfinite(r0)) and np.all(np.isfinite(J0))):
+        raise RunRefused("update: the residuals or their Jacobian are not finite at the starting parameters")
+    m = r0.shape[0] - problem.constrained
+    _, s, vt = np.linalg.svd(J0, full_matrices=True)
+    s = np.concatenate([s, np.zeros(P - s.shape[0])]) if s.shape[0] < P else s
+    V = vt.T
+    flat = s <= IDENTIFIABLE_RTOL * (s[0] if s.size and s[0] > 0 else 1.0)
+    V_id, V_null = V[:, ~flat], V[:, flat]
+    rank = int((~flat).sum())
+    if not problem.known_noise and m <= rank:
+        raise RunRefused(f"update: {m} residuals for {rank} identifiable parameters: the noise level is estimated "
+                         "from the fit, which needs more residuals than parameters; accepted: more measured modes or "
+                         "shapes, fewer parameters, or standard deviations in the file (omega_std)", "parameters")
+    lo = np.log(np.maximum(problem.lower, 1e-300))
+    hi = np.log(np.where(np.isfinite(problem.upper), problem.upper, np.inf))
+    count = [0]
+
+    def fun(z):
+        count[0] += 1
+        p = np.exp(theta0 + V_id @ z)
+        r, _ = problem.residual(p)
+        return r
+
+    def jac(z):
+        p = np.exp(theta0 + V_id @ z)
+        _, J = problem.residual(p)
+        return J @ V_id
+
+    status = "no identifiable parameter"
+    theta = theta0.copy()
+    if rank:
+        if V_null.shape[1] == 0:  # full rank: bounds apply directly (V_id is orthogonal)
+            def fun_t(t):
+                count[0] += 1
+                return problem.residual(np.exp(t))[0]
+
+            res = least_squares(fun_t, np.clip(theta0, lo, hi), jac=lambda t: problem.residual(np.exp(t))[1],
+                                bounds=(lo, hi), method="trf", x_scale=1.0, ftol=1e-15, xtol=1e-15, gtol=1e-15,
+                                max_nfev=200)
+            theta = res.x
+        else:
+            res = least_squares(fun, np.zeros(rank), jac=jac, method="trf", x_scale=1.0, ftol=1e-15, xtol=1e-15,
+                                gtol=1e-15, max_nfev=200)
+            theta = theta0 + V_id @ res.x
+        status = res.message
+    p_end = np.exp(theta)
+    r1, J1 = problem.residual(p_end)
+    chi2 = float(np.sum(r1 * r1))
+    dof = m - rank
+    scale = 1.0 if problem.known_noise else float(np.sqrt(chi2 / dof)) if dof > 0 else np.nan
+    # the covariance on the identifiable subspace, from the Jacobian at the solution
+    Jr = J1 @ V_id
+    G = Jr.T @ Jr
+    try:
+        cov_z = np.linalg.inv(G) if rank else np.zeros((0, 0))
+    except np.linalg.LinAlgError:
+        cov_z = np.linalg.pinv(G)
+    cov = scale**2 * (V_id @ cov_z @ V_id.T)
+    involved = np.any(np.abs(V_null) > INVOLVED, axis=1) if V_null.shape[1] else np.zeros(P, dtype=bool)
+    se_log = np.sqrt(np.maximum(np.diag(cov), 0.0))
+    se = np.where(involved, np.nan, p_end * se_log)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        corr = cov / np.outer(se_log, se_log)
+    corr[involved, :] = np.nan
+    corr[:, involved] = np.nan
+    combos = []
+    if V_null.shape[1]:
+        for i in range(V_id.shape[1]):
+            v = V_id[:, i] * (1.0 if V_id[np.argmax(np.abs(V_id[:, i])), i] > 0 else -1.0)
+            combos.append((v, float(v @ theta), float(np.sqrt(max(v @ cov @ v, 0.0)))))
+    return Fit(p_end, se, corr, cov, s, V, [V_null[:, i] for i in range(V_null.shape[1])], ~involved, r0, r1,
+               scale, chi2, dof, str(status), count[0], combos)
+
+
+__all__ = ["Problem", "Fit", "solve", "describe", "IDENTIFIABLE_RTOL"]
