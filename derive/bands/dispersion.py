@@ -35,6 +35,9 @@ from .model import BandCell
 MAX_POLY_CELL = 4
 #: Cells of at most this many masses are tried for a factorisation of the polynomial in ω².
 MAX_FACTOR_CELL = 4
+#: Largest cell whose det K(q) is formed symbolically (the elimination's expressions grow with p; a cell of 30
+#: masses took minutes): past it only the numeric route runs.
+MAX_DET_CELL = 8
 
 
 @dataclass(frozen=True)
@@ -93,12 +96,14 @@ class Dispersion:
         return tuple(_tidy(c) for c in coefficients(self.cell.masses, self.links, self.q))
 
     @cached_property
-    def determinant(self) -> sp.Expr:
-        """c_0 = det K(q), a sum of positive terms (any p)."""
+    def determinant(self) -> sp.Expr | None:
+        """c_0 = det K(q), a sum of positive terms (None past MAX_DET_CELL)."""
         from .elimination import determinant
 
         if self.coefficients is not None:
             return self.coefficients[0]
+        if self.p > MAX_DET_CELL:
+            return None
         return _tidy(determinant(self.p, self.links, self.q))
 
     @cached_property
@@ -128,6 +133,8 @@ class Dispersion:
 
     @cached_property
     def _closed(self):
+        if self.p > MAX_FACTOR_CELL:
+            return None
         p, c0 = self.p, self.determinant
         if p == 1:
             m = self.cell.masses[0]

@@ -50,7 +50,7 @@ def symbolic_json(d: Dispersion) -> dict:
     return {"dynamical_matrix": [[sstr(d.D[i, j]) for j in range(d.p)] for i in range(d.p)],
             "characteristic_polynomial": s(d.polynomial),
             "coefficients": None if d.coefficients is None else [sstr(c) for c in d.coefficients],
-            "determinant": sstr(d.determinant),
+            "determinant": s(d.determinant),
             "closed_form": d.branches is not None,
             "omega2": None if d.branches is None else [sstr(b) for b in d.branches],
             "omega": None if d.frequencies is None else [sstr(w) for w in d.frequencies],
@@ -73,10 +73,14 @@ def symbolic_lines(d: Dispersion) -> list[str]:
     lines += ["", "Bloch matrix D(q) = M^-1/2 K(q) M^-1/2 (q: phase per cell, in [-pi, pi]; Hermitian):"]
     lines += ["    [" + ", ".join(sstr(d.D[i, j]) for j in range(d.p)) + "]" for i in range(d.p)]
     if d.polynomial is not None:
-        lines += ["", "Characteristic polynomial (each coefficient a sum of positive terms):",
+        lines += ["", "Characteristic polynomial det(K(q) - omega**2*M) = sum_j c_j*(-omega**2)**j, each c_j a sum of"
+                      " positive terms:",
                   f"    det(K(q) - omega**2*M) = {sstr(d.polynomial)}"]
-    else:
+    elif d.determinant is not None:
         lines += ["", f"det K(q) = {sstr(d.determinant)}  (the polynomial is not expanded for p > 4)"]
+    else:
+        lines += ["", f"(det K(q) is not formed symbolically for a cell of {d.p} masses: the numbers below come from"
+                      " the accurate numeric route)"]
     if d.branches is not None:
         lines += ["", "Closed-form branches (q in [0, pi]; even in q):"]
         for j, (b, w) in enumerate(zip(d.branches, d.frequencies)):
