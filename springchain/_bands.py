@@ -217,7 +217,7 @@ class Bands:
             kinds = {k: sum(1 for m in self.finite if m.kind == k) for k in ("band", "edge", "defect")}
             chain = self.finite_scene or self.scene
             lines += ["", f"The finite chain of {chain.name!r} ({chain.n} masses): " +
-                      ", ".join(f"{v} {k} modes" for k, v in kinds.items() if v) + ":"]
+                      ", ".join(f"{v} {k} mode{'s' if v != 1 else ''}" for k, v in kinds.items() if v) + ":"]
             shown = self.finite if len(self.finite) <= 40 else self.finite[:20] + self.finite[-20:]
             for m in shown:
                 what = (f"band {m.band}, q = {m.q:.8g}" if m.kind == "band" else
