@@ -67,17 +67,42 @@ CODE_NUMBERS = {
     "COMPILED_FORCE_MIN_N": "springchain.numeric.fast:COMPILED_FORCE_MIN_N",
     "SWEEP_IN_PROCESS_SECONDS": "springchain._sweep:IN_PROCESS_SECONDS",
     "NEWMARK_DENSE_MAX": "springchain.numeric.integrators.newmark:DENSE_MAX",
+    "CELL_MAX_MASSES": "springchain.derive.bands.cell:MAX_CELL_MASSES",
+    "CELL_MAX_REACH": "springchain.derive.bands.cell:MAX_REACH",
+    "CELL_MAX_EXPANDED": "springchain.derive.bands.cell:MAX_EXPANDED",
+    "BANDS_MAX_PERIOD": "springchain.derive.bands.model:MAX_PERIOD",
+    "BANDS_MAX_POLY_CELL": "springchain.derive.bands.dispersion:MAX_POLY_CELL",
+    "BANDS_POINTS": "springchain._bands:POINTS",
+    "BANDS_MAX_Q": "springchain._bands:MAX_Q",
+    "BANDS_OMEGA_POINTS": "springchain._bands:OMEGA_POINTS",
+    "BANDS_FINITE_MAX": "springchain._bands:FINITE_MAX",
+    "BANDS_GAP_RESOLUTION": "springchain.numeric.bands.edges:GAP_RESOLUTION",
+    "BANDS_EDGE_CELLS": "springchain.numeric.bands.finite:EDGE_CELLS",
+    "SPECTRUM_PERIOD_MIN": "springchain.numeric.response_spectrum:PERIOD_RANGE[0]",
+    "SPECTRUM_PERIOD_MAX": "springchain.numeric.response_spectrum:PERIOD_RANGE[1]",
+    "SPECTRUM_VALUE_LIMIT": "springchain.numeric.response_spectrum:RECORD_VALUE_LIMIT",
+    "SPECTRUM_MAX_WORK": "springchain.numeric.response_spectrum:MAX_WORK",
+    "SPECTRUM_SAMPLES_PER_PERIOD": "springchain.numeric.sdof_peak:SAMPLES_PER_PERIOD",
+    "SPECTRUM_LONG_CYCLES": "springchain.numeric.sdof_peak:LONG_CYCLES",
 }
 
 
 def _code_numbers() -> dict[str, str]:
     import importlib
 
+    import re
+
     out = {}
     for name, where in CODE_NUMBERS.items():
         module, attr = where.split(":")
+        attr, _, index = attr.partition("[")  # "NAME[0]": an item of a tuple
         value = getattr(importlib.import_module(module), attr)
-        out[name] = f"{value:g}" if isinstance(value, float) else f"{value:,}".replace(",", " ")
+        if index:
+            value = value[int(index.rstrip("]"))]
+        if isinstance(value, float):  # 4e9, 1e-150: no "e+09"
+            out[name] = re.sub(r"e\+?(-?)0*(\d)", r"e\1\2", f"{value:g}")
+        else:
+            out[name] = f"{value:,}".replace(",", " ")
     return out
 
 

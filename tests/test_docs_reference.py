@@ -94,7 +94,9 @@ def test_each_key_example_loads_in_its_table(meta, tmp_path):
         for key, info in entry.get("keys", {}).items():
             scene = copy.deepcopy(examples[(path, label)])
             value = tomllib.loads(info["example"])[key]
-            target = scene[path.removesuffix("[]")]
+            target = scene
+            for part in path.removesuffix("[]").split("."):  # a table inside a table: "cell.springs[]"
+                target = target[part]
             if isinstance(target, list):
                 target = target[0]
                 if key in ("k", "k3"):

@@ -38,9 +38,9 @@ def _write(name: str, text: str) -> None:
 def scene_page() -> tuple[str, list[str]]:
     meta = ref.scene_meta()
     seen = ref.loader_keys(meta)
-    base = ["Each table's example below is merged into one of these two scenes (its top-level tables replaced):",
-            "", "```{code-block} toml", ":caption: the masses form", "", meta["base"]["masses"].strip(), "```", "",
-            "```{code-block} toml", ":caption: the chain form", "", meta["base"]["chain"].strip(), "```", ""]
+    base = ["Each table's example below is merged into one of these scenes (its top-level tables replaced):", ""]
+    for form in meta["base"]:
+        base += ["```{code-block} toml", f":caption: the {form} form", "", meta["base"][form].strip(), "```", ""]
     return "\n".join(base) + "\n" + ref.render_scene_reference(meta, seen), ref.scene_problems(meta, seen)
 
 
