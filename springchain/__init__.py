@@ -19,6 +19,7 @@ The public API (each name loads what it needs on first use, so ``import springch
     sc.rayleigh_coefficients("building", zeta=(0.05, 0.05), modes=(1, 3))  # .alpha, .beta, closed forms
     sc.response_spectrum("quake-record", zeta=[0.02, 0.05])   # SD, PSV, PSA (exact); a CSV path or bundled record
     sc.rsa("building_quake", spectrum="quake-record")         # SRSS and CQC peaks
+    sc.random_response("building", "spec.csv", on="floor3")    # RMS by the exact modal integral; .plot()
 
 Subpackages: :mod:`springchain.derive` (SymPy), :mod:`springchain.numeric` (NumPy/SciPy),
 :mod:`springchain.generated` (generated modules of the bundled scenes).
@@ -39,6 +40,7 @@ _LAZY = {
     "scene_from_dict": ".derive.scene",
     "rayleigh_coefficients": "._structural", "response_spectrum": "._structural", "rsa": "._structural",
     "SpectrumResult": "._structural", "RSA": "._structural",
+    "random_response": "._random", "RandomVibration": "._random",
 }
 
 __all__ = ["__version__", *_LAZY]

@@ -60,7 +60,7 @@ def _whole(flag):
 
 
 #: The commands that take a SCENE, and so ``--set NAME=VALUE``.
-SCENE_COMMANDS = ("derive", "modes", "simulate", "bench", "plan", "sweep", "frf", "animate", "rsa")
+SCENE_COMMANDS = ("derive", "modes", "simulate", "bench", "plan", "sweep", "frf", "animate", "rsa", "psd")
 
 
 def _set_values(items: list[str]) -> dict[str, float]:
@@ -336,6 +336,69 @@ def cmd_animate(args) -> int:
     result = animate(args.scene, mode=args.mode, method=args.method, out=args.out, frames=args.frames, fps=args.fps)
     print(f"{result.describe()}\nwrote {result.path}")
     return 0
+
+
+# -- the ecosystem: random vibration, output units ------------------------------------------------
+def _output_units(args):
+    """The ``--units`` list (None without it); a bad entry is one line naming the flag."""
+    spec = getattr(args, "units", None)
+    if not spec:
+        return None
+    from .derive.units import UnitProblem
+    from .derive.units.output import OutputUnits
+
+    try:
+        return OutputUnits.parse(spec)
+    except UnitProblem as exc:
+        raise SceneError(None, "--units", f"{spec!r}: {exc}") from None
+
+
+def cmd_psd(args) -> int:
+    """random vibration: response PSD and RMS of every mass and spring force
+
+    Drive the scene by a random input given by its one-sided PSD (a CSV f,psd: frequency [Hz] and PSD
+    [unit^2/Hz], piecewise linear on log-log axes; units in the header with the units extra, e.g.
+    'f [Hz], psd [g^2/Hz]'): a force on MASS (--on) or, without --on, a base acceleration. Prints the
+    RMS displacement, velocity and acceleration of every mass and the RMS force of every spring, from
+    the exact modal integral (no frequency sampling error), and writes log-log PSD figures.
+    """
+    from ._random import random_response
+
+    units = _output_units(args)
+    result = random_response(args.scene, args.input, args.on,
+                             interpolation="linear" if args.linear else "loglog")
+    if args.json:
+        print(_dumps(result.to_json(units)))
+        return 0
+    print(result.to_text(units), end="")
+    if not args.no_figures:
+        for kind in ("acceleration", "displacement", "spring force"):
+            print(f"wrote {result.save(args.out, kind, units)}")
+    return 0
+
+
+def _add_psd(sub) -> None:
+    """``springchain psd``: random vibration."""
+    ps = _command(sub, "psd", cmd_psd)
+    _scene(ps, "building")
+    ps.add_argument("--input", required=True, metavar="FILE",
+                    help="the input PSD: a CSV f,psd (frequency [Hz], one-sided PSD [unit^2/Hz]; header units "
+                         "such as 'f [Hz], psd [g^2/Hz]' need the units extra)")
+    ps.add_argument("--on", metavar="MASS",
+                    help="the mass a random force drives (a name; an index for [chain] scenes); default: the "
+                         "PSD is a base acceleration")
+    ps.add_argument("--linear", action="store_true",
+                    help="interpolate the PSD linearly between breakpoints (default: straight on log-log axes)")
+    _units_flag(ps)
+    ps.add_argument("--no-figures", action="store_true", help="print only")
+    _json(ps)
+    _out(ps, DEFAULT_OUT, metavar="DIR")
+
+
+def _units_flag(p) -> None:
+    p.add_argument("--units", metavar="LIST",
+                   help="show results in these units, e.g. 'mm,kN,g' (each result in the listed unit of its "
+                        "dimension; ratios and PSDs follow; g is standard gravity; needs the units extra)")
 
 
 # -- structural dynamics: response spectra and response-spectrum analysis ----------------------
@@ -614,7 +677,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--version", action="version", version=f"springchain {__version__}")
     sub = p.add_subparsers(dest="command", required=True, parser_class=_Parser)
     for add in (_add_run, _add_derive, _add_modes, _add_simulate, _add_bench, _add_plan, _add_scaling, _add_sweep,
-                _add_frf, _add_animate, add_structural_commands):
+                _add_frf, _add_animate, add_structural_commands, _add_psd):
         add(sub)
     for name in SCENE_COMMANDS:  # one option, the same on every command that takes a SCENE
         sub.choices[name].add_argument(
@@ -630,7 +693,7 @@ FLAGS = {"dt": "--dt", "steps": "--steps", "record_every": "--record-every", "me
          "input": "--input", "output": "--output", "omega_min": "--omega-min", "omega_max": "--omega-max",
          "points": "--points", "mode": "--mode", "frames": "--frames", "fps": "--fps", "max_n": "--max-n",
          "symbolic_max_n": "--symbolic-max-n", "zeta": "--zeta", "periods": "--periods", "combine": "--combine",
-         "springs": "--springs", "alpha": "--alpha"}
+         "springs": "--springs", "alpha": "--alpha", "on": "--on", "interpolation": "--linear"}
 
 
 def _flag_for(args, quantity: str | None) -> str | None:
