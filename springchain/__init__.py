@@ -20,6 +20,7 @@ The public API (each name loads what it needs on first use, so ``import springch
     sc.response_spectrum("quake-record", zeta=[0.02, 0.05])   # SD, PSV, PSA (exact); a CSV path or bundled record
     sc.rsa("building_quake", spectrum="quake-record")         # SRSS and CQC peaks
     sc.random_response("building", "spec.csv", on="floor3")    # RMS by the exact modal integral; .plot()
+    sc.state_space("building", inputs="floor3", outputs=["floor3:a"], form="control")  # SciPy / python-control
 
 Subpackages: :mod:`springchain.derive` (SymPy), :mod:`springchain.numeric` (NumPy/SciPy),
 :mod:`springchain.generated` (generated modules of the bundled scenes).
@@ -41,6 +42,7 @@ _LAZY = {
     "rayleigh_coefficients": "._structural", "response_spectrum": "._structural", "rsa": "._structural",
     "SpectrumResult": "._structural", "RSA": "._structural",
     "random_response": "._random", "RandomVibration": "._random",
+    "state_space": "._interop", "AccuracyWarning": "._interop",
 }
 
 __all__ = ["__version__", *_LAZY]

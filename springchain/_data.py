@@ -18,12 +18,18 @@ LONG_NAMES = {"x": "displacement from the springs' rest configuration", "v": "ve
               "xabs": "absolute displacement (relative displacement + ground displacement)"}
 
 
+#: The extra that installs each optional module other than the data extra's.
+EXTRAS = {"control": 'pip install "springchain[control]"', "pyuff": 'pip install "springchain[uff]"',
+          "pint": 'pip install "springchain[units]"'}
+
+
 def require(module: str, what: str):
     """Import an optional dependency, or fail in one line naming the extra that provides it."""
     try:
         return importlib.import_module(module)
     except ImportError:
-        raise ImportError(f"{what} needs {module}, which springchain installs only on request: {EXTRA}") from None
+        raise ImportError(f"{what} needs {module}, which springchain installs only on request: "
+                          f"{EXTRAS.get(module, EXTRA)}") from None
 
 
 def _mass_coords(scene) -> list:
