@@ -123,6 +123,11 @@ def cmd_modes(args) -> int:
     from ._api import modes
 
     m = modes(args.scene)
+    if args.uff:
+        from ._uff import write_modes_uff
+
+        uff_path, uff_notes = write_modes_uff(args.scene, args.uff)
+        sys.stderr.write(f"wrote {uff_path} (UFF dataset 55 per mode, ASCII; {'; '.join(uff_notes)})\n")
     if args.json:
         print(_dumps(m.to_json(), indent=2))
     elif args.latex:
@@ -313,13 +318,45 @@ def cmd_frf(args) -> int:
     """
     from ._frf import frf
 
+    if args.form or args.hz or args.db or args.units:
+        return _frf_form(args)
     result = frf(args.scene, args.input, args.output, args.omega_min, args.omega_max, args.points)
+    if args.uff:
+        from ._uff import write_frf_uff
+
+        uff_path = write_frf_uff(result, args.uff)
     path = result.save(args.out)
     if args.json:
         print(_dumps(result.to_json()))
         return 0
     print(result.to_text(), end="")
     print(f"wrote {path}")
+    if args.uff:
+        print(f"wrote {uff_path} (UFF dataset 58, binary: frequencies [Hz] and complex values exact)")
+    return 0
+
+
+def _frf_form(args) -> int:
+    """``frf`` with --form, --hz, --db or --units: the form's table, figure and JSON."""
+    from ._frf_forms import frf_form
+
+    units = _output_units(args)
+    form = args.form or "receptance"
+    result = frf_form(args.scene, form, input=args.input, output=args.output, hz=args.hz, db=args.db,
+                      omega_min=args.omega_min, omega_max=args.omega_max, points=args.points)
+    path = result.save(args.out, units)
+    uff_path = None
+    if args.uff:
+        from ._uff import write_frf_uff
+
+        uff_path = write_frf_uff(result, args.uff)
+    if args.json:
+        print(_dumps(result.to_json(units)))
+        return 0
+    print(result.to_text(units), end="")
+    print(f"wrote {path}")
+    if uff_path:
+        print(f"wrote {uff_path} (UFF dataset 58, binary, SI units: frequencies [Hz] and complex values exact)")
     return 0
 
 
@@ -523,6 +560,8 @@ def _add_modes(sub) -> None:
     g = m.add_mutually_exclusive_group()
     g.add_argument("--json", action="store_true", help="print one JSON object (see README) and nothing else")
     g.add_argument("--latex", action="store_true", help="print the derivation as LaTeX (amsmath)")
+    m.add_argument("--uff", metavar="FILE",
+                   help="also write every mode as UFF dataset 55 (ASCII, Hz, mass-normalised; needs the uff extra)")
 
 
 def _add_simulate(sub) -> None:
@@ -642,6 +681,14 @@ def _add_frf(sub) -> None:
                     help='print one JSON object {"omega", "magnitude", "phase" (deg), "resonances", '
                          '"transfer_function", ...} and nothing else')
     fr.add_argument("--out", default=DEFAULT_OUT, metavar="DIR", help="folder for the Bode figure (default: %(default)s)")
+    fr.add_argument("--form", metavar="FORM",
+                    help="receptance, mobility, accelerance, dynamic-stiffness (force on --input), or "
+                         "transmissibility, relative-transmissibility (--input ground: the base moves)")
+    fr.add_argument("--hz", action="store_true", help="frequencies in Hz (default: rad/s)")
+    fr.add_argument("--db", action="store_true", help="magnitudes in dB (20 log10, re 1 of the unit)")
+    _units_flag(fr)
+    fr.add_argument("--uff", metavar="FILE",
+                    help="also write the FRF as a UFF dataset 58 (binary, frequencies in Hz; needs the uff extra)")
 
 
 def _add_animate(sub) -> None:
@@ -693,7 +740,8 @@ FLAGS = {"dt": "--dt", "steps": "--steps", "record_every": "--record-every", "me
          "input": "--input", "output": "--output", "omega_min": "--omega-min", "omega_max": "--omega-max",
          "points": "--points", "mode": "--mode", "frames": "--frames", "fps": "--fps", "max_n": "--max-n",
          "symbolic_max_n": "--symbolic-max-n", "zeta": "--zeta", "periods": "--periods", "combine": "--combine",
-         "springs": "--springs", "alpha": "--alpha", "on": "--on", "interpolation": "--linear"}
+         "springs": "--springs", "alpha": "--alpha", "on": "--on", "interpolation": "--linear",
+         "form": "--form", "uff": "--uff"}
 
 
 def _flag_for(args, quantity: str | None) -> str | None:
@@ -725,6 +773,11 @@ def main(argv: list[str] | None = None) -> int:
             sys.stderr.write(f"springchain: error: {flag + ': ' if flag else ''}{exc}\n")
             return EXIT_USAGE
         raise
+    except ImportError as exc:  # an optional extra that is not installed: its one line says what to install
+        if "springchain installs only on request" not in str(exc):
+            raise
+        sys.stderr.write(f"springchain: error: {exc}\n")
+        return EXIT_USAGE
     except BrokenPipeError:  # output piped into e.g. `head`
         sys.stderr.close()
         return 0
