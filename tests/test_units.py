@@ -216,3 +216,26 @@ def test_a_scene_without_units_never_imports_pint():
             "print('pint' in sys.modules)")
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
     assert out.stdout.strip() == "False"
+
+
+def test_xarray_outputs_carry_units_pint_xarray_reads(tmp_path):
+    """Every variable of Simulation.to_xarray() (springs and modal energies included) quantifies with
+    pint-xarray, each in the dimension its quantity has."""
+    pytest.importorskip("pint_xarray")
+    import springchain as sc
+
+    run = sc.simulate("building_quake", steps=200, figures=False, out=tmp_path, springs=True, modal_energy=True)
+    q = run.to_xarray().pint.quantify()
+    want = {"x": "[length]", "v": "[length] / [time]", "aabs": "[length] / [time] ** 2", "drift": "[length]",
+            "spring_force": "[length] * [mass] / [time] ** 2", "base_shear": "[length] * [mass] / [time] ** 2",
+            "modal_energy": "[length] ** 2 * [mass] / [time] ** 2"}
+    seen = set()
+    for name in q.data_vars:
+        quantity = next(k for k in sorted(want, key=len, reverse=True) if name.startswith(k + "_"))
+        assert q[name].data.dimensionality == q[name].data._REGISTRY.parse_units(
+            {"[length]": "m", "[length] / [time]": "m/s", "[length] / [time] ** 2": "m/s^2",
+             "[length] * [mass] / [time] ** 2": "N", "[length] ** 2 * [mass] / [time] ** 2": "J"}[want[quantity]]
+        ).dimensionality, name
+        seen.add(quantity)
+    assert seen == set(want) and str(q["time"].data.units) == "second"
+    assert q["base_shear_modal"].dims == ("time",) and q["spring_force_modal"].dims == ("time", "spring")
