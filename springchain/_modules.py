@@ -42,11 +42,11 @@ def module_path(scene: Scene, out_dir: Path | None = None) -> Path:
 
 
 def _code_version() -> str:
-    """Hash of the derive/ sources: cached modules are redone when the generator changes."""
+    """Hash of the derive/ sources (subpackages included): cached modules are redone when the generator changes."""
     from . import derive as derive_pkg
 
     h = hashlib.sha256()
-    for p in sorted(Path(next(iter(derive_pkg.__path__))).glob("*.py")):
+    for p in sorted(Path(next(iter(derive_pkg.__path__))).rglob("*.py")):  # derive/units too: it sets the numbers
         h.update(p.read_bytes())
     return h.hexdigest()[:12]
 

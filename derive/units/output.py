@@ -39,7 +39,7 @@ class OutputUnits:
                 raise UnitProblem(f"--units {text!r} is a frequency", "frequencies in rad/s, or Hz with --hz")
             if unit.dimension in chosen:
                 raise UnitProblem(f"--units lists two units of dimension {unit.dimension}", "one unit per dimension")
-            chosen[unit.dimension] = (text, unit.factor)
+            chosen[unit.dimension] = (text, float(unit.factor))
         if LENGTH in chosen and VELOCITY not in chosen:
             t_text, t_f = chosen.get(TIME, ("s", 1.0))
             chosen[VELOCITY] = (f"{chosen[LENGTH][0]}/{t_text}", chosen[LENGTH][1] / t_f)

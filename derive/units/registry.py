@@ -3,7 +3,8 @@
 Scene text is untrusted, so a unit is checked before pint sees it: ASCII letters, digits, ``_``,
 spaces, ``* / . ( )`` and powers ``^N`` / ``**N`` with a small whole exponent (|N| <= 16) only,
 at most :data:`MAX_UNIT` characters — no nested exponents, nothing pint would have to compute at
-length. Offset units (degC) are refused. pint is imported on the first unit only; a scene
+length. Offset units (degC) are refused. Factors are exact rationals (pint with
+``non_int_type=Fraction``), so ``"20 kN/cm^3"`` becomes the float nearest 2e10, rounded once. pint is imported on the first unit only; a scene
 without units never imports it. In a slot that means an acceleration, a bare ``g`` is standard
 gravity (9.80665 m/s²), as test engineers write it (``a [g]``, ``g^2/Hz``); elsewhere pint's
 ``g`` (the gram) stands.
@@ -14,6 +15,7 @@ from __future__ import annotations
 import functools
 import re
 from dataclasses import dataclass
+from fractions import Fraction
 
 from .dimension import Dimension
 
@@ -42,39 +44,41 @@ class UnitProblem(ValueError):
 
 @dataclass(frozen=True)
 class Unit:
-    """A parsed unit: its text, its SI factor (``value [unit] = value * factor [SI]``) and dimension."""
+    """A parsed unit: its text, its exact SI factor (``value [unit] = value * factor [SI]``) and dimension."""
 
     text: str
-    factor: float
+    factor: Fraction
     dimension: Dimension
 
 
-def split_quantity(text) -> tuple[float, str] | None:
-    """``(number, unit text)`` of ``"4 MN/m"``; None for anything else (an expression, a number)."""
+def split_quantity(text) -> tuple[Fraction, str] | None:
+    """``(number, unit text)`` of ``"4 MN/m"`` (the number exact, as written); None for anything else."""
     if not isinstance(text, str) or len(text) > MAX_UNIT + 40:
         return None
     m = QUANTITY.match(text)
     if not m or not re.search(r"[A-Za-z]", m.group(2)):
         return None
     try:
-        number = float(m.group(1))
-    except ValueError:  # pragma: no cover - the pattern is a float literal
+        number = Fraction(m.group(1))
+    except (ValueError, ZeroDivisionError):  # pragma: no cover - the pattern is a decimal literal
+        return None
+    if abs(number) > 10**300:
         return None
     return number, m.group(2)
 
 
 @functools.cache
 def registry():
-    """pint's UnitRegistry (one per process; cached on disk by pint where it can)."""
+    """pint's UnitRegistry with exact rational factors (one per process; cached on disk by pint where it can)."""
     try:
         import pint
     except ImportError:
         raise UnitProblem("a value with a unit needs pint, which springchain installs only on request",
                           f"{EXTRA}, or a plain number in SI units") from None
     try:
-        return pint.UnitRegistry(cache_folder=":auto:")
+        return pint.UnitRegistry(non_int_type=Fraction, cache_folder=":auto:")
     except Exception:  # noqa: BLE001 - an unwritable cache folder: build without the cache
-        return pint.UnitRegistry()
+        return pint.UnitRegistry(non_int_type=Fraction)
 
 
 def _screen(text: str) -> str:
@@ -119,8 +123,8 @@ def parse_unit(text: str, expected: Dimension | None = None) -> Unit:
 
     try:
         unit = ureg.parse_units(pint_text)
-        q = ureg.Quantity(1.0, unit)
-        q * 2.0  # offset units (degC) refuse arithmetic
+        q = ureg.Quantity(Fraction(1), unit)
+        q * 2  # offset units (degC) refuse arithmetic
         base = q.to_base_units()
     except pint.errors.OffsetUnitCalculusError:
         raise UnitProblem(f"{text!r} is an offset unit", "multiplicative units (K, not degC)") from None
@@ -130,7 +134,7 @@ def parse_unit(text: str, expected: Dimension | None = None) -> Unit:
         name = name[0] if isinstance(name, (list, tuple)) and name else name
         raise UnitProblem(f"unknown unit {str(name)!r}", "a unit pint knows, e.g. kg, t, N, kN, MN/m, kN*s/m, "
                                                          "m/s^2, mm, s, ms") from None
-    return Unit(text, float(base.magnitude), Dimension.of(dict(base.dimensionality)))
+    return Unit(text, Fraction(base.magnitude), Dimension.of(dict(base.dimensionality)))
 
 
 def si_unit_text(dimension: Dimension) -> str:

@@ -75,7 +75,10 @@ class SceneUnits:
         if key.startswith("parameters."):
             name = key.split(".", 1)[1]
             self.dims[name], self.given[name] = unit.dimension, value
-        return number * unit.factor
+        try:
+            return float(number * unit.factor)  # exact product, rounded once
+        except OverflowError:
+            return float("inf") if number > 0 else float("-inf")  # refused as not finite by the caller
 
     def value(self, key: str, text):
         """``text`` for the expression parser: a ``"NUMBER UNIT"`` becomes its SI float."""

@@ -51,7 +51,7 @@ def header_factors(line: str, names: tuple[str, ...],
         if unit.dimension != dim:
             raise HeaderProblem(f"header {line[:60]!r}: column {name} [{unit.text}] is {called(unit.dimension)}, "
                                 f"expected {what}, {dim}")
-        factors.append(unit.factor)
+        factors.append(float(unit.factor))
     return tuple(factors)
 
 
