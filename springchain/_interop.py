@@ -46,7 +46,7 @@ def _inputs(sc: Scene, inputs) -> list:
         if kind and kind != "force":
             raise RunRefused(f"inputs {item!r}: accepted: a mass name (a force on it), 'NAME:force' or 'ground' "
                              "(a base acceleration)", quantity="inputs")
-        out.append(mass_index(sc, name if sc.chain is None else name, "inputs"))
+        out.append(mass_index(sc, name, "inputs"))
     return out
 
 
