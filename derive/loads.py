@@ -90,7 +90,8 @@ def read_table(scene_file: str, key: str, value, column: str) -> Table:
     SceneError
         Naming ``scene_file``, ``key``, the bad value and the accepted form.
     """
-    form = f"a CSV file with a header line 't,{column}' and rows of two numbers, times strictly increasing"
+    form = (f"a CSV file with a header line 't,{column}' (units optional: 't [s], {column} [UNIT]') and rows of two "
+            "numbers, times strictly increasing")
 
     def bad(what, why: str) -> SceneError:
         return SceneError(scene_file, key, f"{show(what)}: {why}; accepted: {form}")
@@ -132,9 +133,12 @@ def read_table(scene_file: str, key: str, value, column: str) -> Table:
     lines = [ln for ln in lines if ln and not ln.startswith("#")]
     if not lines:
         raise bad(value, "empty")
-    header = [h.strip().lower() for h in lines[0].split(",")]
-    if header != ["t", column]:
-        raise bad(value, f"header {lines[0][:40]!r} (line 1)")
+    from .units import HeaderProblem, header_factors
+
+    try:  # "t,a", or with units "t [s], a [g]" (converted to SI below)
+        factors = header_factors(lines[0], ("t", column))
+    except HeaderProblem as exc:
+        raise bad(value, str(exc)) from None
     rows = lines[1:]
     if len(rows) < 2:
         raise bad(value, f"{len(rows)} data rows (at least 2 needed)")
@@ -154,6 +158,10 @@ def read_table(scene_file: str, key: str, value, column: str) -> Table:
                 raise bad(value, f"row {r + 1} {line[:40]!r}: {cell.strip()[:20]!r} is not a finite number "
                                  f"of size at most {MAX_TABLE_VALUE:g}")
             data[r, c] = number
+    if factors != (1.0, 1.0):  # the header's units, to SI once
+        data *= np.asarray(factors)[None, :]
+        if not np.all(np.abs(data) <= MAX_TABLE_VALUE):
+            raise bad(value, f"values beyond {MAX_TABLE_VALUE:g} in SI units")
     _check_times(data, lambda why: bad(value, why))
     return Table(str(path), data[:, 0].copy(), data[:, 1].copy())
 

@@ -36,6 +36,7 @@ from .pieces import pieces
 from .damping import DampingModel, parse_damping
 from .loads import FORCE_KEYS, Force, Ground, TableForce, parse_forces, parse_ground  # noqa: F401
 from .scene_edit import DICT_FILE, from_dict
+from .units.dimension import LENGTH
 
 WALL = -1
 
@@ -617,6 +618,7 @@ def potential_expression(ld: Loader, key: str, text, names: frozenset[str]) -> E
         raise ld.bad(f"parameters.{EXTENSION}", EXTENSION, "in a potential, d is the spring's extension",
                      "another parameter name (e.g. d0) in a scene with potentials")
     expr = parse_expression(text, names | {EXTENSION}, file=ld.file, key=key)
+    ld.units.check(key, text, expr, {EXTENSION: LENGTH})
     if EXTENSION not in expr.symbols():
         raise ld.bad(key, text, "does not depend on the extension d",
                      "the spring's energy as an expression of its extension d, e.g. "

@@ -133,11 +133,23 @@ def with_parameters(scene: Scene, values: dict, how: str | None = None) -> Scene
                              f"not a parameter of scene {scene.name!r}{did_you_mean(name, scene.parameters)}; "
                              f"accepted: {', '.join(sorted(scene.parameters)) or 'none (the scene has no parameters)'}")
         params[name] = _number(scene.file, f"parameters.{name}", value)
+        params[name] = _keep_unit(scene, name, params[name])
     if all(params[p] == scene.parameters[p] and not (isinstance(params[p], float) and math.isnan(params[p]))
            for p in values):
         return scene
     changes = ", ".join(f"{k} = {values[k]!r}" for k in values)
     return _rebuild(scene, data, how or f"with_parameters({changes})")
+
+
+def _keep_unit(scene: Scene, name: str, value):
+    """A parameter given with a unit (``"10 t"``) gets its new SI ``value`` with the SI unit of the same
+    dimension, so the expressions that use it keep their dimension checks; otherwise ``value``."""
+    old = scene.source.get("parameters", {}).get(name) if isinstance(scene.source, dict) else None
+    from .units import parse_unit, split_quantity
+    from .units.registry import si_unit_text
+
+    split = split_quantity(old)
+    return value if split is None else f"{float(value)!r} {si_unit_text(parse_unit(split[1]).dimension)}"
 
 
 def with_initial(scene: Scene, x=None, v=None) -> Scene:

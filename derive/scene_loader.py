@@ -15,6 +15,7 @@ import numpy as np
 
 from .errors import SceneError, show
 from .expr import Expr, Num, parse_expression
+from .units import SceneUnits
 
 #: Longest name (parameter, mass).
 MAX_NAME = 64
@@ -76,6 +77,8 @@ class Loader:
     def __init__(self, file: str, data: dict):
         self.file = file
         self.data = data
+        #: Units of this scene (values "NUMBER UNIT" to SI, dimension checks); idle without units.
+        self.units = SceneUnits(file)
 
     def err(self, key: str | None, message: str) -> SceneError:
         return SceneError(self.file, key, message)
@@ -133,6 +136,8 @@ class Loader:
 
     def number(self, key: str, value, *, positive=False, integer=False, maximum=None) -> float | int:
         """A finite TOML number (int or float; never a boolean or a string)."""
+        if isinstance(value, str) and (si := self.units.number(key, value)) is not None:
+            value = si  # "NUMBER UNIT", in SI
         what = "a whole number" if integer else "a number"
         accepted = what + (" > 0" if positive else "") + (f" up to {maximum:g}" if maximum else "")
         if isinstance(value, bool) or not isinstance(value, (int, float)):
@@ -162,7 +167,9 @@ class Loader:
         the value must exceed its error bound. ``bounded`` asks for
         ``MIN_MAGNITUDE <= |value| <= MAX_MAGNITUDE``.
         """
+        text = self.units.value(key, text)  # "NUMBER UNIT" -> its SI number
         expr = parse_expression(text, allowed, file=self.file, key=key)
+        self.units.check(key, text, expr)
         env = dict(env or {})
         chunks = [None] if index_range is None else [index_range[s:s + _CHUNK]
                                                     for s in range(0, len(index_range), _CHUNK)]

@@ -24,6 +24,10 @@ The public API (each name loads what it needs on first use, so ``import springch
     sc.mac("building", "measured.csv")                      # MAC matrix and optimal pairing
     sc.update("building", "measured.csv", parameters="k")   # least-squares model updating
     sc.reconstruct("spectra.csv", total_mass=3.0)           # a chain from its two spectra
+    sc.random_response("building", "spec.csv", on="floor3")    # RMS by the exact modal integral; .plot()
+    sc.state_space("building", inputs="floor3", outputs=["floor3:a"], form="control")  # SciPy / python-control
+    sc.frf_form("building_quake", "transmissibility", output="floor3", hz=True, db=True)  # mobility, ... too
+    sc.write_frf_uff(h, "h.uff"); frfs, modes = sc.read_uff("measured.uff")  # UFF 58 (binary) and 55
 
 Subpackages: :mod:`springchain.derive` (SymPy), :mod:`springchain.numeric` (NumPy/SciPy),
 :mod:`springchain.generated` (generated modules of the bundled scenes).
@@ -47,6 +51,10 @@ _LAZY = {
     "bands": "._bands", "Bands": "._bands",
     "sensitivities": "._sensitivity", "Sensitivities": "._sensitivity", "mac": "._mac", "MAC": "._mac",
     "update": "._updating", "Update": "._updating", "reconstruct": "._updating", "Reconstruction": "._updating",
+    "random_response": "._random", "RandomVibration": "._random",
+    "state_space": "._interop", "AccuracyWarning": "._interop",
+    "frf_form": "._frf_forms", "FrfForm": "._frf_forms",
+    "read_uff": "._uff", "write_frf_uff": "._uff", "write_modes_uff": "._uff",
 }
 
 __all__ = ["__version__", *_LAZY]

@@ -12,10 +12,23 @@ import numpy as np
 
 EXTRA = 'pip install "springchain[data]"'
 #: Units of each recorded quantity (NPZ key prefix).
-UNITS = {"x": "m", "v": "m/s", "aabs": "m/s^2", "xabs": "m"}
+#: (pint-readable: ``ds.pint.quantify()`` of pint-xarray reads the ``units`` attributes.)
+UNITS = {"x": "m", "v": "m/s", "aabs": "m/s^2", "xabs": "m", "drift": "m", "spring_force": "N", "base_shear": "N",
+         "modal_energy": "J"}
 LONG_NAMES = {"x": "displacement from the springs' rest configuration", "v": "velocity",
               "aabs": "absolute acceleration (relative acceleration + ground acceleration)",
-              "xabs": "absolute displacement (relative displacement + ground displacement)"}
+              "xabs": "absolute displacement (relative displacement + ground displacement)",
+              "drift": "spring stretch (storey drift)", "spring_force": "spring force",
+              "base_shear": "base shear (sum of the forces of the springs to the wall)",
+              "modal_energy": "energy of each linear normal mode (ascending omega)"}
+#: The second dimension of each recorded quantity (absent: one value per time).
+SECOND_DIM = {"x": "mass", "v": "mass", "aabs": "mass", "xabs": "mass", "drift": "spring", "spring_force": "spring",
+              "modal_energy": "mode"}
+
+
+#: The extra that installs each optional module other than the data extra's.
+EXTRAS = {"control": 'pip install "springchain[control]"', "pyuff": 'pip install "springchain[uff]"',
+          "pint": 'pip install "springchain[units]"'}
 
 
 def require(module: str, what: str):
@@ -23,7 +36,8 @@ def require(module: str, what: str):
     try:
         return importlib.import_module(module)
     except ImportError:
-        raise ImportError(f"{what} needs {module}, which springchain installs only on request: {EXTRA}") from None
+        raise ImportError(f"{what} needs {module}, which springchain installs only on request: "
+                          f"{EXTRAS.get(module, EXTRA)}") from None
 
 
 def _mass_coords(scene) -> list:
@@ -35,9 +49,15 @@ def _series(sim) -> list[tuple[str, str, np.ndarray]]:
     """(quantity, method, array (S, N)) of every recorded array of a Simulation."""
     out = [(q, m, arr) for q, d in (("x", sim.x), ("v", sim.v)) for m, arr in d.items()]
     for key, arr in sim.extra.items():
-        q, _, m = key.partition("_")
+        q = next((name for name in sorted(UNITS, key=len, reverse=True) if key.startswith(name + "_")), None)
+        q, m = (q, key[len(q) + 1:]) if q else key.partition("_")[::2]
         out.append((q, m, arr))
     return out
+
+
+def _dims(q: str, arr) -> tuple[str, ...]:
+    """Dimensions of a recorded array: (time, mass), (time, spring), (time, mode) or (time,)."""
+    return ("time",) if np.ndim(arr) == 1 else ("time", SECOND_DIM.get(q, "mass"))
 
 
 def simulation_xarray(sim):
@@ -46,13 +66,14 @@ def simulation_xarray(sim):
     xr = require("xarray", "Simulation.to_xarray()")
     coords = {"time": ("time", np.asarray(sim.t), {"units": "s", "long_name": "time t = i·dt"}),
               "mass": ("mass", _mass_coords(sim.scene), {"long_name": "mass (coordinate order)"})}
-    data = {f"{q}_{m}": (("time", "mass"), np.asarray(arr),
+    data = {f"{q}_{m}": (_dims(q, arr), np.asarray(arr),
                          {"units": UNITS.get(q, ""), "long_name": LONG_NAMES.get(q, q), "method": m, "quantity": q})
             for q, m, arr in _series(sim)}
     s = sim.summary
     attrs = {"scene": sim.scene.name, "scene_file": str(sim.scene.file), "dt": float(s.get("dt", np.nan)),
              "steps": int(s.get("steps", 0)), "methods": ", ".join(sim.methods),
-             "units": "time: s; x: m; v: m/s; aabs: m/s^2; xabs: m",
+             "units": "time: s; x: m; v: m/s; aabs: m/s^2; xabs: m; drift: m; spring_force: N; base_shear: N; "
+                      "modal_energy: J",
              "parameters": ", ".join(f"{k} = {v:g}" for k, v in sorted(sim.scene.parameters.items()))}
     return xr.Dataset(data, coords=coords, attrs=attrs)
 
@@ -66,6 +87,7 @@ def simulation_dataframe(sim):
     frames = []
     for q, m, arr in _series(sim):
         arr = np.asarray(arr)
+        arr = arr[:, None] if arr.ndim == 1 else arr
         s, n = arr.shape
         frames.append(pd.DataFrame({"method": m, "quantity": q, "time": np.repeat(t, n),
                                     "mass": np.tile(masses[:n], s), "value": arr.reshape(-1),

@@ -42,7 +42,7 @@ def module_path(scene: Scene, out_dir: Path | None = None) -> Path:
 
 
 def _code_version() -> str:
-    """Hash of the derive/ sources: cached modules are redone when the generator changes."""
+    """Hash of the derive/ sources (subpackages included): cached modules are redone when the generator changes."""
     from . import derive as derive_pkg
 
     h = hashlib.sha256()

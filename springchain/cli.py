@@ -60,7 +60,8 @@ def _whole(flag):
 
 
 #: The commands that take a SCENE, and so ``--set NAME=VALUE``.
-SCENE_COMMANDS = ("derive", "modes", "simulate", "bench", "plan", "sweep", "frf", "animate", "rsa", "bands", "update")
+SCENE_COMMANDS = ("derive", "modes", "simulate", "bench", "plan", "sweep", "frf", "animate", "rsa", "bands", "update",
+                  "psd")
 
 
 def _set_values(items: list[str]) -> dict[str, float]:
@@ -125,6 +126,11 @@ def cmd_modes(args) -> int:
     if getattr(args, "sensitivity", False) or getattr(args, "parameters", None) is not None:
         return cmd_modes_sensitivity(args)
     m = modes(args.scene)
+    if args.uff:
+        from ._uff import write_modes_uff
+
+        uff_path, uff_notes = write_modes_uff(args.scene, args.uff)
+        sys.stderr.write(f"wrote {uff_path} (UFF dataset 55 per mode, ASCII; {'; '.join(uff_notes)})\n")
     if args.json:
         print(_dumps(m.to_json(), indent=2))
     elif args.latex:
@@ -315,13 +321,45 @@ def cmd_frf(args) -> int:
     """
     from ._frf import frf
 
+    if args.form or args.hz or args.db or args.units:
+        return _frf_form(args)
     result = frf(args.scene, args.input, args.output, args.omega_min, args.omega_max, args.points)
+    if args.uff:
+        from ._uff import write_frf_uff
+
+        uff_path = write_frf_uff(result, args.uff)
     path = result.save(args.out)
     if args.json:
         print(_dumps(result.to_json()))
         return 0
     print(result.to_text(), end="")
     print(f"wrote {path}")
+    if args.uff:
+        print(f"wrote {uff_path} (UFF dataset 58, binary: frequencies [Hz] and complex values exact)")
+    return 0
+
+
+def _frf_form(args) -> int:
+    """``frf`` with --form, --hz, --db or --units: the form's table, figure and JSON."""
+    from ._frf_forms import frf_form
+
+    units = _output_units(args)
+    form = args.form or "receptance"
+    result = frf_form(args.scene, form, input=args.input, output=args.output, hz=args.hz, db=args.db,
+                      omega_min=args.omega_min, omega_max=args.omega_max, points=args.points)
+    path = result.save(args.out, units)
+    uff_path = None
+    if args.uff:
+        from ._uff import write_frf_uff
+
+        uff_path = write_frf_uff(result, args.uff)
+    if args.json:
+        print(_dumps(result.to_json(units)))
+        return 0
+    print(result.to_text(units), end="")
+    print(f"wrote {path}")
+    if uff_path:
+        print(f"wrote {uff_path} (UFF dataset 58, binary, SI units: frequencies [Hz] and complex values exact)")
     return 0
 
 
@@ -338,6 +376,69 @@ def cmd_animate(args) -> int:
     result = animate(args.scene, mode=args.mode, method=args.method, out=args.out, frames=args.frames, fps=args.fps)
     print(f"{result.describe()}\nwrote {result.path}")
     return 0
+
+
+# -- the ecosystem: random vibration, output units ------------------------------------------------
+def _output_units(args):
+    """The ``--units`` list (None without it); a bad entry is one line naming the flag."""
+    spec = getattr(args, "units", None)
+    if not spec:
+        return None
+    from .derive.units import UnitProblem
+    from .derive.units.output import OutputUnits
+
+    try:
+        return OutputUnits.parse(spec)
+    except UnitProblem as exc:
+        raise SceneError(None, "--units", f"{spec!r}: {exc}") from None
+
+
+def cmd_psd(args) -> int:
+    """random vibration: response PSD and RMS of every mass and spring force
+
+    Drive the scene by a random input given by its one-sided PSD (a CSV f,psd: frequency [Hz] and PSD
+    [unit^2/Hz], piecewise linear on log-log axes; units in the header with the units extra, e.g.
+    'f [Hz], psd [g^2/Hz]'): a force on MASS (--on) or, without --on, a base acceleration. Prints the
+    RMS displacement, velocity and acceleration of every mass and the RMS force of every spring, from
+    the exact modal integral (no frequency sampling error), and writes log-log PSD figures.
+    """
+    from ._random import random_response
+
+    units = _output_units(args)
+    result = random_response(args.scene, args.input, args.on,
+                             interpolation="linear" if args.linear else "loglog")
+    if args.json:
+        print(_dumps(result.to_json(units)))
+        return 0
+    print(result.to_text(units), end="")
+    if not args.no_figures:
+        for kind in ("acceleration", "displacement", "spring force"):
+            print(f"wrote {result.save(args.out, kind, units)}")
+    return 0
+
+
+def _add_psd(sub) -> None:
+    """``springchain psd``: random vibration."""
+    ps = _command(sub, "psd", cmd_psd)
+    _scene(ps, "building")
+    ps.add_argument("--input", required=True, metavar="FILE",
+                    help="the input PSD: a CSV f,psd (frequency [Hz], one-sided PSD [unit^2/Hz]; header units "
+                         "such as 'f [Hz], psd [g^2/Hz]' need the units extra)")
+    ps.add_argument("--on", metavar="MASS",
+                    help="the mass a random force drives (a name; an index for [chain] scenes); default: the "
+                         "PSD is a base acceleration")
+    ps.add_argument("--linear", action="store_true",
+                    help="interpolate the PSD linearly between breakpoints (default: straight on log-log axes)")
+    _units_flag(ps)
+    ps.add_argument("--no-figures", action="store_true", help="print only")
+    _json(ps)
+    _out(ps, DEFAULT_OUT, metavar="DIR")
+
+
+def _units_flag(p) -> None:
+    p.add_argument("--units", metavar="LIST",
+                   help="show results in these units, e.g. 'mm,kN,g' (each result in the listed unit of its "
+                        "dimension; ratios and PSDs follow; g is standard gravity; needs the units extra)")
 
 
 # -- structural dynamics: response spectra and response-spectrum analysis ----------------------
@@ -605,6 +706,8 @@ def _add_modes(sub) -> None:
     g.add_argument("--json", action="store_true", help="print one JSON object (its fields: the guide's Modes chapter) and nothing else")
     g.add_argument("--latex", action="store_true", help="print the derivation as LaTeX (amsmath)")
     add_sensitivity_options(m)
+    m.add_argument("--uff", metavar="FILE",
+                   help="also write every mode as UFF dataset 55 (ASCII, Hz, mass-normalised; needs the uff extra)")
 
 
 def _add_simulate(sub) -> None:
@@ -724,6 +827,14 @@ def _add_frf(sub) -> None:
                     help='print one JSON object {"omega", "magnitude", "phase" (deg), "resonances", '
                          '"transfer_function", ...} and nothing else')
     fr.add_argument("--out", default=DEFAULT_OUT, metavar="DIR", help="folder for the Bode figure (default: %(default)s)")
+    fr.add_argument("--form", metavar="FORM",
+                    help="receptance, mobility, accelerance, dynamic-stiffness (force on --input), or "
+                         "transmissibility, relative-transmissibility (--input ground: the base moves)")
+    fr.add_argument("--hz", action="store_true", help="frequencies in Hz (default: rad/s)")
+    fr.add_argument("--db", action="store_true", help="magnitudes in dB (20 log10, re 1 of the unit)")
+    _units_flag(fr)
+    fr.add_argument("--uff", metavar="FILE",
+                    help="also write the FRF as a UFF dataset 58 (binary, frequencies in Hz; needs the uff extra)")
 
 
 def _add_animate(sub) -> None:
@@ -759,7 +870,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--version", action="version", version=f"springchain {__version__}")
     sub = p.add_subparsers(dest="command", required=True, parser_class=_Parser)
     for add in (_add_run, _add_derive, _add_modes, _add_simulate, _add_bench, _add_plan, _add_scaling, _add_sweep,
-                _add_frf, _add_animate, add_structural_commands, _add_bands, add_updating_commands):
+                _add_frf, _add_animate, add_structural_commands, _add_bands, add_updating_commands, _add_psd):
         add(sub)
     for name in SCENE_COMMANDS:  # one option, the same on every command that takes a SCENE
         sub.choices[name].add_argument(
@@ -775,7 +886,8 @@ FLAGS = {"dt": "--dt", "steps": "--steps", "record_every": "--record-every", "me
          "input": "--input", "output": "--output", "omega_min": "--omega-min", "omega_max": "--omega-max",
          "points": "--points", "mode": "--mode", "frames": "--frames", "fps": "--fps", "max_n": "--max-n",
          "symbolic_max_n": "--symbolic-max-n", "zeta": "--zeta", "periods": "--periods", "combine": "--combine",
-         "springs": "--springs", "alpha": "--alpha", "q": "--points"}
+         "springs": "--springs", "alpha": "--alpha", "q": "--points", "on": "--on", "interpolation": "--linear",
+         "form": "--form", "uff": "--uff"}
 
 
 def _flag_for(args, quantity: str | None) -> str | None:
@@ -807,6 +919,11 @@ def main(argv: list[str] | None = None) -> int:
             sys.stderr.write(f"springchain: error: {flag + ': ' if flag else ''}{exc}\n")
             return EXIT_USAGE
         raise
+    except ImportError as exc:  # an optional extra that is not installed: its one line says what to install
+        if "springchain installs only on request" not in str(exc):
+            raise
+        sys.stderr.write(f"springchain: error: {exc}\n")
+        return EXIT_USAGE
     except BrokenPipeError:  # output piped into e.g. `head`
         sys.stderr.close()
         return 0
