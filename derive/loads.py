@@ -82,24 +82,9 @@ class Ground:
     key: str = "ground"
 
 
-def read_table(scene_file: str, key: str, value, column: str) -> Table:
-    """Read and check the CSV ``value`` (relative to ``scene_file``) with header ``t,<column>``.
-
-    Raises
-    ------
-    SceneError
-        Naming ``scene_file``, ``key``, the bad value and the accepted form.
-    """
-    form = (f"a CSV file with a header line 't,{column}' (units optional: 't [s], {column} [UNIT]') and rows of two "
-            "numbers, times strictly increasing")
-
-    def bad(what, why: str) -> SceneError:
-        return SceneError(scene_file, key, f"{show(what)}: {why}; accepted: {form}")
-
-    if not isinstance(value, str):  # from Python (scene_from_dict): arrays, not a file
-        return table_from_arrays(scene_file, key, value, column)
-    if not value or "\x00" in value:
-        raise bad(value, "not a file name")
+def _read_text(scene_file: str, value: str, bad) -> tuple[Path, str]:
+    """The table file ``value`` (relative to ``scene_file``'s folder, never outside it) as text, after
+    checking it is a regular, readable, bounded UTF-8 file; ``bad(value, why)`` makes the error."""
     base = Path(scene_file).parent if scene_file else Path(".")
     path = base / value
     try:  # the scene is untrusted: it may name files in its own folder (or below), nothing else
@@ -129,6 +114,28 @@ def read_table(scene_file: str, key: str, value, column: str) -> Table:
         raise bad(value, f"byte {exc.start} is not UTF-8") from None
     if text.startswith("\ufeff"):
         text = text[1:]
+    return path, text
+
+
+def read_table(scene_file: str, key: str, value, column: str) -> Table:
+    """Read and check the CSV ``value`` (relative to ``scene_file``) with header ``t,<column>``.
+
+    Raises
+    ------
+    SceneError
+        Naming ``scene_file``, ``key``, the bad value and the accepted form.
+    """
+    form = (f"a CSV file with a header line 't,{column}' (units optional: 't [s], {column} [UNIT]') and rows of two "
+            "numbers, times strictly increasing")
+
+    def bad(what, why: str) -> SceneError:
+        return SceneError(scene_file, key, f"{show(what)}: {why}; accepted: {form}")
+
+    if not isinstance(value, str):  # from Python (scene_from_dict): arrays, not a file
+        return table_from_arrays(scene_file, key, value, column)
+    if not value or "\x00" in value:
+        raise bad(value, "not a file name")
+    path, text = _read_text(scene_file, value, bad)
     lines = [ln.strip() for ln in text.splitlines()]
     lines = [ln for ln in lines if ln and not ln.startswith("#")]
     if not lines:
