@@ -65,8 +65,8 @@ print(building.to_text())
 psd_figure = building.plot("acceleration")
 
 # %%
-# The RMS displacement of the top floor relative to the base, again by sampling: H from the state-space model (``sc.state_space``,
-# the ground acceleration in, floor3's displacement relative to the base out) on N log-spaced
+# The RMS displacement of the top floor relative to the base, again by sampling: H from the state-space
+# model (``sc.state_space``, the ground acceleration in, floor3's displacement out) on N log-spaced
 # frequencies, and the trapezoidal rule. With 2 % damping the half-power width of the first resonance
 # is 4 % of its frequency: the sampled integral needs hundreds of points for three digits.
 exact = building.rms("floor3", "displacement")
