@@ -1,6 +1,7 @@
 """The cost of mode sensitivities (∂ω²/∂p and ∂φ/∂p by Nelson's method) per mode and parameter.
 
-Run ``python benchmarks/bench_sensitivity.py [--json] [--n N] [--modes J]``, BLAS pinned to one thread:
+Run ``python benchmarks/bench_sensitivity.py [--json] [--n N] [--modes J] [--markdown FILE]``, BLAS pinned to
+one thread:
 
 * a **40-mass** ``[masses]`` scene (masses and springs over 12 decades, four parameters, every mode):
   the dense route (spring-factor SVD refined to double-double, Nelson through the modal corrector);
@@ -16,12 +17,21 @@ is inside the timed call.
 from __future__ import annotations
 
 import argparse
+import importlib.util
 import json
+import sys
 import tempfile
 import time
 from pathlib import Path
 
 import numpy as np
+
+# the shared ``--markdown FILE`` option (benchmarks/_report.py), loaded by path: the scripts are not a package
+_spec = importlib.util.spec_from_file_location("springchain_benchmarks__report", Path(__file__).with_name("_report.py"))
+_report = sys.modules.get(_spec.name) or importlib.util.module_from_spec(_spec)
+if _spec.name not in sys.modules:
+    sys.modules[_spec.name] = _report
+    _spec.loader.exec_module(_report)
 
 
 def dense_scene(n: int = 40, seed: int = 0) -> str:
@@ -71,29 +81,42 @@ def measure(text: str, wanted, repeat: int, folder: Path) -> dict:
             "worst_settled": float(np.max(r.settled))}
 
 
+def _print(out: dict, n: int) -> None:
+    """The Markdown table of the text output (one row per scene)."""
+    print(f"Sensitivities of every listed mode to every parameter; best of the timed runs, BLAS one thread; "
+          f"chain of {n} masses")
+    print("")
+    print("| scene | masses | modes | parameters | set-up s | seconds | ms per mode and parameter "
+          "| largest last correction | route |")
+    print("|---|---:|---:|---:|---:|---:|---:|---:|---|")
+    for name, rec in out.items():
+        print(f"| {name} | {rec['masses']} | {rec['modes']} | {rec['parameters']} | {rec['set_up_seconds']:.2f} "
+              f"| {rec['seconds']:.3f} | {1e3 * rec['per_mode_and_parameter']:.2f} | {rec['worst_settled']:.1e} "
+              f"| {rec['route']} |")
+
+
 def main(argv=None) -> dict:
     from threadpoolctl import threadpool_limits
 
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--n", type=int, default=100_000, help="chain length (default: %(default)s)")
     ap.add_argument("--modes", type=int, default=3, help="lowest and highest modes of the chain (default: 3 + 3)")
-    ap.add_argument("--repeat", type=int, default=3)
-    ap.add_argument("--json", action="store_true")
+    ap.add_argument("--repeat", type=int, default=3, help="timed runs of each call, the best kept (default: %(default)s)")
+    ap.add_argument("--json", action="store_true", help="print the records as JSON")
+    _report.add_option(ap)
     args = ap.parse_args(argv)
-    with threadpool_limits(limits=1), tempfile.TemporaryDirectory() as tmp:
-        folder = Path(tmp)
-        dense = measure(dense_scene(), None, args.repeat, folder)
-        J = args.modes
-        wanted = np.concatenate([np.arange(J), np.arange(args.n - J, args.n)])
-        chain = measure(chain_scene(args.n), wanted, args.repeat, folder)
-    out = {"dense_40": dense, "chain": chain}
-    if args.json:
-        print(json.dumps(out, indent=1))
-    else:
-        for name, rec in out.items():
-            print(f"{name:>9}: {rec['masses']} masses, {rec['modes']} modes x {rec['parameters']} parameters: "
-                  f"{rec['seconds']:.3f} s ({1e3 * rec['per_mode_and_parameter']:.2f} ms per mode and parameter; "
-                  f"set-up {rec['set_up_seconds']:.2f} s; largest last correction {rec['worst_settled']:.1e})")
+    with _report.recorded(args.markdown, __file__, argv):
+        with threadpool_limits(limits=1), tempfile.TemporaryDirectory() as tmp:
+            folder = Path(tmp)
+            dense = measure(dense_scene(), None, args.repeat, folder)
+            J = args.modes
+            wanted = np.concatenate([np.arange(J), np.arange(args.n - J, args.n)])
+            chain = measure(chain_scene(args.n), wanted, args.repeat, folder)
+        out = {"dense_40": dense, "chain": chain}
+        if args.json:
+            print(json.dumps(out, indent=1))
+        else:
+            _print(out, args.n)
     return out
 
 

@@ -84,6 +84,18 @@ CODE_NUMBERS = {
     "SPECTRUM_MAX_WORK": "springchain.numeric.response_spectrum:MAX_WORK",
     "SPECTRUM_SAMPLES_PER_PERIOD": "springchain.numeric.sdof_peak:SAMPLES_PER_PERIOD",
     "SPECTRUM_LONG_CYCLES": "springchain.numeric.sdof_peak:LONG_CYCLES",
+    "SENS_MAX_ALL_MODES": "springchain._sensitivity:MAX_ALL_MODES",
+    "SENS_MODES_EACH_END": "springchain._sensitivity:MODES_EACH_END",
+    "SENS_MAX_SHAPE_MASSES": "springchain._sensitivity:MAX_SHAPE_MASSES",
+    "VEERING_MAC": "springchain.numeric.sensitivity.tracking:VEERING_MAC",
+    "IDENTIFIABLE_RTOL": "springchain.numeric.updating.fit:IDENTIFIABLE_RTOL",
+    "RECONSTRUCT_MAX_MASSES": "springchain.numeric.updating.reconstruct:MAX_MASSES",
+    "RECONSTRUCT_MAX_DIGITS": "springchain.numeric.updating.reconstruct:MAX_DIGITS",
+    "STATE_SPACE_MAX_MASSES": "springchain._interop:MAX_DENSE_STATES",
+    "STATE_SPACE_CONTRAST_NOTE": "springchain.numeric.interop.state_space:CONTRAST_NOTE",
+    "FRF_FORMS_MAX_BASE_MASSES": "springchain._frf_forms:MAX_BASE_MASSES",
+    "RANDOM_MAX_MASSES": "springchain.numeric.random.modal_form:MAX_MASSES",
+    "RANDOM_MAX_POINTS": "springchain.numeric.random.psd_input:MAX_POINTS",
 }
 
 

@@ -38,6 +38,9 @@ SCENE_KEYS = DOCS / "reference" / "scene_keys.toml"
 EXAMPLE_FILES = {
     "hammer.csv": "t,f\n0.0,0.0\n0.01,50.0\n0.02,0.0\n",
     "record.csv": "t,a\n0.0,0.0\n0.5,1.0\n1.0,-1.0\n1.5,0.0\n",
+    # the same with units in the header (the units extra): milliseconds and kilonewtons, g
+    "hammer-kN.csv": "t [ms], f [kN]\n0,0\n10,0.05\n20,0\n",
+    "record-g.csv": "t [s], a [g]\n0.0,0.0\n0.5,0.1\n1.0,-0.1\n1.5,0.0\n",
 }
 
 

@@ -9,11 +9,15 @@ E_j = ½(q̇_j² + ω_j² q_j²) (``modal_energy=True``): mode 1 gives its energ
 and takes almost all of it back.
 """
 
+import tempfile
+
 from matplotlib.figure import Figure
 
 import springchain as sc
 
-run = sc.simulate("fput_alpha", methods=["verlet"], record_every=200, modal_energy=True, progress=False)
+frames = tempfile.TemporaryDirectory()  # [chain] runs stream their frames to an NPZ in `out`
+run = sc.simulate("fput_alpha", methods=["verlet"], record_every=200, modal_energy=True, progress=False,
+                  out=frames.name)
 E = run.extra["modal_energy_verlet"]  # (S, N), ascending omega
 print("frames x modes:", E.shape, " t_end =", run.t[-1])
 

@@ -8,12 +8,15 @@ V(d) = (a/b)·exp(−b d) + a d (the Toda lattice), started with one exact solit
 few times, and follow its peak.
 """
 
+import tempfile
+
 import numpy as np
 from matplotlib.figure import Figure
 
 import springchain as sc
 
-run = sc.simulate("toda", methods=["verlet"], progress=False)
+frames = tempfile.TemporaryDirectory()  # [chain] runs stream their frames to an NPZ in `out`
+run = sc.simulate("toda", methods=["verlet"], progress=False, out=frames.name)
 x = run.x["verlet"]
 compression = -(x[:, 1:] - x[:, :-1])  # -d of spring i, between masses i and i+1
 
