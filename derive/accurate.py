@@ -59,10 +59,6 @@ def exact_values(params: dict, values: dict) -> dict:
     return {params[k]: sp.Rational(Fraction(float(v))) for k, v in values.items()}
 
 
-def _agree(a: float, b: float) -> bool:
-    return abs(a - b) <= AGREE * max(abs(a), abs(b))
-
-
 @functools.lru_cache(maxsize=512)
 def _mp_function(expr: sp.Expr, symbols: tuple):
     """``expr`` as an mpmath function of ``symbols`` (built once per expression, :mod:`derive.mp_eval`)."""
@@ -74,35 +70,71 @@ def _mp_exact(r: sp.Rational):
     return mpmath.mpf(r.p) / r.q
 
 
+#: Smallest positive normal float64 and the largest finite one: a value people read outside this
+#: range would print as 0, a subnormal with fewer digits, or inf (:class:`Float64Limit`).
+FLOAT64_TINY, FLOAT64_HUGE = 2.2250738585072014e-308, 1.7976931348623157e308
+
+
+class Float64Limit(ArithmeticError):
+    """A value that must be printed with float64's relative accuracy lies outside its normal range."""
+
+
+def _known_zero(expr: sp.Expr, subs: tuple):
+    """Whether SymPy sees ``expr`` at the exact values as 0 (True, False or None: undecided).
+
+    SymPy evaluates powers of the substituted numbers at once, and its square roots of large
+    integers go through ``factorint(limit=2**15)``, which raises on some inputs (SymPy 1.14:
+    "... is not a prime factor of ...", sympy/sympy#28621; with gmpy2 on Python < 3.13,
+    ``math.log`` of an ``mpz`` past 1e308 overflows). Such a failure only means "undecided":
+    the numeric evaluation decides instead.
+    """
+    try:
+        return (expr.xreplace(dict(subs)) if subs else expr).is_zero  # symbols -> exact rationals
+    except (ValueError, OverflowError, ArithmeticError):
+        return None
+
+
 @functools.lru_cache(maxsize=4096)
-def _value(expr: sp.Expr, subs: tuple) -> float:
-    if (expr.xreplace(dict(subs)) if subs else expr).is_zero:  # symbols -> exact rationals (no pattern matching)
+def _value(expr: sp.Expr, subs: tuple, nonzero: bool = False) -> float:
+    if not nonzero and _known_zero(expr, subs):
         return 0.0
     symbols = tuple(s for s, _ in subs if expr.has(s))
     values = [v for s, v in subs if expr.has(s)]
     f = _mp_function(expr, symbols)
-    prev = None
+    prev = prev_mp = None
     prev_dps = None
     dps = 30
     while dps <= MAX_DPS:
         with mpmath.workdps(dps):
             try:
-                z = f(*[_mp_exact(v) for v in values])
-                cur = float(mpmath.re(z))
+                z = mpmath.re(f(*[_mp_exact(v) for v in values]))
+                cur = float(z)
             except (ZeroDivisionError, ValueError, OverflowError):
-                cur = float("nan")
+                z, cur = None, float("nan")
         if prev is not None and cur == cur and prev == prev:
-            if _agree(prev, cur):
+            if z != 0 and prev_mp != 0 and abs(z - prev_mp) <= AGREE * max(abs(z), abs(prev_mp)):
+                _in_range(expr, z, nonzero)
                 return cur
-            # a quantity that is exactly zero but not recognised as such: noise shrinks with precision
-            if abs(cur) < 10.0 ** (-prev_dps / 2) and abs(cur) <= 1e-10 * abs(prev) or (cur == 0.0 == prev):
+            # a quantity that is exactly zero but not recognised as such: its rounding noise shrinks
+            # as fast as the precision grows (never taken for a quantity known to be nonzero, e.g.
+            # the ω² of an elastic mode, which may be 1e-300 of the terms it is computed from)
+            if not nonzero and prev_dps >= 60 and (
+                    z == 0 == prev_mp or abs(z) <= abs(prev_mp) * mpmath.mpf(10) ** (-prev_dps // 2)):
                 return 0.0
-        prev, prev_dps = cur, dps
+        prev, prev_mp, prev_dps = cur, z, dps
         dps *= 2
     raise NotAccurate(f"{sp.sstr(expr)} does not converge to float64 accuracy within {MAX_DPS} digits")
 
 
-def value(expr, subs: dict) -> float:
+def _in_range(expr: sp.Expr | None, z, nonzero: bool) -> None:
+    """Raise :class:`Float64Limit` for a value float64 cannot hold (inf; below the normal range when
+    ``nonzero`` asks for its relative accuracy)."""
+    if abs(z) > FLOAT64_HUGE or (nonzero and abs(z) < FLOAT64_TINY):
+        raise Float64Limit(f"{mpmath.nstr(z, 3)} is outside float64's normal range "
+                           f"({FLOAT64_TINY:.3g} to {FLOAT64_HUGE:.3g} in size)")
+
+
+def value(expr, subs: dict, *, nonzero: bool = False) -> float:
     """The real part of ``expr`` at ``subs`` (exact rationals), correctly rounded to float64.
 
     Parameters
@@ -110,6 +142,10 @@ def value(expr, subs: dict) -> float:
     expr : sympy.Expr or int
     subs : dict
         ``{Symbol: Rational}`` from :func:`exact_values`.
+    nonzero : bool
+        The quantity is known not to be 0 (the ω² of an elastic mode): its relative accuracy is
+        what counts, so the precision is raised until it settles however small it is next to the
+        terms it is computed from, instead of being taken for an exact zero lost in rounding noise.
 
     Returns
     -------
@@ -119,6 +155,8 @@ def value(expr, subs: dict) -> float:
     ------
     NotAccurate
         If successive precisions up to :data:`MAX_DPS` digits never agree.
+    Float64Limit
+        If the value is beyond float64's range (or, with ``nonzero``, below its normal range).
     """
     if isinstance(expr, float):  # a float64 already (numeric fallback shapes): its own value
         return expr
@@ -126,7 +164,7 @@ def value(expr, subs: dict) -> float:
         expr = sp.Integer(expr)
     if expr.is_Float and expr._prec >= 53:  # a float64 (or wider) number already: it is its own value
         return float(expr)
-    return _value(expr, tuple(sorted(subs.items(), key=lambda kv: str(kv[0]))))
+    return _value(expr, tuple(sorted(subs.items(), key=lambda kv: str(kv[0]))), nonzero)
 
 
 def _mp(e: sp.Expr, dps: int):
@@ -175,8 +213,11 @@ def numeric_modes(masses: list, springs: list, n_rigid: int) -> list[tuple[float
     dps = 40
     while dps <= MAX_DPS:
         w, shapes = _eig_dynamical(masses, springs, n, dps)
-        cur = [float(x) for x in w[n_rigid:]]
-        if prev is not None and all(_agree(a, b) for a, b in zip(prev, cur)):
+        cur = w[n_rigid:]
+        if prev is not None and all(abs(a - b) <= AGREE * max(abs(a), abs(b)) for a, b in zip(prev, cur)):
+            for x in cur:
+                _in_range(None, x, True)
+            cur = [float(x) for x in cur]
             out = []
             for lam, s in zip(cur, shapes[n_rigid:]):
                 piv = max(s, key=abs)
@@ -219,6 +260,10 @@ def spring_factor_modes(masses: list, springs: list, rigid_pieces: list) -> list
     w2, shapes = run([float(m) for m in masses], [float(k) for _, _, k in springs])
     r = len(rigid_pieces)
     w2, shapes = w2[r:], shapes[:, r:]
+    bad = ~((w2 >= FLOAT64_TINY) & (w2 <= FLOAT64_HUGE))
+    if bad.any():
+        raise Float64Limit(f"{float(w2[np.argmax(bad)]):.3g} (spring-factor route) is outside float64's normal "
+                           f"range ({FLOAT64_TINY:.3g} to {FLOAT64_HUGE:.3g} in size)")
     piv = shapes[np.argmax(np.abs(shapes), axis=0), np.arange(shapes.shape[1])]
     shapes = shapes / piv[None, :]
     return [(float(w), shapes[:, j].tolist()) for j, w in enumerate(w2)]

@@ -175,6 +175,8 @@ def _check_chain_stiffness(model: ChainModel, springs: range, subs: dict) -> Non
     """V, V', V'' finite and V'' > 0 at d = 0 for every spring index (float64, in chunks)."""
     import numpy as np
 
+    from .scene_loader import MAX_MAGNITUDE, MIN_MAGNITUDE
+
     law = model.law
     values = [float(subs[p]) for p in model.params.values()]
     syms = [model.i] + list(model.params.values())
@@ -185,10 +187,13 @@ def _check_chain_stiffness(model: ChainModel, springs: range, subs: dict) -> Non
             with np.errstate(all="ignore"):
                 v = np.broadcast_to(np.asarray(f(i, *values), dtype=float), i.shape)
             bad = ~np.isfinite(v) if name != "V''" else ~(v > 0)
-            if bad.any():
-                j = int(i[np.argmax(bad)])
-                why = (f"{name}(0) = {v[np.argmax(bad)]:g} is not finite" if name != "V''"
-                       else f"stiffness V''(0) = {v[np.argmax(bad)]:g} is not positive")
+            far = (v < MIN_MAGNITUDE) | (v > MAX_MAGNITUDE) if name == "V''" else bad
+            if bad.any() or far.any():
+                j = int(i[np.argmax(bad | far)])
+                why = (f"{name}(0) = {v[np.argmax(bad)]:g} is not finite" if name != "V''" else
+                       f"stiffness V''(0) = {v[np.argmax(bad)]:g} is not positive" if bad.any() else
+                       f"stiffness V''(0) = {v[np.argmax(far)]:g} is outside {MIN_MAGNITUDE:g} to {MAX_MAGNITUDE:g} "
+                       "(the range of a spring's k)")
                 raise SceneError(model.scene.file, "chain.potential", f"{why} for the spring i = {j}; accepted: a "
                                  "potential finite, twice differentiable and with V''(0) > 0 for every spring i")
 

@@ -29,7 +29,7 @@ from .printing import latex, sstr
 from .accurate import MAX_MPMATH_MODES, NotAccurate, _eig_dynamical, _mp, exact_values, value
 from .model import Model
 from .model_cache import cached_on
-from .modes import ModeSet
+from .modes import ModeSet, omega2_value
 from .pieces import pieces
 from .work import WorkCapExceeded, check, ops
 
@@ -371,7 +371,7 @@ def _closed_forms(model: Model, modes: ModeSet) -> list[sp.Expr | None]:
     j = 0
     subs = _values(model)
     records = [(mode, shape) for mode in modes.modes for shape in mode.shapes]
-    records.sort(key=lambda r: max(value(r[0].omega2, subs), 0.0) if r[0].exact else float(r[0].omega2))
+    records.sort(key=lambda r: omega2_value(r[0], subs))
     C_d = None
     if model.dampers:
         C_d = model._assemble([(a, b, c) for a, b, c, _ in model.dampers], model.v)

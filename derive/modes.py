@@ -26,10 +26,11 @@ from dataclasses import dataclass, field
 
 import sympy as sp
 
-from .accurate import MAX_MPMATH_MODES, exact_values, numeric_modes, spring_factor_modes, value
+from .accurate import MAX_MPMATH_MODES, Float64Limit, exact_values, numeric_modes, spring_factor_modes, value
+from .errors import SceneError
 from .model import Model
 from .pieces import pieces
-from .work import MAX_DET_TERMS, WorkCapExceeded, check, det_terms_bound
+from .work import MAX_DET_TERMS, SymbolicNumbersFailed, WorkCapExceeded, check, det_terms_bound, sympy_numbers
 
 #: Largest block (after rigid modes and mirror symmetry) whose determinant is expanded symbolically.
 MAX_SYMBOLIC_BLOCK = 6
@@ -248,7 +249,19 @@ def closed_form_modes(model: Model, max_radical_degree: int = 3) -> ModeSet:
     -------
     ModeSet
         Sorted by the numeric value of ω² at the scene's parameters.
+
+    Raises
+    ------
+    SceneError
+        If an ω² lies outside float64's normal range (it could not be printed with its relative accuracy).
     """
+    try:
+        return _closed_form_modes(model, max_radical_degree)
+    except Float64Limit as exc:
+        raise _outside_float64(model, exc) from None
+
+
+def _closed_form_modes(model: Model, max_radical_degree: int) -> ModeSet:
     lam = sp.Symbol("lambda")
     rigid = _rigid_shapes(model)
     modes: list[Mode] = []
@@ -262,16 +275,20 @@ def closed_form_modes(model: Model, max_radical_degree: int = 3) -> ModeSet:
     try:
         if hopeless or numeric_k:
             raise BudgetExceeded
-        for B in _blocks(model):
-            # rigid translations lie in the symmetric block (uniform vectors are mirror-symmetric)
-            # the rigid space is mirror-invariant: its share of this block has dimension rank(Bᵀ R)
-            n_rigid = (B.T * sp.Matrix.hstack(*[sp.Matrix(s) for s in rigid])).rank() if rigid else 0
-            modes.extend(_solve_block(model, B, lam, n_rigid, max_radical_degree))
+        with sympy_numbers():
+            for B in _blocks(model):
+                # rigid translations lie in the symmetric block (uniform vectors are mirror-symmetric)
+                # the rigid space is mirror-invariant: its share of this block has dimension rank(Bᵀ R)
+                n_rigid = (B.T * sp.Matrix.hstack(*[sp.Matrix(s) for s in rigid])).rank() if rigid else 0
+                modes.extend(_solve_block(model, B, lam, n_rigid, max_radical_degree))
+            subs = exact_values(model.params, model.scene.parameters)
+            modes = _merge_equal(modes, subs)
         closed = True
-    except BudgetExceeded:
+    except BudgetExceeded as exc:
         why = ("K is the Hessian at a numerically found equilibrium" if numeric_k else
                f"{model.scene.n} masses: symmetry blocks larger than {MAX_SYMBOLIC_BLOCK}" if hopeless else
-               f"a factor of degree > 3, an unreadably long root, or a characteristic polynomial of more "
+               "SymPy's arithmetic failed on the scene's exact numbers" if isinstance(exc, SymbolicNumbersFailed)
+               else f"a factor of degree > 3, an unreadably long root, or a characteristic polynomial of more "
                f"than {MAX_DET_TERMS} terms")
         how = ("mpmath eigensolver at increasing precision, correct to float64" if model.scene.n <= MAX_MPMATH_MODES
                else "spring-factor SVD, as the generated module's omega2(), relatively accurate to a few float64 ulps")
@@ -279,11 +296,32 @@ def closed_form_modes(model: Model, max_radical_degree: int = 3) -> ModeSet:
         modes = [m for m in modes if m.rigid] + _numeric_modes(model, lam, len(rigid))
         closed = False
     subs = exact_values(model.params, model.scene.parameters)
-    modes = _merge_equal(modes, subs)
+    if not closed:
+        modes = _merge_equal(modes, subs)
     # rigid modes first (exact zeros by structure), then by the correctly rounded value
-    modes.sort(key=lambda m: (not m.rigid, value(m.omega2, subs) if m.exact else float(m.omega2),
-                              str(m.omega2)))
+    modes.sort(key=lambda m: (not m.rigid, omega2_value(m, subs), str(m.omega2)))
     return ModeSet(tuple(modes), closed, tuple(notes))
+
+
+def _outside_float64(model: Model, exc: Float64Limit) -> SceneError:
+    """The one-line refusal of a scene whose ω² float64 cannot print with its relative accuracy."""
+    return SceneError(model.scene.file, "masses", f"an ω² of this scene is {exc}; accepted: masses and "
+                      "stiffnesses whose squared frequencies lie in float64's normal range")
+
+
+def omega2_value(mode: Mode, subs: dict) -> float:
+    """ω² of ``mode`` at the exact parameter values ``subs``, correctly rounded to float64.
+
+    0 for a rigid-body mode (by structure); a numeric fallback's own value; a closed form evaluated
+    with :func:`accurate.value` as a quantity known to be nonzero (every elastic ω² is > 0), so that
+    an ω² of 1e-90 next to terms of size 1 is settled to its own relative accuracy, never taken for a
+    zero lost in rounding noise.
+    """
+    if mode.rigid:
+        return 0.0
+    if not mode.exact:
+        return float(mode.omega2)
+    return value(mode.omega2, subs, nonzero=True)
 
 
 def _merge_equal(modes: list[Mode], subs: dict) -> list[Mode]:
@@ -294,7 +332,7 @@ def _merge_equal(modes: list[Mode], subs: dict) -> list[Mode]:
     out: list[Mode] = []
     values: list[float] = []
     for mode in modes:
-        v = value(mode.omega2, subs) if mode.exact else float(mode.omega2)
+        v = omega2_value(mode, subs)
         for j, other in enumerate(out):
             ov = values[j]
             if (mode.exact and other.exact and mode.rigid == other.rigid

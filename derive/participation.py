@@ -29,10 +29,10 @@ import sympy as sp
 
 from .printing import latex
 
-from .accurate import MAX_MPMATH_MODES, NotAccurate, _eig_dynamical, exact_values, value
+from .accurate import MAX_DPS, MAX_MPMATH_MODES, NotAccurate, _eig_dynamical, exact_values, value
 from .model import Model
 from .model_cache import cached_on
-from .modes import ModeSet
+from .modes import ModeSet, omega2_value
 from .work import ops
 from .scene import WALL
 
@@ -195,18 +195,21 @@ def _accurate_values(model: Model):
         return _spring_factor_values(model) + ("spring-factor SVD (float64, compensated sums)",)
     prev = None
     dps = 40
-    while dps <= 640:
+    while dps <= MAX_DPS:
         w2, gamma, phis, m = _values_mp(model, dps, n_rigid)
         with mpmath.workdps(dps):
             total = mpmath.fsum(m)
             cur = ([float(x) for x in w2], [float(g) for g in gamma], [[float(c) for c in p] for p in phis],
                    float(total))
+            # Γ settled relative to √(total mass); every elastic ω² settled relative to itself (an ω² of
+            # 1e-90 next to ω² = 1 is lost in the absolute rounding of eigsy below ~100 digits)
             if prev is not None and all(abs(a - b) <= _SETTLED * math.sqrt(cur[3]) + 1e-300
-                                        for a, b in zip(prev[1], cur[1])):
+                                        for a, b in zip(prev[1], cur[1])) \
+                    and all(abs(a - b) <= _SETTLED * abs(b) for a, b in zip(prev[0][n_rigid:], cur[0][n_rigid:])):
                 return cur + (f"mpmath eigsy at {dps} digits (settled to float64)",)
         prev = cur
         dps *= 2
-    raise NotAccurate("participation factors did not settle to float64 accuracy within 640 digits")
+    raise NotAccurate(f"participation factors did not settle to float64 accuracy within {MAX_DPS} digits")
 
 
 def _spring_factor_values(model: Model):
@@ -272,7 +275,7 @@ def _participation(model: Model, modes: ModeSet | None) -> Participation:
     records = []
     if modes is not None:
         records = [(mode, shape) for mode in modes.modes for shape in mode.shapes]
-        records.sort(key=lambda r: max(value(r[0].omega2, subs), 0.0) if r[0].exact else float(r[0].omega2))
+        records.sort(key=lambda r: omega2_value(r[0], subs))
     # the sign of each mass-normalised shape follows the printed shape (modes of multiplicity one)
     if len(records) == n:
         for j, (mode, shape) in enumerate(records):

@@ -172,8 +172,10 @@ def closed_form(model, mode_set, zeta_targets, modes) -> tuple[sp.Expr, sp.Expr]
     """α, β in the scene's parameters from the closed-form ω (None without closed forms)."""
     if mode_set is None or not mode_set.closed_form:
         return None
+    from .modes import omega2_value
+
     subs = exact_values(model.params, model.scene.parameters)
-    elastic = sorted((m for m in mode_set.modes if not m.rigid for _ in m.shapes), key=lambda m: value(m.omega2, subs))
+    elastic = sorted((m for m in mode_set.modes if not m.rigid for _ in m.shapes), key=lambda m: omega2_value(m, subs))
     if len(elastic) < max(modes):
         return None
     wa, wb = (sp.sqrt(elastic[m - 1].omega2) for m in modes)

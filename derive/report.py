@@ -11,7 +11,7 @@ import sympy as sp
 
 from .accurate import exact_values, value
 from .model import Effect, Model
-from .modes import ModeSet
+from .modes import ModeSet, omega2_value
 from .printing import MATRIX_LATEX, MATRIX_TEXT, ScenePrinter, latex, sstr
 
 MAX_MATRIX = 8  # larger matrices are described, not printed
@@ -108,7 +108,7 @@ def mode_records(model: Model, modes: ModeSet) -> list[dict]:
         for shape in mode.shapes:
             out.append({
                 "omega2": sp.sstr(mode.omega2),
-                "omega2_value": max(_num(mode.omega2, model), 0.0) if mode.rigid else _num(mode.omega2, model),
+                "omega2_value": omega2_value(mode, _values(model)),
                 "multiplicity": mode.multiplicity,
                 "shape": [_text(c) for c in shape],
                 "shape_value": [_num(c, model) for c in shape],
@@ -240,7 +240,7 @@ def _load_notes(model: Model) -> list[str]:
 def mode_lines(model: Model, modes: ModeSet) -> list[str]:
     lines = []
     for mode in modes.modes:
-        value = _num(mode.omega2, model)
+        value = omega2_value(mode, _values(model))
         tag = "  rigid-body: uniform translation of a free piece" if mode.rigid else ""
         mult = f"  (multiplicity {mode.multiplicity})" if mode.multiplicity > 1 else ""
         lines.append(f"ω² = {sstr(mode.omega2)}   (= {value:.10g} at the scene's values){mult}{tag}")

@@ -407,7 +407,7 @@ def _parameters(ld: Loader) -> dict[str, float]:
                    else "a variable, function or constant of expressions")
             raise ld.bad(key, pname, f"reserved ({why})",
                          f"any other identifier (not {', '.join(sorted(RESERVED))}), e.g. {pname}0")
-        parameters[pname] = float(ld.number(key, params_raw[pname]))
+        parameters[pname] = ld.magnitude(key, float(ld.number(key, params_raw[pname])))
     return parameters
 
 
@@ -586,7 +586,7 @@ def potential_expression(ld: Loader, key: str, text, names: frozenset[str]) -> E
     if EXTENSION in names:
         raise ld.bad(f"parameters.{EXTENSION}", EXTENSION, "in a potential, d is the spring's extension",
                      "another parameter name (e.g. d0) in a scene with potentials")
-    expr = parse_expression(text, names | {EXTENSION}, file=ld.file, key=key)
+    expr = ld.literals(key, text, parse_expression(text, names | {EXTENSION}, file=ld.file, key=key))
     if EXTENSION not in expr.symbols():
         raise ld.bad(key, text, "does not depend on the extension d",
                      "the spring's energy as an expression of its extension d, e.g. "
