@@ -29,7 +29,8 @@ import sympy as sp
 
 from .printing import latex
 
-from .accurate import MAX_DPS, MAX_MPMATH_MODES, NotAccurate, _eig_dynamical, exact_values, value
+from .accurate import (MAX_DPS, MAX_MPMATH_MODES, NotAccurate, _eig_dynamical, certified, clusters, dynamical_bound,
+                       exact_values, value)
 from .model import Model
 from .model_cache import cached_on
 from .modes import ModeSet, omega2_value
@@ -138,20 +139,9 @@ def chain_section(model, p: Participation | None, records: list[dict]) -> tuple[
 
 
 # -- values -------------------------------------------------------------------------------------
-def _clusters(w2: list, tol) -> list[range]:
-    out, j, n = [], 0, len(w2)
-    scale = max([abs(w) for w in w2] + [1])
-    while j < n:
-        k = j + 1
-        while k < n and abs(w2[k] - w2[j]) <= tol * scale:
-            k += 1
-        out.append(range(j, k))
-        j = k
-    return out
-
-
-def _values_mp(model: Model, dps: int, n_rigid: int):
-    """(ω², Γ, shapes) at working precision ``dps`` (mpmath), repeated ω rotated (see module docstring)."""
+def _values_mp(model: Model, dps: int, n_rigid: int, bound):
+    """(ω², Γ, shapes) at working precision ``dps`` (mpmath), repeated ω rotated (see module docstring);
+    ``bound`` bounds ‖D‖ (:func:`accurate.dynamical_bound`), for telling a repeated ω from a close pair."""
     subs = exact_values(model.params, model.scene.parameters)
     n = model.scene.n
     masses = [m.subs(subs) for m in model.masses]
@@ -162,8 +152,7 @@ def _values_mp(model: Model, dps: int, n_rigid: int):
         m = [mpmath.mpf(x.p) / x.q if isinstance(x, sp.Rational) else mpmath.mpf(str(sp.N(x, dps + 10)))
              for x in masses]
         phis = [list(s) for s in shapes]
-        tiny = mpmath.mpf(10) ** (-(dps // 2))
-        for cl in _clusters(w2, tiny):
+        for cl in clusters(w2, n_rigid, bound, dps):
             if len(cl) < 2:
                 continue
             # rotate: first vector along the projection of r onto the eigenspace, the rest M-orthogonal to it
@@ -193,19 +182,21 @@ def _accurate_values(model: Model):
     n = model.scene.n
     if n > MAX_MPMATH_MODES:
         return _spring_factor_values(model) + ("spring-factor SVD (float64, compensated sums)",)
+    subs = exact_values(model.params, model.scene.parameters)
+    bound = dynamical_bound([x.subs(subs) for x in model.masses],
+                            [(a, b, k.subs(subs)) for a, b, k, _, _ in model.springs])
     prev = None
     dps = 40
     while dps <= MAX_DPS:
-        w2, gamma, phis, m = _values_mp(model, dps, n_rigid)
+        w2, gamma, phis, m = _values_mp(model, dps, n_rigid, bound)
         with mpmath.workdps(dps):
             total = mpmath.fsum(m)
             cur = ([float(x) for x in w2], [float(g) for g in gamma], [[float(c) for c in p] for p in phis],
                    float(total))
-            # Γ settled relative to √(total mass); every elastic ω² settled relative to itself (an ω² of
+            # Γ settled relative to √(total mass); every elastic ω² certified relative to itself (an ω² of
             # 1e-90 next to ω² = 1 is lost in the absolute rounding of eigsy below ~100 digits)
             if prev is not None and all(abs(a - b) <= _SETTLED * math.sqrt(cur[3]) + 1e-300
-                                        for a, b in zip(prev[1], cur[1])) \
-                    and all(abs(a - b) <= _SETTLED * abs(b) for a, b in zip(prev[0][n_rigid:], cur[0][n_rigid:])):
+                                        for a, b in zip(prev[1], cur[1])) and certified(w2, n_rigid, bound, dps):
                 return cur + (f"mpmath eigsy at {dps} digits (settled to float64)",)
         prev = cur
         dps *= 2
