@@ -30,7 +30,8 @@ from .accurate import MAX_MPMATH_MODES, Float64Limit, exact_values, numeric_mode
 from .errors import SceneError
 from .model import Model
 from .pieces import pieces
-from .work import MAX_DET_TERMS, SymbolicNumbersFailed, WorkCapExceeded, check, det_terms_bound, sympy_numbers
+from .work import (MAX_DET_TERMS, MAX_NUMBER_DIGITS, NumbersTooLong, SymbolicNumbersFailed, WorkCapExceeded, check,
+                   det_terms_bound, number_digits, sympy_numbers)
 
 #: Largest block (after rigid modes and mirror symmetry) whose determinant is expanded symbolically.
 MAX_SYMBOLIC_BLOCK = 6
@@ -177,6 +178,8 @@ def _solve_block(model: Model, B: sp.Matrix, lam: sp.Symbol, n_rigid_in_block: i
         raise BudgetExceeded  # characteristic polynomial of degree > 6: no closed form worth printing
     Kb = (B.T * model.K * B).applyfunc(sp.expand)
     Mb = (B.T * model.M * B).applyfunc(sp.expand)
+    if number_digits([*Kb, *Mb]) > MAX_NUMBER_DIGITS:  # a size, like every cap: no seconds of factoring
+        raise NumbersTooLong
     A = Kb - lam * Mb
     check(det_terms_bound(A), MAX_DET_TERMS)  # before expanding: the size of the work, not its time
     poly = sp.Poly(A.det(method="berkowitz"), lam)
@@ -287,7 +290,8 @@ def _closed_form_modes(model: Model, max_radical_degree: int) -> ModeSet:
     except BudgetExceeded as exc:
         why = ("K is the Hessian at a numerically found equilibrium" if numeric_k else
                f"{model.scene.n} masses: symmetry blocks larger than {MAX_SYMBOLIC_BLOCK}" if hopeless else
-               "SymPy's arithmetic failed on the scene's exact numbers" if isinstance(exc, SymbolicNumbersFailed)
+               "SymPy's arithmetic failed on the scene's exact numbers" if isinstance(exc, SymbolicNumbersFailed) else
+               f"exact numbers of more than {MAX_NUMBER_DIGITS} digits" if isinstance(exc, NumbersTooLong)
                else f"a factor of degree > 3, an unreadably long root, or a characteristic polynomial of more "
                f"than {MAX_DET_TERMS} terms")
         how = ("mpmath eigensolver at increasing precision, correct to float64" if model.scene.n <= MAX_MPMATH_MODES

@@ -68,6 +68,26 @@ def ops(expr) -> int:
     return int(sp.count_ops(expr))
 
 
+#: Most decimal digits (numerator and denominator) of an exact number in the matrices whose
+#: characteristic polynomial is factored: literals such as ``2e-70`` are exact rationals, and their
+#: products in a determinant run to hundreds of digits, where factoring takes seconds and the closed
+#: form is a wall of digits nobody reads (the numeric route is exact to float64 either way).
+MAX_NUMBER_DIGITS = 40
+
+
+class NumbersTooLong(WorkCapExceeded):
+    """An exact number of the symbolic problem is longer than :data:`MAX_NUMBER_DIGITS` digits."""
+
+
+def number_digits(exprs) -> int:
+    """The most decimal digits (numerator plus denominator) of a rational number in ``exprs``."""
+    out = 0
+    for e in exprs:
+        for r in sp.sympify(e).atoms(sp.Rational):
+            out = max(out, len(str(abs(r.p))) + len(str(r.q)))
+    return out
+
+
 class SymbolicNumbersFailed(WorkCapExceeded):
     """SymPy's own arithmetic on the scene's numbers failed (a fallback, like a work cap).
 
@@ -112,4 +132,4 @@ def check(size: int, cap: int) -> None:
         raise WorkCapExceeded(f"{size} > {cap}")
 
 
-__all__ = ["WorkCapExceeded", "SymbolicNumbersFailed", "sympy_numbers", "MAX_DET_TERMS", "det_terms_bound", "monomials", "ops", "check"]
+__all__ = ["WorkCapExceeded", "NumbersTooLong", "MAX_NUMBER_DIGITS", "number_digits", "SymbolicNumbersFailed", "sympy_numbers", "MAX_DET_TERMS", "det_terms_bound", "monomials", "ops", "check"]

@@ -44,7 +44,7 @@ RTOL = 1e-12
 #: The accepted value range (written here, not imported: the test states the domain it checks).
 LO, HI = -150.0, 150.0
 #: Examples per kind in the default run (bounded: about a minute on one core for both kinds).
-EXAMPLES = int(os.environ.get("SPRINGCHAIN_CONTRAST_EXAMPLES", "12"))
+EXAMPLES = int(os.environ.get("SPRINGCHAIN_CONTRAST_EXAMPLES", "20"))
 #: Worst errors seen in this process, per output (printed by ``-s`` runs; the report quotes them).
 WORST: dict[str, float] = {}
 
@@ -336,7 +336,7 @@ def check_mass_normalised(shapes, masses, w2, E, n_rigid: int, gamma, dps: int) 
         assert worst <= RTOL, f"effective masses off by {mpmath.nstr(worst, 3)} of the total mass"
 
 
-def check_modes(path, masses, springs, *, chain: bool) -> None:
+def check_modes(path, masses, springs, *, chain: bool, generated: bool = True) -> None:
     """The property (see the module docstring)."""
     import springchain
     from springchain.derive.errors import SceneError
@@ -371,6 +371,16 @@ def check_modes(path, masses, springs, *, chain: bool) -> None:
     assert worst <= RTOL, f"ω² relative error {worst:.3g}: got {got}, want {[mpmath.nstr(w, 17) for w in w2]}"
     assert float(max(errs_api, default=0)) <= RTOL
     assert all(v > 0 for v in got[n_rigid:]), "an elastic mode printed as 0"
+    if generated:  # the generated module's omega2() (stable closed forms, or its spring-factor / bisection route)
+        from springchain._modules import load_module
+
+        module, _ = load_module(result.scene)
+        gw2 = np.sort(np.asarray(module.omega2(**result.scene.parameters), dtype=float))
+        assert np.all(gw2[:n_rigid] == 0.0), gw2
+        with mpmath.workdps(dps):
+            gerr = max((abs(mpmath.mpf(float(g)) - w) / w for g, w in zip(gw2[n_rigid:], w2[n_rigid:])), default=0)
+        _note("generated omega2", float(gerr))
+        assert float(gerr) <= RTOL, f"generated omega2(): relative error {float(gerr):.3g}: {gw2}"
     shapes = [r.get("shape_value") for r in data["modes"]]
     if all(s is not None for s in shapes):
         check_shapes(shapes, masses, w2, E, n_rigid, "shapes (chain)" if chain else "shapes", dps)
