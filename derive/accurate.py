@@ -34,7 +34,7 @@ from fractions import Fraction
 import mpmath
 import sympy as sp
 
-from .mp_eval import mp_function
+from .mp_eval import mp_function, mp_function_bounded
 
 #: Relative agreement of two successive precisions accepted as converged.
 AGREE = 1e-18
@@ -96,31 +96,58 @@ def _known_zero(expr: sp.Expr, subs: tuple):
         return None
 
 
+@functools.lru_cache(maxsize=512)
+def _mp_bounded(expr: sp.Expr, symbols: tuple):
+    """``expr`` as ``f(*values) -> (value, error bound)`` (:func:`derive.mp_eval.mp_function_bounded`), or None."""
+    return mp_function_bounded(expr, symbols)
+
+
 @functools.lru_cache(maxsize=4096)
-def _value(expr: sp.Expr, subs: tuple, nonzero: bool = False) -> float:
+def _value(expr: sp.Expr, subs: tuple, nonzero: bool = False, floor: float | None = None) -> float:
     if not nonzero and _known_zero(expr, subs):
         return 0.0
     symbols = tuple(s for s, _ in subs if expr.has(s))
     values = [v for s, v in subs if expr.has(s)]
-    f = _mp_function(expr, symbols)
+    bounded = _mp_bounded(expr, symbols)
+    f = _mp_function(expr, symbols) if bounded is None else None
     prev = prev_mp = None
     prev_dps = None
     dps = 30
     while dps <= MAX_DPS:
         with mpmath.workdps(dps):
             try:
-                z = mpmath.re(f(*[_mp_exact(v) for v in values]))
+                if bounded is not None:
+                    z, err = bounded(*[_mp_exact(v) for v in values])
+                else:
+                    z, err = mpmath.re(f(*[_mp_exact(v) for v in values])), None
                 cur = float(z)
             except (ZeroDivisionError, ValueError, OverflowError):
-                z, cur = None, float("nan")
-        if prev is not None and cur == cur and prev == prev:
-            if z != 0 and prev_mp != 0 and abs(z - prev_mp) <= AGREE * max(abs(z), abs(prev_mp)):
+                z, err, cur = None, None, float("nan")
+        if err is not None and cur == cur:
+            # a first-order bound on the rounding of this evaluation: the value is settled when the
+            # bound is far below it (even a term lost at two precisions shows in it)
+            if z != 0 and err <= AGREE * abs(z):
                 _in_range(expr, z, nonzero)
                 return cur
+            if floor is not None and not nonzero and abs(z) + err <= floor:
+                return 0.0
+        if prev is not None and cur == cur and prev == prev:
+            if err is None and z != 0 and prev_mp != 0 and abs(z - prev_mp) <= AGREE * max(abs(z), abs(prev_mp)):
+                _in_range(expr, z, nonzero)
+                return cur
+            if floor is not None and not nonzero:
+                # without a bound: the value and the lower precision's noise both under the floor. Two
+                # exact zeros prove nothing (a term lost at both precisions) before 640 digits.
+                if err is None and abs(z) <= floor and abs(z - prev_mp) <= floor and (
+                        z != 0 or prev_mp != 0 or prev_dps >= 640):
+                    return 0.0
             # a quantity that is exactly zero but not recognised as such: its rounding noise shrinks
             # as fast as the precision grows (never taken for a quantity known to be nonzero, e.g.
-            # the ω² of an elastic mode, which may be 1e-300 of the terms it is computed from)
-            if not nonzero and prev_dps >= 60 and (
+            # the ω² of an elastic mode, which may be 1e-300 of the terms it is computed from). A
+            # heuristic: an O(1) value under noise of 1e209 shrinks the same way (a shape component
+            # of 0.618 from terms of 1e269 was taken for 0), so a caller that knows the scale gives
+            # ``floor`` instead.
+            elif not nonzero and prev_dps >= 60 and (
                     z == 0 == prev_mp or abs(z) <= abs(prev_mp) * mpmath.mpf(10) ** (-prev_dps // 2)):
                 return 0.0
         prev, prev_mp, prev_dps = cur, z, dps
@@ -136,7 +163,7 @@ def _in_range(expr: sp.Expr | None, z, nonzero: bool) -> None:
                            f"({FLOAT64_TINY:.3g} to {FLOAT64_HUGE:.3g} in size)")
 
 
-def value(expr, subs: dict, *, nonzero: bool = False) -> float:
+def value(expr, subs: dict, *, nonzero: bool = False, floor: float | None = None) -> float:
     """The real part of ``expr`` at ``subs`` (exact rationals), correctly rounded to float64.
 
     Parameters
@@ -148,6 +175,11 @@ def value(expr, subs: dict, *, nonzero: bool = False) -> float:
         The quantity is known not to be 0 (the ω² of an elastic mode): its relative accuracy is
         what counts, so the precision is raised until it settles however small it is next to the
         terms it is computed from, instead of being taken for an exact zero lost in rounding noise.
+    floor : float, optional
+        A size below which the value does not matter (e.g. 1e-20 of the shape it is a component
+        of): the value is 0.0 once it and the rounding noise are both below it. Without it, an
+        exact zero SymPy does not recognise is told by its noise shrinking with the precision, a
+        heuristic that a value far below the terms it comes from can fool.
 
     Returns
     -------
@@ -166,7 +198,7 @@ def value(expr, subs: dict, *, nonzero: bool = False) -> float:
         expr = sp.Integer(expr)
     if expr.is_Float and expr._prec >= 53:  # a float64 (or wider) number already: it is its own value
         return float(expr)
-    return _value(expr, tuple(sorted(subs.items(), key=lambda kv: str(kv[0]))), nonzero)
+    return _value(expr, tuple(sorted(subs.items(), key=lambda kv: str(kv[0]))), nonzero, floor)
 
 
 def _mp(e: sp.Expr, dps: int):

@@ -375,7 +375,7 @@ def _bidiagonal_omega2(c: _Context) -> list[str]:
                   "    # tolerance are tiny * max(1, max entry²) absolute, 2e-10 at entries of 1e149",
                   "    _sc = numpy.ldexp(1.0, -int(numpy.frexp(numpy.max(_t))[1]))",
                   "    _nz = _t[_t > 0]",
-                  "    if numpy.max(_nz) <= 1e140 * numpy.min(_nz):",
+                  "    if _nz.size < 2 or numpy.max(_nz) <= 1e140 * numpy.min(_nz):",
                   "        _sv = scipy.linalg.eigh_tridiagonal(numpy.zeros(2 * _s), _t * _sc, eigvals_only=True, select='i',",
                   "                                            select_range=(_s, 2 * _s - 1), lapack_driver='stebz',",
                   "                                            tol=numpy.finfo(numpy.float64).tiny)",

@@ -34,7 +34,7 @@ from .accurate import (MAX_DPS, MAX_MPMATH_MODES, NotAccurate, _eig_dynamical, c
 from .model import Model
 from .model_cache import cached_on
 from .modes import ModeSet, omega2_value
-from .work import ops
+from .work import MAX_NUMBER_DIGITS, WorkCapExceeded, number_digits, ops, sympy_numbers
 from .scene import WALL
 
 #: Two successive precisions agreeing to this relative difference (of the total mass) settle a value.
@@ -233,12 +233,18 @@ def _closed_forms(model: Model, modes: ModeSet, records: list) -> tuple[list, li
             continue
         a = sp.Add(*(mi * c for mi, c in zip(model.masses, shape)))
         b = sp.Add(*(mi * c**2 for mi, c in zip(model.masses, shape)))
-        if ops(a) + ops(b) > MAX_INPUT_OPS:  # past the work cap: values only for this mode
+        # past a work cap (operations, or exact numbers longer than MAX_NUMBER_DIGITS: cancelling them
+        # ran for minutes): values only for this mode
+        if ops(a) + ops(b) > MAX_INPUT_OPS or number_digits([a, b]) > MAX_NUMBER_DIGITS:
             continue
-        a, b = sp.radsimp(sp.cancel(sp.expand(a))), sp.radsimp(sp.cancel(sp.expand(b)))
-        root = sp.sqrt(b)
-        gamma = sp.factor(sp.cancel(a / root)) if not a.has(sp.cos, sp.sin) else a / root
-        meff = sp.factor(sp.cancel(a**2 / b)) if not a.has(sp.cos, sp.sin) else sp.cancel(a**2 / b)
+        try:
+            with sympy_numbers():  # SymPy's own failures on large exact numbers: values only
+                a, b = sp.radsimp(sp.cancel(sp.expand(a))), sp.radsimp(sp.cancel(sp.expand(b)))
+                root = sp.sqrt(b)
+                gamma = sp.factor(sp.cancel(a / root)) if not a.has(sp.cos, sp.sin) else a / root
+                meff = sp.factor(sp.cancel(a**2 / b)) if not a.has(sp.cos, sp.sin) else sp.cancel(a**2 / b)
+        except WorkCapExceeded:
+            continue
         if ops(gamma) <= MAX_OPS and ops(meff) <= MAX_OPS:
             g_out[j], m_out[j] = gamma, meff
             s_out[j] = tuple(c / root for c in shape)

@@ -30,7 +30,7 @@ import sympy as sp
 
 from .printing import latex
 
-from .accurate import MAX_MPMATH_MODES, _eig_dynamical, exact_values, value
+from .accurate import MAX_DPS, MAX_MPMATH_MODES, _eig_dynamical, certified, dynamical_bound, exact_values, value
 from .errors import SceneError
 from .model_cache import cached_on
 
@@ -89,12 +89,17 @@ def formula(wa, wb, za, zb, equal: bool, sqrt=None):
 
 
 def _elastic_mp(model, dps: int):
-    """Elastic ω² (ascending) at working precision ``dps``."""
+    """Elastic ω² (ascending) at working precision ``dps`` or more: raised until every value is certified
+    (:func:`accurate.certified`; two precisions can agree on the same deflated, wrong value)."""
     subs = exact_values(model.params, model.scene.parameters)
     masses = [m.subs(subs) for m in model.masses]
     springs = [(a, b, k.subs(subs)) for a, b, k, _, _ in model.springs]
-    w2, _ = _eig_dynamical(masses, springs, model.scene.n, dps)
-    return w2[len(model.free_components):]
+    rigid, bound = len(model.free_components), dynamical_bound(masses, springs)
+    while True:
+        w2, _ = _eig_dynamical(masses, springs, model.scene.n, dps)
+        if certified(w2, rigid, bound, dps) or dps >= MAX_DPS:
+            return w2[rigid:]
+        dps *= 2
 
 
 def _elastic_float(model):

@@ -101,6 +101,25 @@ def _energy_lines(model: Model) -> list[str]:
     return out
 
 
+def shape_values(model: Model, shape) -> list[float]:
+    """A shape's components at the scene's values (correctly rounded), zeros told by a floor.
+
+    A closed-form shape's first nonzero component is 1 (its scale); a component j counts as 0 once
+    it is certainly below 1e-20 of that in the mass-weighted sense (``1e-20·sqrt(m_pivot/m_j)``),
+    never by the noise heuristic alone (a component 0.618 computed from terms of 1e269 was printed
+    as 0). Numeric fallback shapes are floats already.
+    """
+    subs = _values(model)
+    pivot = next((i for i, c in enumerate(shape) if not isinstance(c, float) and sp.sympify(c).is_Number
+                  and c != 0), None)
+    if pivot is None:
+        return [_num(c, model) for c in shape]
+    masses = [value(m, subs) for m in model.masses]
+    scale = abs(float(shape[pivot])) * masses[pivot] ** 0.5
+    return [c if isinstance(c, float) else value(sp.sympify(c), subs, floor=1e-20 * scale / masses[j] ** 0.5)
+            for j, c in enumerate(shape)]
+
+
 def mode_records(model: Model, modes: ModeSet) -> list[dict]:
     """One record per independent mode (a repeated ω² once per shape), sorted by value."""
     out = []
@@ -111,7 +130,7 @@ def mode_records(model: Model, modes: ModeSet) -> list[dict]:
                 "omega2_value": omega2_value(mode, _values(model)),
                 "multiplicity": mode.multiplicity,
                 "shape": [_text(c) for c in shape],
-                "shape_value": [_num(c, model) for c in shape],
+                "shape_value": shape_values(model, shape),
             })
     out.sort(key=lambda r: r["omega2_value"])
     return out

@@ -407,7 +407,7 @@ def _parameters(ld: Loader) -> dict[str, float]:
                    else "a variable, function or constant of expressions")
             raise ld.bad(key, pname, f"reserved ({why})",
                          f"any other identifier (not {', '.join(sorted(RESERVED))}), e.g. {pname}0")
-        parameters[pname] = ld.magnitude(key, float(ld.number(key, params_raw[pname])))
+        parameters[pname] = float(ld.number(key, params_raw[pname]))
     return parameters
 
 

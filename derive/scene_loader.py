@@ -20,7 +20,8 @@ from .expr import Expr, Num, parse_expression
 MAX_NAME = 64
 #: Masses, stiffnesses, damping and |k3|, |g| must lie in this range (no
 #: subnormal numbers, no overflow when two of them multiply); so must every number written in an
-#: expression and every parameter value (or be 0).
+#: expression (or be 0), and a potential's stiffness at the equilibrium. (Parameter values are not
+#: held to it themselves: a phase of 1e-167 is harmless; what they make is checked.)
 MIN_MAGNITUDE, MAX_MAGNITUDE = 1e-150, 1e150
 #: What the range check says is accepted.
 IN_RANGE = f"0 or numbers of size {MIN_MAGNITUDE:g} to {MAX_MAGNITUDE:g}"
@@ -153,13 +154,6 @@ class Loader:
             raise self.bad(key, value, "not > 0", accepted)
         if maximum is not None and value > maximum:
             raise self.bad(key, value, f"more than {maximum:g}", accepted)
-        return value
-
-    def magnitude(self, key: str, value: float) -> float:
-        """A parameter value: 0 or of size ``MIN_MAGNITUDE`` … ``MAX_MAGNITUDE`` (the range every value
-        the scene language accepts lies in, so that no product of two of them overflows or underflows)."""
-        if value != 0 and not MIN_MAGNITUDE <= abs(value) <= MAX_MAGNITUDE:
-            raise self.bad(key, value, "outside the accepted range", IN_RANGE)
         return value
 
     def literals(self, key: str, text, expr: Expr) -> Expr:

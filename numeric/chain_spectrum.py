@@ -151,7 +151,7 @@ def singular_values(f: Bidiagonal, lowest: int | None = None, highest: int = 0) 
     # to a largest entry in [1/2, 1), the floor is tiny itself: relative accuracy down to ω ~ 1e-300.
     scale = np.ldexp(1.0, -int(np.frexp(np.max(t))[1])) if t.size and np.max(t) > 0 else 1.0
     nonzero = t[t > 0]
-    if nonzero.size and np.max(nonzero) > STEBZ_RANGE * np.min(nonzero):
+    if nonzero.size > 1 and np.max(nonzero) > STEBZ_RANGE * np.min(nonzero):
         # stebz squares the entries: past STEBZ_RANGE the small ones underflow (every ω² of a 14-mass
         # chain of 1/3e149 kg and 1e80/1e-80 N/m came out as 3.2e-230, true 6.3e-231 ... 1.2e-229)
         if s > QR_MAX:
