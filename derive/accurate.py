@@ -201,6 +201,23 @@ def value(expr, subs: dict, *, nonzero: bool = False, floor: float | None = None
     return _value(expr, tuple(sorted(subs.items(), key=lambda kv: str(kv[0]))), nonzero, floor)
 
 
+def omega2_value(mode, subs: dict) -> float:
+    """ω² of ``mode`` (a :class:`derive.modes.Mode`) at the exact parameter values ``subs``, correctly
+    rounded to float64.
+
+    0 for a rigid-body mode (by structure); a numeric fallback's own value; a closed form evaluated
+    with :func:`accurate.value` as a quantity known to be nonzero (every elastic ω² is > 0), so that
+    an ω² of 1e-90 next to terms of size 1 is settled to its own relative accuracy, never taken for a
+    zero lost in rounding noise.
+    """
+    if mode.rigid:
+        return 0.0
+    if not mode.exact:
+        return float(mode.omega2)
+    return value(mode.omega2, subs, nonzero=True)
+
+
+
 def _mp(e: sp.Expr, dps: int):
     """An exact SymPy number as an mpmath value at the current working precision."""
     if isinstance(e, sp.Rational):

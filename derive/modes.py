@@ -26,7 +26,8 @@ from dataclasses import dataclass, field
 
 import sympy as sp
 
-from .accurate import MAX_MPMATH_MODES, Float64Limit, exact_values, numeric_modes, spring_factor_modes, value
+from .accurate import (MAX_MPMATH_MODES, Float64Limit, exact_values, numeric_modes, omega2_value,
+                       spring_factor_modes, value)
 from .errors import SceneError
 from .model import Model
 from .pieces import pieces
@@ -311,21 +312,6 @@ def _outside_float64(model: Model, exc: Float64Limit) -> SceneError:
     """The one-line refusal of a scene whose ω² float64 cannot print with its relative accuracy."""
     return SceneError(model.scene.file, "masses", f"an ω² of this scene is {exc}; accepted: masses and "
                       "stiffnesses whose squared frequencies lie in float64's normal range")
-
-
-def omega2_value(mode: Mode, subs: dict) -> float:
-    """ω² of ``mode`` at the exact parameter values ``subs``, correctly rounded to float64.
-
-    0 for a rigid-body mode (by structure); a numeric fallback's own value; a closed form evaluated
-    with :func:`accurate.value` as a quantity known to be nonzero (every elastic ω² is > 0), so that
-    an ω² of 1e-90 next to terms of size 1 is settled to its own relative accuracy, never taken for a
-    zero lost in rounding noise.
-    """
-    if mode.rigid:
-        return 0.0
-    if not mode.exact:
-        return float(mode.omega2)
-    return value(mode.omega2, subs, nonzero=True)
 
 
 def _merge_equal(modes: list[Mode], subs: dict) -> list[Mode]:

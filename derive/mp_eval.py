@@ -149,69 +149,80 @@ def _bnode(e: sp.Basic, index: dict):
         return rational
     if e is sp.pi:
         return lambda v: (+mpmath.pi, mpmath.pi * mpmath.eps)
-    if e.is_Add or e.is_Mul:
-        parts = [_bnode(a, index) for a in e.args]
-        if e.is_Add:
-            def add(v):
-                acc, err, size = mpmath.mpf(0), mpmath.mpf(0), mpmath.mpf(0)
-                for f in parts:
-                    x, ex = f(v)
-                    acc, err, size = acc + x, err + ex, size + abs(x)
-                return acc, err + size * mpmath.eps  # each partial sum rounds by at most u times the sizes
-            return add
-
-        def mul(v):
-            acc, rel = mpmath.mpf(1), mpmath.mpf(0)
-            vals = [f(v) for f in parts]
-            for x, ex in vals:
-                acc = acc * x
-            if acc == 0:  # a zero factor: the bound is the product of the others' sizes times its error
-                err = mpmath.mpf(0)
-                for j, (x, ex) in enumerate(vals):
-                    other = mpmath.mpf(1)
-                    for k, (y, ey) in enumerate(vals):
-                        if k != j:
-                            other *= abs(y) + ey
-                    err += ex * other
-                return acc, err
-            for x, ex in vals:
-                rel += ex / abs(x)
-            return acc, abs(acc) * (rel + len(vals) * mpmath.eps)
-        return mul
+    if e.is_Add:
+        return _badd([_bnode(a, index) for a in e.args])
+    if e.is_Mul:
+        return _bmul([_bnode(a, index) for a in e.args])
     if e.is_Pow:
-        base, ex = e.args
-        b = _bnode(base, index)
-        if not ex.is_Rational:
-            raise _Unbounded(e)
-        pw = mpmath.mpf(int(ex.p)) / int(ex.q)
-        half = ex == sp.S.Half
-
-        def power(v):
-            x, err = b(v)
-            if x == 0 or err >= abs(x) / 2:  # no relative rule: Hölder (sqrt) or nothing
-                if ex > 0 and ex <= 1:
-                    val = mpmath.sqrt(x) if half else (mpmath.mpf(0) if x == 0 else _mp(x) ** pw)
-                    return val, (abs(x) + err) ** pw + abs(val) * mpmath.eps
-                return (_mp(x) ** pw if x != 0 else mpmath.inf), mpmath.inf
-            val = mpmath.sqrt(x) if half else _mp(x) ** pw
-            return val, abs(val) * (abs(pw) * err / abs(x) + 2 * mpmath.eps)
-        return power
+        return _bpow(e, index)
     if isinstance(e, (sp.cos, sp.sin)):
         a = _bnode(e.args[0], index)
         fn = mpmath.cos if isinstance(e, sp.cos) else mpmath.sin
         return lambda v: (lambda x, err: (fn(x), err + 2 * mpmath.eps))(*a(v))
     if isinstance(e, sp.acos):
-        a = _bnode(e.args[0], index)
-
-        def acos(v):
-            x, err = a(v)
-            val = mpmath.acos(x)
-            gap = 1 - abs(x)
-            if gap > 2 * err:  # |d acos/dx| = 1/sqrt(1 - x²) <= 1/sqrt(gap) on the interval
-                return val, err / mpmath.sqrt(gap - err) + 2 * mpmath.eps
-            return val, 2 * mpmath.sqrt(2 * (err + max(gap, 0))) + 2 * mpmath.eps  # Hölder at ±1
-        return acos
+        return _bacos(_bnode(e.args[0], index))
     raise _Unbounded(type(e).__name__)
+
+
+def _badd(parts: list):
+    def add(v):
+        acc, err, size = mpmath.mpf(0), mpmath.mpf(0), mpmath.mpf(0)
+        for f in parts:
+            x, ex = f(v)
+            acc, err, size = acc + x, err + ex, size + abs(x)
+        return acc, err + size * mpmath.eps  # each partial sum rounds by at most u times the sizes
+    return add
+
+
+def _bmul(parts: list):
+    def mul(v):
+        vals = [f(v) for f in parts]
+        acc = mpmath.mpf(1)
+        for x, _ in vals:
+            acc = acc * x
+        if acc == 0:  # a zero factor: its error times the sizes of the others
+            err = mpmath.mpf(0)
+            for j, (_, ex) in enumerate(vals):
+                other = mpmath.mpf(1)
+                for k, (y, ey) in enumerate(vals):
+                    if k != j:
+                        other *= abs(y) + ey
+                err += ex * other
+            return acc, err
+        rel = mpmath.fsum(ex / abs(x) for x, ex in vals)
+        return acc, abs(acc) * (rel + len(vals) * mpmath.eps)
+    return mul
+
+
+def _bpow(e: sp.Basic, index: dict):
+    base, ex = e.args
+    b = _bnode(base, index)
+    if not ex.is_Rational:
+        raise _Unbounded(e)
+    pw = mpmath.mpf(int(ex.p)) / int(ex.q)
+    half = ex == sp.S.Half
+
+    def power(v):
+        x, err = b(v)
+        if x == 0 or err >= abs(x) / 2:  # no relative rule: Hölder for 0 < p <= 1, else unbounded
+            if 0 < ex <= 1:
+                val = mpmath.sqrt(x) if half else (mpmath.mpf(0) if x == 0 else _mp(x) ** pw)
+                return val, (abs(x) + err) ** pw + abs(val) * mpmath.eps
+            return (_mp(x) ** pw if x != 0 else mpmath.inf), mpmath.inf
+        val = mpmath.sqrt(x) if half else _mp(x) ** pw
+        return val, abs(val) * (abs(pw) * err / abs(x) + 2 * mpmath.eps)
+    return power
+
+
+def _bacos(a):
+    def acos(v):
+        x, err = a(v)
+        val = mpmath.acos(x)
+        gap = 1 - abs(x)
+        if gap > 2 * err:  # |d acos/dx| = 1/sqrt(1 - x²) <= 1/sqrt(gap) on the interval
+            return val, err / mpmath.sqrt(gap - err) + 2 * mpmath.eps
+        return val, 2 * mpmath.sqrt(2 * (err + max(gap, 0))) + 2 * mpmath.eps  # Hölder at ±1
+    return acos
 
 
 def mp_function_bounded(expr: sp.Expr, symbols: tuple) -> Callable | None:

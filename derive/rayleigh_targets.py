@@ -30,7 +30,8 @@ import sympy as sp
 
 from .printing import latex
 
-from .accurate import MAX_DPS, MAX_MPMATH_MODES, _eig_dynamical, certified, dynamical_bound, exact_values, value
+from .accurate import (MAX_DPS, MAX_MPMATH_MODES, _eig_dynamical, certified, dynamical_bound, exact_values,
+                       omega2_value, value)
 from .errors import SceneError
 from .model_cache import cached_on
 
@@ -177,8 +178,6 @@ def closed_form(model, mode_set, zeta_targets, modes) -> tuple[sp.Expr, sp.Expr]
     """α, β in the scene's parameters from the closed-form ω (None without closed forms)."""
     if mode_set is None or not mode_set.closed_form:
         return None
-    from .modes import omega2_value
-
     subs = exact_values(model.params, model.scene.parameters)
     elastic = sorted((m for m in mode_set.modes if not m.rigid for _ in m.shapes), key=lambda m: omega2_value(m, subs))
     if len(elastic) < max(modes):

@@ -45,8 +45,9 @@ RTOL = 1e-12
 LO, HI = -150.0, 150.0
 #: Examples per kind in the default run (bounded: about a minute on one core for both kinds).
 EXAMPLES = int(os.environ.get("SPRINGCHAIN_CONTRAST_EXAMPLES", "20"))
-#: Worst errors seen in this process, per output (printed by ``-s`` runs; the report quotes them).
+#: Worst errors seen in this process, per output, and counts of scenes (printed by ``-s`` runs).
 WORST: dict[str, float] = {}
+COUNTS: dict[str, int] = {"scenes": 0, "refusals": 0, "float64 notes": 0}
 
 
 # -- drawing -----------------------------------------------------------------------------------------------
@@ -381,6 +382,7 @@ def check_modes(path, masses, springs, *, chain: bool, generated: bool = True) -
     n = len(masses)
     n_rigid = free_pieces(n, springs)
     w2, E, dps = reference(masses, springs, n_rigid)
+    COUNTS["scenes"] += 1
     try:
         result = springchain.modes(path)
         data = result.to_json()
@@ -388,12 +390,12 @@ def check_modes(path, masses, springs, *, chain: bool, generated: bool = True) -
     except SceneError as exc:  # a refusal must be one line naming float64's limit
         msg = str(exc)
         assert "\n" not in msg and _float64_limit(msg), msg
-        _note("refusals", WORST.get("refusals", 0) + 1)
+        COUNTS["refusals"] += 1
         return
     if any(_float64_limit(note) for note in data.get("notes", [])):
         # said: nothing below may be held to float64's relative accuracy; the numbers must still be finite
         assert all(math.isfinite(r["omega2_value"]) for r in data["modes"])
-        _note("float64 notes", WORST.get("float64 notes", 0) + 1)
+        COUNTS["float64 notes"] += 1
         return
     got = [r["omega2_value"] for r in data["modes"]]
     assert len(got) == n, f"{len(got)} modes listed for {n} masses"
@@ -517,6 +519,10 @@ def test_chain_scenes_over_the_accepted_range_exhaustive(case, tmp_path):
     run_chain(tmp_path, case)
 
 
-def test_worst_errors_are_recorded():
-    """Keeps WORST importable for ``-s`` runs (printed at the end of a session by the caller)."""
-    assert isinstance(WORST, dict)
+@pytest.fixture(scope="module", autouse=True)
+def _print_worst():
+    """The worst error per output over this module's scenes, printed at its end (seen with ``-s``)."""
+    yield
+    if WORST:
+        print(f"\ncontrast domain: {COUNTS}; worst per output: "
+              + ", ".join(f"{k} = {v:.3g}" for k, v in sorted(WORST.items())))

@@ -371,3 +371,51 @@ def test_geometric_chain_simulates_against_its_modes(tmp_path):
             q = mpmath.matrix([q0[j] * mpmath.cos(mpmath.sqrt(w[j]) * mpmath.mpf(float(t))) for j in range(n)])
             x = r * (E * q)
             assert np.allclose(sim.x["modal"][row], [float(c) for c in x], rtol=0, atol=1e-14)
+
+
+# -- float64's own range, at the edges of the accepted domain -------------------------------------------------
+def test_long_chain_below_float64_normal_range_says_so(tmp_path, capsys):
+    """Masses 1e150, springs 1e-150, 1e5 masses: the lowest ω² ~ 2.5e-310 is subnormal in float64. The
+    listed values are the closed form's, and a note names the limit instead of passing them off as accurate."""
+    n = 100_000
+    text = (f'name = "sub"\n[parameters]\nm = 1e150\nk = 1e-150\n[chain]\nn = {n}\nmass = "m"\nk = "k"\n'
+            'left = "wall"\nright = "free"\n')
+    path = _write(tmp_path, "sub", text)
+    assert cli_main(["modes", str(path), "--json"]) == 0
+    data = json.loads(capsys.readouterr().out)
+    notes = " ".join(data["notes"])
+    assert "float64 limit" in notes and "2.23e-308" in notes, notes
+    with mpmath.workdps(60):  # ω_j² = (4k/m) sin²((2j-1)π/(2(2n+1))), the normal ones to full accuracy
+        for rec in data["modes"]:
+            want = 4 * mpmath.mpf(Fraction(1e-150).numerator) / Fraction(1e-150).denominator \
+                / (mpmath.mpf(Fraction(1e150).numerator) / Fraction(1e150).denominator) \
+                * mpmath.sin((2 * rec["j"] - 1) * mpmath.pi / (2 * (2 * n + 1))) ** 2
+            if want > 2.3e-308:
+                assert _rel(rec["omega2_value"], want) <= 1e-14
+
+
+def test_long_chain_beyond_the_bisection_range_is_refused(tmp_path, capsys):
+    """sqrt(k/m) spanning more than 1e140 in a chain past 4000 masses: no float64 route here keeps relative
+    accuracy in O(n) per value, so one line names the limit instead of 20 wrong numbers."""
+    text = ('name = "far"\n[parameters]\nma = 1.0\nmb = 3e149\nka = 1e80\nkb = 1e-80\n[chain]\nn = 5000\n'
+            'mass = "ma*(1 - i % 2) + mb*(i % 2)"\nk = "ka*(1 - i % 2) + kb*(i % 2)"\nleft = "wall"\nright = "free"\n')
+    path = _write(tmp_path, "far", text)
+    assert cli_main(["modes", str(path)]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "1e+140" in err and "4000" in err and "Traceback" not in err, err
+
+
+def test_extreme_chain_within_the_dense_route_is_accurate(tmp_path):
+    """The same contrast on 60 masses (listed 10 + 10, by dbdsqr's QR) against mpmath."""
+    n = 60
+    text = ('name = "far60"\n[parameters]\nma = 1.0\nmb = 3e149\nka = 1e80\nkb = 1e-80\n[chain]\n'
+            f'n = {n}\nmass = "ma*(1 - i % 2) + mb*(i % 2)"\nk = "ka*(1 - i % 2) + kb*(i % 2)"\n'
+            'left = "wall"\nright = "free"\n')
+    path = _write(tmp_path, "far60", text)
+    mass = lambda i: Fraction(3e149) if i % 2 else Fraction(1.0)  # noqa: E731
+    k = lambda i: Fraction(1e-80) if i % 2 else Fraction(1e80)  # noqa: E731  (i = -1: the wall, odd)
+    want = _chain_reference(n, mass, k, "wall", "free", digits=400)
+    got = springchain.modes(path).omega2_values
+    listed = list(range(10)) + list(range(n - 10, n))
+    errs = [_rel(g, want[p]) for g, p in zip(got, listed)]
+    assert len(got) == 20 and max(errs) <= 1e-13, errs
