@@ -170,7 +170,7 @@ def _badd(parts: list):
         for f in parts:
             x, ex = f(v)
             acc, err, size = acc + x, err + ex, size + abs(x)
-        return acc, err + size * mpmath.eps  # each partial sum rounds by at most u times the sizes
+        return acc, err + len(parts) * size * mpmath.eps  # each partial sum rounds by at most u times the sizes
     return add
 
 

@@ -195,7 +195,8 @@ def _accurate_values(model: Model):
                    float(total))
             # Γ settled relative to √(total mass); every elastic ω² certified relative to itself (an ω² of
             # 1e-90 next to ω² = 1 is lost in the absolute rounding of eigsy below ~100 digits)
-            if prev is not None and all(abs(a - b) <= _SETTLED * math.sqrt(cur[3]) + 1e-300
+            # (|Γ|: eigsy's sign of a vector may flip between precisions; the sign is fixed afterwards)
+            if prev is not None and all(abs(abs(a) - abs(b)) <= _SETTLED * math.sqrt(cur[3]) + 1e-300
                                         for a, b in zip(prev[1], cur[1])) and certified(w2, n_rigid, bound, dps):
                 return cur + (f"mpmath eigsy at {dps} digits (settled to float64)",)
         prev = cur
