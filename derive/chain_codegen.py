@@ -373,7 +373,7 @@ def _bidiagonal_omega2(c: _Context) -> list[str]:
                   "    _t[0::2], _t[1::2] = _a, _b",
                   "    # scaled by a power of 2 to a largest entry in [1/2, 1): stebz's pivot floor and stopping",
                   "    # tolerance are tiny * max(1, max entry²) absolute, 2e-10 at entries of 1e149",
-                  "    _sc = numpy.ldexp(1.0, -int(numpy.frexp(numpy.max(_t))[1]))",
+                  "    _sc = numpy.ldexp(1.0, -numpy.frexp(numpy.max(_t))[1])",
                   "    _nz = _t[_t > 0]",
                   "    if _nz.size < 2 or numpy.max(_nz) <= 1e140 * numpy.min(_nz):",
                   "        _sv = scipy.linalg.eigh_tridiagonal(numpy.zeros(2 * _s), _t * _sc, eigvals_only=True, select='i',",

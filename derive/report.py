@@ -146,7 +146,7 @@ def equilibrium_json(model: Model) -> dict | None:
     for (a, b, *_), law, d, k in zip(model.springs, model.laws, eq.extensions, eq.stiffness):
         springs.append({"key": law.key, "potential": sstr(law.energy) if law.given else None,
                         "extension": sstr(d), "extension_value": _num(d, model),
-                        "stiffness": sstr(k), "stiffness_value": _num(k, model)})
+                        "stiffness": sstr(k), "stiffness_value": value(k, _values(model), nonzero=True)})
     return {"x": [sstr(v) for v in eq.x], "x_value": [_num(v, model) for v in eq.x],
             "closed_form": eq.closed_form, "how": eq.how, "springs": springs}
 
@@ -161,7 +161,7 @@ def equilibrium_lines(model: Model) -> list[str]:
            f"    found by: {eq.how}"]
     for law, d, k in zip(model.laws, eq.extensions, eq.stiffness):
         out.append(f"    {law.key}: extension d = {sstr(d)}, stiffness V''(d) = {sstr(k)}"
-                   + (f"  (= {_num(k, model):.10g})" if not k.is_Number else ""))
+                   + (f"  (= {value(k, _values(model), nonzero=True):.10g})" if not k.is_Number else ""))
     return out
 
 
