@@ -69,10 +69,10 @@ def _value(e: float) -> float:
 
 
 @st.composite
-def masses_scenes(draw, max_n: int = 6) -> dict:
+def masses_scenes(draw, max_n: int = 6, min_n: int = 2) -> dict:
     """A ``[masses]`` scene as data: ``params`` (name -> float), ``masses`` and ``springs`` as
     (expression text, exact value) with the springs' ends (-1 = wall)."""
-    n = draw(st.integers(2, max_n))
+    n = draw(st.integers(min_n, max_n))
     pairs = [(i, j) for i in range(n) for j in range(i + 1, n)]
     kind = draw(st.sampled_from(["line", "ring", "graph", "pieces"]))
     if kind == "line":
@@ -515,6 +515,14 @@ def test_chain_scenes_over_the_accepted_range(case, tmp_path):
 @settings(max_examples=int(160 * SLOW_BUDGET), **_SETTINGS)
 @given(case=masses_scenes())
 def test_masses_scenes_over_the_accepted_range_exhaustive(case, tmp_path):
+    run_masses(tmp_path, case)
+
+
+@pytest.mark.slow
+@settings(max_examples=int(16 * SLOW_BUDGET), **_SETTINGS)
+@given(case=masses_scenes(max_n=20, min_n=17))
+def test_masses_scenes_past_the_mpmath_route_exhaustive(case, tmp_path):
+    """17-20 masses: the spring-factor SVD (float64) answers ω², shapes and participation."""
     run_masses(tmp_path, case)
 
 
