@@ -27,10 +27,10 @@ import sympy as sp
 
 from .printing import latex, sstr
 from .accurate import (MAX_DPS, MAX_MPMATH_MODES, NotAccurate, _eig_dynamical, _mp, certified, dynamical_bound,
-                       exact_values, value)
+                       exact_values, omega2_value, value)
 from .model import Model
 from .model_cache import cached_on
-from .modes import ModeSet, omega2_value
+from .modes import ModeSet
 from .pieces import pieces
 from .work import MAX_NUMBER_DIGITS, WorkCapExceeded, check, number_digits, ops, sympy_numbers
 

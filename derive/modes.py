@@ -26,8 +26,7 @@ from dataclasses import dataclass, field
 
 import sympy as sp
 
-from .accurate import (MAX_MPMATH_MODES, Float64Limit, exact_values, numeric_modes, omega2_value,
-                       spring_factor_modes, value)
+from .accurate import MAX_MPMATH_MODES, Float64Limit, exact_values, numeric_modes, omega2_value, spring_factor_modes
 from .errors import SceneError
 from .model import Model
 from .pieces import pieces

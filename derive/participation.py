@@ -30,10 +30,10 @@ import sympy as sp
 from .printing import latex
 
 from .accurate import (MAX_DPS, MAX_MPMATH_MODES, NotAccurate, _eig_dynamical, certified, clusters, dynamical_bound,
-                       exact_values, value)
+                       exact_values, omega2_value, value)
 from .model import Model
 from .model_cache import cached_on
-from .modes import ModeSet, omega2_value
+from .modes import ModeSet
 from .work import MAX_NUMBER_DIGITS, WorkCapExceeded, number_digits, ops, sympy_numbers
 from .scene import WALL
 

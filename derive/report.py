@@ -9,9 +9,9 @@ from pathlib import Path
 
 import sympy as sp
 
-from .accurate import exact_values, value
+from .accurate import exact_values, omega2_value, value
 from .model import Effect, Model
-from .modes import ModeSet, omega2_value
+from .modes import ModeSet
 from .printing import MATRIX_LATEX, MATRIX_TEXT, ScenePrinter, latex, sstr
 
 MAX_MATRIX = 8  # larger matrices are described, not printed
