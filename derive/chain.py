@@ -175,6 +175,8 @@ def _check_chain_stiffness(model: ChainModel, springs: range, subs: dict) -> Non
     """V, V', V'' finite and V'' > 0 at d = 0 for every spring index (float64, in chunks)."""
     import numpy as np
 
+    from .scene_loader import MAX_MAGNITUDE, MIN_MAGNITUDE
+
     law = model.law
     values = [float(subs[p]) for p in model.params.values()]
     syms = [model.i] + list(model.params.values())
@@ -185,10 +187,13 @@ def _check_chain_stiffness(model: ChainModel, springs: range, subs: dict) -> Non
             with np.errstate(all="ignore"):
                 v = np.broadcast_to(np.asarray(f(i, *values), dtype=float), i.shape)
             bad = ~np.isfinite(v) if name != "V''" else ~(v > 0)
-            if bad.any():
-                j = int(i[np.argmax(bad)])
-                why = (f"{name}(0) = {v[np.argmax(bad)]:g} is not finite" if name != "V''"
-                       else f"stiffness V''(0) = {v[np.argmax(bad)]:g} is not positive")
+            far = (v < MIN_MAGNITUDE) | (v > MAX_MAGNITUDE) if name == "V''" else bad
+            if bad.any() or far.any():
+                j = int(i[np.argmax(bad | far)])
+                why = (f"{name}(0) = {v[np.argmax(bad)]:g} is not finite" if name != "V''" else
+                       f"stiffness V''(0) = {v[np.argmax(bad)]:g} is not positive" if bad.any() else
+                       f"stiffness V''(0) = {v[np.argmax(far)]:g} is outside {MIN_MAGNITUDE:g} to {MAX_MAGNITUDE:g} "
+                       "(the range of a spring's k)")
                 raise SceneError(model.scene.file, "chain.potential", f"{why} for the spring i = {j}; accepted: a "
                                  "potential finite, twice differentiable and with V''(0) > 0 for every spring i")
 
@@ -277,7 +282,7 @@ def chain_mode_records(model: ChainModel, modes: ChainModes, omega2_values=None)
             j = int(order[p]) + modes.j_range[0]
             rec["j"] = j
             rec["omega2"] = sp.sstr(modes.omega2.subs({model.j: j, model.n: n}))
-            shape = modes.shape.subs({model.j: j, model.n: n})
+            shape = _record_shape(model, modes, j, n)
             rec["shape"] = sp.sstr(shape)
             if n <= MAX_MODES_LISTED:
                 f = sp.lambdify(model.i, shape, "numpy")
@@ -285,6 +290,46 @@ def chain_mode_records(model: ChainModel, modes: ChainModes, omega2_values=None)
                 rec["shape_value"] = [float(v) for v in np.broadcast_to(np.asarray(f(idx), dtype=float), (n,))]
         records.append(rec)
     return records, note
+
+
+def _record_shape(model: ChainModel, modes: ChainModes, j: int, n: int) -> sp.Expr:
+    """Mode j's shape as an expression of the mass index i (0 at the left end), for one listed mode.
+
+    The family's shape counts i from the wall of a free–wall chain (its note says so): here it is
+    turned to the mass index. A ring's ω² of j and n − j are equal and the family's cos(2πji/n) is
+    the same for both: the second of the pair (2j > n) takes the independent sin(2πji/n), so the
+    listed shapes of a repeated ω² span its eigenspace.
+    """
+    ch, i = model.chain, model.i
+    if ch.left is End.RING and 2 * j > n:
+        return sp.sin(2 * sp.pi * j * i / n)
+    shape = modes.shape.subs({model.j: j, model.n: n})
+    if ch.left is End.FREE and ch.right is End.WALL:
+        shape = shape.subs(i, n - 1 - i)
+    return shape
+
+
+def _float64_note(model: ChainModel, records: list[dict]) -> str:
+    """A note when listed elastic ω² lie outside float64's normal range (else ``""``).
+
+    Every mass and spring lies in 1e-150 … 1e150, but a long chain's lowest ω² is ~ (k/m)(π/2n)²:
+    1e-300 / n² falls below the smallest normal float64 (2.2e-308) past n ~ 7000, where it would
+    print with fewer significant digits (subnormal) or as 0. Said, never printed silently.
+    """
+    from .accurate import FLOAT64_HUGE, FLOAT64_TINY
+
+    ch = model.chain
+    rigid = 1 if ch.left is End.RING or (ch.left is End.FREE and ch.right is End.FREE) else 0
+    e = MODES_LISTED_EACH_END
+    positions = list(range(len(records))) if len(records) == ch.n else list(range(e)) + list(range(ch.n - e, ch.n))
+    low = [r["omega2_value"] for r, p in zip(records, positions) if p >= rigid and r["omega2_value"] < FLOAT64_TINY]
+    high = [r["omega2_value"] for r in records if not r["omega2_value"] <= FLOAT64_HUGE]
+    if not (low or high):
+        return ""
+    what = (f"{len(low)} listed ω² below {FLOAT64_TINY:.3g} (subnormal: fewer significant digits, or 0)" if low
+            else f"{len(high)} listed ω² beyond {FLOAT64_HUGE:.3g}")
+    return (f"float64 limit: {what}; these values are not accurate to float64's relative precision "
+            "(the spectrum spans more than float64's normal range)")
 
 
 def _damping_ratios(model: ChainModel, records: list[dict], damped) -> str:
@@ -373,6 +418,10 @@ def chain_report(model: ChainModel, modes: ChainModes, omega2_values=None, dampe
     zeta_note = _damping_ratios(model, records, damped) if damping_data is not None and records else ""
     if zeta_note:
         notes.append(zeta_note)
+    range_note = _float64_note(model, records)
+    if range_note:
+        notes.append(range_note)
+        lines.append(f"    note: {range_note}")
     if records:  # the numbers, for every chain (a closed form or not): as --json lists them
         how = "closed form at the scene's values" if modes.omega2 is not None else \
             "numeric, the generated module's omega2()"

@@ -302,11 +302,19 @@ def _spectrum(c: _Context) -> list[str]:
         return _closed_form_spectrum(c)
     if c.chain.left is End.RING:
         return _ring_spectrum(c)
-    return function(f"omega2({c.sig_and('n=N')})",
-                    "Squared angular frequencies (no closed form), ascending, shape (n,).\n\n"
-                    "Singular values of the bidiagonal spring factor G (GᵀG = M^-1/2 K M^-1/2) by bisection on its\n"
-                    "Golub–Kahan form: accurate to float64 in the relative sense at any positive masses and springs;\n"
-                    "rigid modes exactly 0. Cost O(n²).", _bidiagonal_omega2(c))
+    rigid = "(tuple(range(n)),)" if c.chain.left is End.FREE and c.chain.right is End.FREE else "()"
+    return (function(f"omega2({c.sig_and('n=N')})",
+                     "Squared angular frequencies (no closed form), ascending, shape (n,).\n\n"
+                     "Singular values of the bidiagonal spring factor G (GᵀG = M^-1/2 K M^-1/2) by bisection on its\n"
+                     "Golub–Kahan form: accurate to float64 in the relative sense at any positive masses and springs\n"
+                     "whose sqrt(k/m) lie within 1e140 of each other (beyond, up to MAX_DENSE masses, the dense\n"
+                     "spring-factor SVD); rigid modes exactly 0. Cost O(n²).", _bidiagonal_omega2(c))
+            + function("_dense_omega2(_m, _k, _ends, n)",
+                       "ω² of an open chain of n masses by the spring-factor helper below (its globals bound here).",
+                       [f"    N, SPRING_ENDS, RIGID_PIECES = n, _ends, {rigid}",
+                        textwrap.indent(helper_source().rstrip("\n"), "    "),
+                        "",
+                        "    return _accurate_modes(_m, _k)[0]"]))
 
 
 def _closed_form_spectrum(c: _Context) -> list[str]:
@@ -364,10 +372,23 @@ def _bidiagonal_omega2(c: _Context) -> list[str]:
     return out + ["    _s = _a.shape[0]",
                   "    _t = numpy.empty(2 * _s - 1)",
                   "    _t[0::2], _t[1::2] = _a, _b",
-                  "    _sv = scipy.linalg.eigh_tridiagonal(numpy.zeros(2 * _s), _t, eigvals_only=True, select='i',",
-                  "                                        select_range=(_s, 2 * _s - 1), lapack_driver='stebz',",
-                  "                                        tol=numpy.finfo(numpy.float64).tiny)",
-                  "    _w = numpy.sort(numpy.abs(_sv))[_s - n:] ** 2",
+                  "    # scaled by a power of 2 to a largest entry in [1/2, 1): stebz's pivot floor and stopping",
+                  "    # tolerance are tiny * max(1, max entry²) absolute, 2e-10 at entries of 1e149",
+                  "    _sc = numpy.ldexp(1.0, -numpy.frexp(numpy.max(_t))[1])",
+                  "    _nz = _t[_t > 0]",
+                  "    if _nz.size < 2 or numpy.max(_nz) <= 1e140 * numpy.min(_nz):",
+                  "        _sv = scipy.linalg.eigh_tridiagonal(numpy.zeros(2 * _s), _t * _sc, eigvals_only=True, select='i',",
+                  "                                            select_range=(_s, 2 * _s - 1), lapack_driver='stebz',",
+                  "                                            tol=numpy.finfo(numpy.float64).tiny)",
+                  "    elif n <= _MAX_DENSE:",
+                  "        # entries more than 1e140 apart: stebz squares them (the small ones underflow), so the",
+                  "        # spring-factor SVD of the dense modules (relatively accurate at any positive values; O(n³))",
+                  f"        return _dense_omega2(masses({c.kw_and('n=n')}), spring_constants({c.kw_and('n=n')}), spring_ends(n=n), n)",
+                  "    else:",
+                  "        raise ValueError(f'omega2(): the spring factor\\'s entries sqrt(k/m) span more than 1e140 in a chain '",
+                  "                         f'of {n} masses: float64 bisection cannot give its ω relative accuracy, and the '",
+                  "                         f'dense spring-factor route takes at most MAX_DENSE = {_MAX_DENSE} masses')",
+                  "    _w = (numpy.sort(numpy.abs(_sv))[_s - n:] / _sc) ** 2",
                   "    _w[:_RIGID_MODES] = 0.0",
                   "    return _w"]
 

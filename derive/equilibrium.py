@@ -29,6 +29,7 @@ import sympy as sp
 
 from .accurate import exact_values
 from .errors import SceneError
+from .scene_loader import MAX_MAGNITUDE, MIN_MAGNITUDE
 from .mp_eval import mp_function
 from .potential import SpringLaw
 
@@ -159,6 +160,11 @@ def check_law(file: str, law: SpringLaw, d_value, subs: dict, *, closed_form: sp
                                 "not positive (this spring is not stable there)",
                                 "a potential with V''(d) > 0 at the equilibrium")
         stiff = vals[2]
+        if not MIN_MAGNITUDE <= stiff <= MAX_MAGNITUDE:  # the range a spring's k is held to
+            raise _refuse_value(file, law, f"stiffness V''(d) = {mpmath.nstr(mpmath.mpf(stiff), 6)}", dv,
+                                f"outside {MIN_MAGNITUDE:g} to {MAX_MAGNITUDE:g}",
+                                f"a potential whose stiffness at the equilibrium lies in {MIN_MAGNITUDE:g} to "
+                                f"{MAX_MAGNITUDE:g}, as a spring's k")
     if closed_form is not None:
         return closed_form
     return sp.Float(mpmath.nstr(stiff, 25), 17)

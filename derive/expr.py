@@ -39,6 +39,11 @@ from .expr_tree import CONSTANTS, FUNCTIONS, RESERVED_FUNCTIONS, ARITHMETIC, Bin
 #: parameter of that name and the function coexist there, as before.
 READBACK_ONLY = ("acos",)
 
+#: The chain index variables: ``q**i`` (a parameter to a power of them) is accepted.
+INDEX_NAMES = frozenset({"i", "n"})
+#: The other variables of scene expressions (time, a potential's extension): never a power's base.
+VARIABLE_NAMES = frozenset({"t", "d"})
+
 MAX_LENGTH = 500
 MAX_NODES = 200
 MAX_DEPTH = 24
@@ -117,7 +122,8 @@ def accepted_form(allowed, functions: tuple[str, ...] = FUNCTIONS) -> str:
     """What an expression may contain, for messages."""
     names = ", ".join(sorted(allowed)) or "(none)"
     funcs = f", {' '.join(functions)} (one argument)" if functions else ""
-    return f"numbers, the names {names}, pi, + - * / % and ** with a constant exponent, ( ){funcs}"
+    power = " (or q**i: a parameter to a power of the index)" if "i" in allowed else ""
+    return f"numbers, the names {names}, pi, + - * / % and ** with a constant exponent{power}, ( ){funcs}"
 
 
 def parse_expression(
@@ -291,8 +297,16 @@ class _Walker:
         right = self.walk(node.right, depth + 1, power)
         exponent = _constant_value(right)
         if exponent is None:
+            index = right.symbols()
+            if index and index <= INDEX_NAMES and isinstance(node.left, ast.Name) and \
+                    node.left.id not in INDEX_NAMES | VARIABLE_NAMES | set(CONSTANTS):
+                # geometric growth along a chain, q**i: a parameter (never a number, whose exact
+                # powers SymPy would compute digit by digit) to a power of the index; its value at
+                # every index is range-checked by the loader
+                return BinOp(op, self._name(node.left.id), right)
             raise fail("an exponent that is not a constant number",
-                       "** with a constant exponent, e.g. x**2, x**(1/2), x**-1")
+                       "** with a constant exponent, e.g. x**2, x**(1/2), x**-1"
+                       + (", or a parameter to a power of the index, e.g. q**i" if "i" in self.allowed else ""))
         if abs(exponent) > MAX_EXPONENT or exponent.denominator > MAX_EXPONENT:
             raise fail(f"exponent {exponent} out of range",
                        f"constant exponents p = a/b with |p| <= {MAX_EXPONENT}, b <= {MAX_EXPONENT}")

@@ -50,6 +50,10 @@ class Expr:
         """Names of the free variables (parameters, ``t``, ``i``, ``n``) used."""
         return frozenset()
 
+    def numbers(self) -> tuple[Fraction, ...]:
+        """The exact values of the number literals written in the expression, in reading order."""
+        return ()
+
     def to_sympy(self, symbols: Mapping[str, object]):  # pragma: no cover - abstract
         """The SymPy expression, with ``symbols`` mapping each name to a SymPy symbol."""
         raise NotImplementedError
@@ -72,6 +76,9 @@ class Num(Expr):
     """A finite number literal, kept exact as a fraction of its decimal text."""
 
     value: Fraction
+
+    def numbers(self):
+        return (self.value,)
 
     def to_sympy(self, symbols):
         import sympy
@@ -120,6 +127,9 @@ class Neg(Expr):
     def symbols(self):
         return self.operand.symbols()
 
+    def numbers(self):
+        return self.operand.numbers()
+
     def to_sympy(self, symbols):
         return -self.operand.to_sympy(symbols)
 
@@ -139,6 +149,9 @@ class BinOp(Expr):
 
     def symbols(self):
         return self.left.symbols() | self.right.symbols()
+
+    def numbers(self):
+        return self.left.numbers() + self.right.numbers()
 
     def to_sympy(self, symbols):
         import sympy
@@ -199,6 +212,9 @@ class Call(Expr):
 
     def symbols(self):
         return self.arg.symbols()
+
+    def numbers(self):
+        return self.arg.numbers()
 
     def to_sympy(self, symbols):
         import sympy

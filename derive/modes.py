@@ -26,10 +26,12 @@ from dataclasses import dataclass, field
 
 import sympy as sp
 
-from .accurate import MAX_MPMATH_MODES, exact_values, numeric_modes, spring_factor_modes, value
+from .accurate import MAX_MPMATH_MODES, Float64Limit, exact_values, numeric_modes, omega2_value, spring_factor_modes
+from .errors import SceneError
 from .model import Model
 from .pieces import pieces
-from .work import MAX_DET_TERMS, WorkCapExceeded, check, det_terms_bound
+from .work import (MAX_DET_TERMS, MAX_NUMBER_DIGITS, NumbersTooLong, SymbolicNumbersFailed, WorkCapExceeded, check,
+                   det_terms_bound, number_digits, sympy_numbers)
 
 #: Largest block (after rigid modes and mirror symmetry) whose determinant is expanded symbolically.
 MAX_SYMBOLIC_BLOCK = 6
@@ -176,6 +178,8 @@ def _solve_block(model: Model, B: sp.Matrix, lam: sp.Symbol, n_rigid_in_block: i
         raise BudgetExceeded  # characteristic polynomial of degree > 6: no closed form worth printing
     Kb = (B.T * model.K * B).applyfunc(sp.expand)
     Mb = (B.T * model.M * B).applyfunc(sp.expand)
+    if number_digits([*Kb, *Mb]) > MAX_NUMBER_DIGITS:  # a size, like every cap: no seconds of factoring
+        raise NumbersTooLong
     A = Kb - lam * Mb
     check(det_terms_bound(A), MAX_DET_TERMS)  # before expanding: the size of the work, not its time
     poly = sp.Poly(A.det(method="berkowitz"), lam)
@@ -248,7 +252,19 @@ def closed_form_modes(model: Model, max_radical_degree: int = 3) -> ModeSet:
     -------
     ModeSet
         Sorted by the numeric value of ω² at the scene's parameters.
+
+    Raises
+    ------
+    SceneError
+        If an ω² lies outside float64's normal range (it could not be printed with its relative accuracy).
     """
+    try:
+        return _closed_form_modes(model, max_radical_degree)
+    except Float64Limit as exc:
+        raise _outside_float64(model, exc) from None
+
+
+def _closed_form_modes(model: Model, max_radical_degree: int) -> ModeSet:
     lam = sp.Symbol("lambda")
     rigid = _rigid_shapes(model)
     modes: list[Mode] = []
@@ -262,16 +278,21 @@ def closed_form_modes(model: Model, max_radical_degree: int = 3) -> ModeSet:
     try:
         if hopeless or numeric_k:
             raise BudgetExceeded
-        for B in _blocks(model):
-            # rigid translations lie in the symmetric block (uniform vectors are mirror-symmetric)
-            # the rigid space is mirror-invariant: its share of this block has dimension rank(Bᵀ R)
-            n_rigid = (B.T * sp.Matrix.hstack(*[sp.Matrix(s) for s in rigid])).rank() if rigid else 0
-            modes.extend(_solve_block(model, B, lam, n_rigid, max_radical_degree))
+        with sympy_numbers():
+            for B in _blocks(model):
+                # rigid translations lie in the symmetric block (uniform vectors are mirror-symmetric)
+                # the rigid space is mirror-invariant: its share of this block has dimension rank(Bᵀ R)
+                n_rigid = (B.T * sp.Matrix.hstack(*[sp.Matrix(s) for s in rigid])).rank() if rigid else 0
+                modes.extend(_solve_block(model, B, lam, n_rigid, max_radical_degree))
+            subs = exact_values(model.params, model.scene.parameters)
+            modes = _merge_equal(modes, subs)
         closed = True
-    except BudgetExceeded:
+    except BudgetExceeded as exc:
         why = ("K is the Hessian at a numerically found equilibrium" if numeric_k else
                f"{model.scene.n} masses: symmetry blocks larger than {MAX_SYMBOLIC_BLOCK}" if hopeless else
-               f"a factor of degree > 3, an unreadably long root, or a characteristic polynomial of more "
+               "SymPy's arithmetic failed on the scene's exact numbers" if isinstance(exc, SymbolicNumbersFailed) else
+               f"exact numbers of more than {MAX_NUMBER_DIGITS} digits" if isinstance(exc, NumbersTooLong)
+               else f"a factor of degree > 3, an unreadably long root, or a characteristic polynomial of more "
                f"than {MAX_DET_TERMS} terms")
         how = ("mpmath eigensolver at increasing precision, correct to float64" if model.scene.n <= MAX_MPMATH_MODES
                else "spring-factor SVD, as the generated module's omega2(), relatively accurate to a few float64 ulps")
@@ -279,11 +300,17 @@ def closed_form_modes(model: Model, max_radical_degree: int = 3) -> ModeSet:
         modes = [m for m in modes if m.rigid] + _numeric_modes(model, lam, len(rigid))
         closed = False
     subs = exact_values(model.params, model.scene.parameters)
-    modes = _merge_equal(modes, subs)
+    if not closed:
+        modes = _merge_equal(modes, subs)
     # rigid modes first (exact zeros by structure), then by the correctly rounded value
-    modes.sort(key=lambda m: (not m.rigid, value(m.omega2, subs) if m.exact else float(m.omega2),
-                              str(m.omega2)))
+    modes.sort(key=lambda m: (not m.rigid, omega2_value(m, subs), str(m.omega2)))
     return ModeSet(tuple(modes), closed, tuple(notes))
+
+
+def _outside_float64(model: Model, exc: Float64Limit) -> SceneError:
+    """The one-line refusal of a scene whose ω² float64 cannot print with its relative accuracy."""
+    return SceneError(model.scene.file, "masses", f"an ω² of this scene is {exc}; accepted: masses and "
+                      "stiffnesses whose squared frequencies lie in float64's normal range")
 
 
 def _merge_equal(modes: list[Mode], subs: dict) -> list[Mode]:
@@ -294,7 +321,7 @@ def _merge_equal(modes: list[Mode], subs: dict) -> list[Mode]:
     out: list[Mode] = []
     values: list[float] = []
     for mode in modes:
-        v = value(mode.omega2, subs) if mode.exact else float(mode.omega2)
+        v = omega2_value(mode, subs)
         for j, other in enumerate(out):
             ov = values[j]
             if (mode.exact and other.exact and mode.rigid == other.rigid

@@ -29,11 +29,12 @@ import sympy as sp
 
 from .printing import latex
 
-from .accurate import MAX_MPMATH_MODES, NotAccurate, _eig_dynamical, exact_values, value
+from .accurate import (MAX_DPS, MAX_MPMATH_MODES, NotAccurate, _eig_dynamical, certified, clusters, dynamical_bound,
+                       exact_values, omega2_value, value)
 from .model import Model
 from .model_cache import cached_on
 from .modes import ModeSet
-from .work import ops
+from .work import MAX_NUMBER_DIGITS, WorkCapExceeded, number_digits, ops, sympy_numbers
 from .scene import WALL
 
 #: Two successive precisions agreeing to this relative difference (of the total mass) settle a value.
@@ -138,20 +139,9 @@ def chain_section(model, p: Participation | None, records: list[dict]) -> tuple[
 
 
 # -- values -------------------------------------------------------------------------------------
-def _clusters(w2: list, tol) -> list[range]:
-    out, j, n = [], 0, len(w2)
-    scale = max([abs(w) for w in w2] + [1])
-    while j < n:
-        k = j + 1
-        while k < n and abs(w2[k] - w2[j]) <= tol * scale:
-            k += 1
-        out.append(range(j, k))
-        j = k
-    return out
-
-
-def _values_mp(model: Model, dps: int, n_rigid: int):
-    """(ω², Γ, shapes) at working precision ``dps`` (mpmath), repeated ω rotated (see module docstring)."""
+def _values_mp(model: Model, dps: int, n_rigid: int, bound):
+    """(ω², Γ, shapes) at working precision ``dps`` (mpmath), repeated ω rotated (see module docstring);
+    ``bound`` bounds ‖D‖ (:func:`accurate.dynamical_bound`), for telling a repeated ω from a close pair."""
     subs = exact_values(model.params, model.scene.parameters)
     n = model.scene.n
     masses = [m.subs(subs) for m in model.masses]
@@ -162,8 +152,7 @@ def _values_mp(model: Model, dps: int, n_rigid: int):
         m = [mpmath.mpf(x.p) / x.q if isinstance(x, sp.Rational) else mpmath.mpf(str(sp.N(x, dps + 10)))
              for x in masses]
         phis = [list(s) for s in shapes]
-        tiny = mpmath.mpf(10) ** (-(dps // 2))
-        for cl in _clusters(w2, tiny):
+        for cl in clusters(w2, n_rigid, bound, dps):
             if len(cl) < 2:
                 continue
             # rotate: first vector along the projection of r onto the eigenspace, the rest M-orthogonal to it
@@ -193,20 +182,26 @@ def _accurate_values(model: Model):
     n = model.scene.n
     if n > MAX_MPMATH_MODES:
         return _spring_factor_values(model) + ("spring-factor SVD (float64, compensated sums)",)
+    subs = exact_values(model.params, model.scene.parameters)
+    bound = dynamical_bound([x.subs(subs) for x in model.masses],
+                            [(a, b, k.subs(subs)) for a, b, k, _, _ in model.springs])
     prev = None
     dps = 40
-    while dps <= 640:
-        w2, gamma, phis, m = _values_mp(model, dps, n_rigid)
+    while dps <= MAX_DPS:
+        w2, gamma, phis, m = _values_mp(model, dps, n_rigid, bound)
         with mpmath.workdps(dps):
             total = mpmath.fsum(m)
             cur = ([float(x) for x in w2], [float(g) for g in gamma], [[float(c) for c in p] for p in phis],
                    float(total))
-            if prev is not None and all(abs(a - b) <= _SETTLED * math.sqrt(cur[3]) + 1e-300
-                                        for a, b in zip(prev[1], cur[1])):
+            # Γ settled relative to √(total mass); every elastic ω² certified relative to itself (an ω² of
+            # 1e-90 next to ω² = 1 is lost in the absolute rounding of eigsy below ~100 digits)
+            # (|Γ|: eigsy's sign of a vector may flip between precisions; the sign is fixed afterwards)
+            if prev is not None and all(abs(abs(a) - abs(b)) <= _SETTLED * math.sqrt(cur[3]) + 1e-300
+                                        for a, b in zip(prev[1], cur[1])) and certified(w2, n_rigid, bound, dps):
                 return cur + (f"mpmath eigsy at {dps} digits (settled to float64)",)
         prev = cur
         dps *= 2
-    raise NotAccurate("participation factors did not settle to float64 accuracy within 640 digits")
+    raise NotAccurate(f"participation factors did not settle to float64 accuracy within {MAX_DPS} digits")
 
 
 def _spring_factor_values(model: Model):
@@ -239,12 +234,18 @@ def _closed_forms(model: Model, modes: ModeSet, records: list) -> tuple[list, li
             continue
         a = sp.Add(*(mi * c for mi, c in zip(model.masses, shape)))
         b = sp.Add(*(mi * c**2 for mi, c in zip(model.masses, shape)))
-        if ops(a) + ops(b) > MAX_INPUT_OPS:  # past the work cap: values only for this mode
+        # past a work cap (operations, or exact numbers longer than MAX_NUMBER_DIGITS: cancelling them
+        # ran for minutes): values only for this mode
+        if ops(a) + ops(b) > MAX_INPUT_OPS or number_digits([a, b]) > MAX_NUMBER_DIGITS:
             continue
-        a, b = sp.radsimp(sp.cancel(sp.expand(a))), sp.radsimp(sp.cancel(sp.expand(b)))
-        root = sp.sqrt(b)
-        gamma = sp.factor(sp.cancel(a / root)) if not a.has(sp.cos, sp.sin) else a / root
-        meff = sp.factor(sp.cancel(a**2 / b)) if not a.has(sp.cos, sp.sin) else sp.cancel(a**2 / b)
+        try:
+            with sympy_numbers():  # SymPy's own failures on large exact numbers: values only
+                a, b = sp.radsimp(sp.cancel(sp.expand(a))), sp.radsimp(sp.cancel(sp.expand(b)))
+                root = sp.sqrt(b)
+                gamma = sp.factor(sp.cancel(a / root)) if not a.has(sp.cos, sp.sin) else a / root
+                meff = sp.factor(sp.cancel(a**2 / b)) if not a.has(sp.cos, sp.sin) else sp.cancel(a**2 / b)
+        except WorkCapExceeded:
+            continue
         if ops(gamma) <= MAX_OPS and ops(meff) <= MAX_OPS:
             g_out[j], m_out[j] = gamma, meff
             s_out[j] = tuple(c / root for c in shape)
@@ -272,7 +273,7 @@ def _participation(model: Model, modes: ModeSet | None) -> Participation:
     records = []
     if modes is not None:
         records = [(mode, shape) for mode in modes.modes for shape in mode.shapes]
-        records.sort(key=lambda r: max(value(r[0].omega2, subs), 0.0) if r[0].exact else float(r[0].omega2))
+        records.sort(key=lambda r: omega2_value(r[0], subs))
     # the sign of each mass-normalised shape follows the printed shape (modes of multiplicity one)
     if len(records) == n:
         for j, (mode, shape) in enumerate(records):

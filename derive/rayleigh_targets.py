@@ -30,7 +30,8 @@ import sympy as sp
 
 from .printing import latex
 
-from .accurate import MAX_MPMATH_MODES, _eig_dynamical, exact_values, value
+from .accurate import (MAX_DPS, MAX_MPMATH_MODES, _eig_dynamical, certified, dynamical_bound, exact_values,
+                       omega2_value, value)
 from .errors import SceneError
 from .model_cache import cached_on
 
@@ -89,12 +90,17 @@ def formula(wa, wb, za, zb, equal: bool, sqrt=None):
 
 
 def _elastic_mp(model, dps: int):
-    """Elastic ω² (ascending) at working precision ``dps``."""
+    """Elastic ω² (ascending) at working precision ``dps`` or more: raised until every value is certified
+    (:func:`accurate.certified`; two precisions can agree on the same deflated, wrong value)."""
     subs = exact_values(model.params, model.scene.parameters)
     masses = [m.subs(subs) for m in model.masses]
     springs = [(a, b, k.subs(subs)) for a, b, k, _, _ in model.springs]
-    w2, _ = _eig_dynamical(masses, springs, model.scene.n, dps)
-    return w2[len(model.free_components):]
+    rigid, bound = len(model.free_components), dynamical_bound(masses, springs)
+    while True:
+        w2, _ = _eig_dynamical(masses, springs, model.scene.n, dps)
+        if certified(w2, rigid, bound, dps) or dps >= MAX_DPS:
+            return w2[rigid:]
+        dps *= 2
 
 
 def _elastic_float(model):
@@ -173,7 +179,7 @@ def closed_form(model, mode_set, zeta_targets, modes) -> tuple[sp.Expr, sp.Expr]
     if mode_set is None or not mode_set.closed_form:
         return None
     subs = exact_values(model.params, model.scene.parameters)
-    elastic = sorted((m for m in mode_set.modes if not m.rigid for _ in m.shapes), key=lambda m: value(m.omega2, subs))
+    elastic = sorted((m for m in mode_set.modes if not m.rigid for _ in m.shapes), key=lambda m: omega2_value(m, subs))
     if len(elastic) < max(modes):
         return None
     wa, wb = (sp.sqrt(elastic[m - 1].omega2) for m in modes)

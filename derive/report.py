@@ -9,7 +9,7 @@ from pathlib import Path
 
 import sympy as sp
 
-from .accurate import exact_values, value
+from .accurate import exact_values, omega2_value, value
 from .model import Effect, Model
 from .modes import ModeSet
 from .printing import MATRIX_LATEX, MATRIX_TEXT, ScenePrinter, latex, sstr
@@ -101,6 +101,25 @@ def _energy_lines(model: Model) -> list[str]:
     return out
 
 
+def shape_values(model: Model, shape) -> list[float]:
+    """A shape's components at the scene's values (correctly rounded), zeros told by a floor.
+
+    A closed-form shape's first nonzero component is 1 (its scale); a component j counts as 0 once
+    it is certainly below 1e-20 of that in the mass-weighted sense (``1e-20·sqrt(m_pivot/m_j)``),
+    never by the noise heuristic alone (a component 0.618 computed from terms of 1e269 was printed
+    as 0). Numeric fallback shapes are floats already.
+    """
+    subs = _values(model)
+    pivot = next((i for i, c in enumerate(shape) if not isinstance(c, float) and sp.sympify(c).is_Number
+                  and c != 0), None)
+    if pivot is None:
+        return [_num(c, model) for c in shape]
+    masses = [value(m, subs) for m in model.masses]
+    scale = abs(float(shape[pivot])) * masses[pivot] ** 0.5
+    return [c if isinstance(c, float) else value(sp.sympify(c), subs, floor=1e-20 * scale / masses[j] ** 0.5)
+            for j, c in enumerate(shape)]
+
+
 def mode_records(model: Model, modes: ModeSet) -> list[dict]:
     """One record per independent mode (a repeated ω² once per shape), sorted by value."""
     out = []
@@ -108,10 +127,10 @@ def mode_records(model: Model, modes: ModeSet) -> list[dict]:
         for shape in mode.shapes:
             out.append({
                 "omega2": sp.sstr(mode.omega2),
-                "omega2_value": max(_num(mode.omega2, model), 0.0) if mode.rigid else _num(mode.omega2, model),
+                "omega2_value": omega2_value(mode, _values(model)),
                 "multiplicity": mode.multiplicity,
                 "shape": [_text(c) for c in shape],
-                "shape_value": [_num(c, model) for c in shape],
+                "shape_value": shape_values(model, shape),
             })
     out.sort(key=lambda r: r["omega2_value"])
     return out
@@ -127,7 +146,7 @@ def equilibrium_json(model: Model) -> dict | None:
     for (a, b, *_), law, d, k in zip(model.springs, model.laws, eq.extensions, eq.stiffness):
         springs.append({"key": law.key, "potential": sstr(law.energy) if law.given else None,
                         "extension": sstr(d), "extension_value": _num(d, model),
-                        "stiffness": sstr(k), "stiffness_value": _num(k, model)})
+                        "stiffness": sstr(k), "stiffness_value": value(k, _values(model), nonzero=True)})
     return {"x": [sstr(v) for v in eq.x], "x_value": [_num(v, model) for v in eq.x],
             "closed_form": eq.closed_form, "how": eq.how, "springs": springs}
 
@@ -142,7 +161,7 @@ def equilibrium_lines(model: Model) -> list[str]:
            f"    found by: {eq.how}"]
     for law, d, k in zip(model.laws, eq.extensions, eq.stiffness):
         out.append(f"    {law.key}: extension d = {sstr(d)}, stiffness V''(d) = {sstr(k)}"
-                   + (f"  (= {_num(k, model):.10g})" if not k.is_Number else ""))
+                   + (f"  (= {value(k, _values(model), nonzero=True):.10g})" if not k.is_Number else ""))
     return out
 
 
@@ -240,7 +259,7 @@ def _load_notes(model: Model) -> list[str]:
 def mode_lines(model: Model, modes: ModeSet) -> list[str]:
     lines = []
     for mode in modes.modes:
-        value = _num(mode.omega2, model)
+        value = omega2_value(mode, _values(model))
         tag = "  rigid-body: uniform translation of a free piece" if mode.rigid else ""
         mult = f"  (multiplicity {mode.multiplicity})" if mode.multiplicity > 1 else ""
         lines.append(f"ω² = {sstr(mode.omega2)}   (= {value:.10g} at the scene's values){mult}{tag}")

@@ -617,7 +617,7 @@ def potential_expression(ld: Loader, key: str, text, names: frozenset[str]) -> E
     if EXTENSION in names:
         raise ld.bad(f"parameters.{EXTENSION}", EXTENSION, "in a potential, d is the spring's extension",
                      "another parameter name (e.g. d0) in a scene with potentials")
-    expr = parse_expression(text, names | {EXTENSION}, file=ld.file, key=key)
+    expr = ld.literals(key, text, parse_expression(text, names | {EXTENSION}, file=ld.file, key=key))
     ld.units.check(key, text, expr, {EXTENSION: LENGTH})
     if EXTENSION not in expr.symbols():
         raise ld.bad(key, text, "does not depend on the extension d",

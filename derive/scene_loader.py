@@ -20,8 +20,12 @@ from .units import SceneUnits
 #: Longest name (parameter, mass).
 MAX_NAME = 64
 #: Masses, stiffnesses, damping and |k3|, |g| must lie in this range (no
-#: subnormal numbers, no overflow when two of them multiply).
+#: subnormal numbers, no overflow when two of them multiply); so must every number written in an
+#: expression (or be 0), and a potential's stiffness at the equilibrium. (Parameter values are not
+#: held to it themselves: a phase of 1e-167 is harmless; what they make is checked.)
 MIN_MAGNITUDE, MAX_MAGNITUDE = 1e-150, 1e150
+#: What the range check says is accepted.
+IN_RANGE = f"0 or numbers of size {MIN_MAGNITUDE:g} to {MAX_MAGNITUDE:g}"
 #: Index values evaluated at once when checking [chain] expressions.
 _CHUNK = 1 << 16
 
@@ -157,6 +161,19 @@ class Loader:
             raise self.bad(key, value, f"more than {maximum:g}", accepted)
         return value
 
+    def literals(self, key: str, text, expr: Expr) -> Expr:
+        """Check every number written in ``expr``: 0 or of size ``MIN_MAGNITUDE`` … ``MAX_MAGNITUDE``.
+
+        A potential's ``1e200*d**2`` has no value to check before its derivatives, and a product
+        of in-range values can still be range-checked only as a whole: the literals themselves are
+        held to the same range as the values, so no number the derivation starts from is outside it.
+        """
+        for v in expr.numbers():
+            if v != 0 and not MIN_MAGNITUDE <= abs(float(v)) <= MAX_MAGNITUDE:
+                raise self.bad(key, text, f"the number {float(v):g} is outside the accepted range",
+                               f"numbers written as {IN_RANGE}")
+        return expr
+
     def expression(self, key: str, text, allowed, *, positive=False, nonzero=False, env=None,
                    index_range=None, bounded=False) -> Expr:
         """Parse an expression and check its value at the scene's parameter values.
@@ -177,7 +194,7 @@ class Loader:
             if chunk is not None:
                 env["i"] = np.asarray(chunk, dtype=float)
             self._check_value(key, text, expr, env, positive=positive, nonzero=nonzero, bounded=bounded)
-        return expr
+        return self.literals(key, text, expr)
 
     def _check_value(self, key, text, expr, env, *, positive, nonzero, bounded):
         try:

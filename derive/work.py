@@ -17,6 +17,8 @@ note), exactly as it does for a factor of too high a degree.
 
 from __future__ import annotations
 
+import contextlib
+import os
 from math import comb
 
 import sympy as sp
@@ -66,10 +68,68 @@ def ops(expr) -> int:
     return int(sp.count_ops(expr))
 
 
+#: Most decimal digits (numerator and denominator) of an exact number in the matrices whose
+#: characteristic polynomial is factored: literals such as ``2e-70`` are exact rationals, and their
+#: products in a determinant run to hundreds of digits, where factoring takes seconds and the closed
+#: form is a wall of digits nobody reads (the numeric route is exact to float64 either way).
+MAX_NUMBER_DIGITS = 40
+
+
+class NumbersTooLong(WorkCapExceeded):
+    """An exact number of the symbolic problem is longer than :data:`MAX_NUMBER_DIGITS` digits."""
+
+
+def number_digits(exprs) -> int:
+    """The most decimal digits (numerator plus denominator) of a rational number in ``exprs``."""
+    out = 0
+    for e in exprs:
+        for r in sp.sympify(e).atoms(sp.Rational):
+            out = max(out, len(str(abs(r.p))) + len(str(r.q)))
+    return out
+
+
+class SymbolicNumbersFailed(WorkCapExceeded):
+    """SymPy's own arithmetic on the scene's numbers failed (a fallback, like a work cap).
+
+    SymPy evaluates ``sqrt`` of a large integer at once, through ``factorint(limit=2**15)``,
+    which raises on some inputs: SymPy 1.14 caches a composite "prime factor" and raises
+    ``ValueError: ... is not a prime factor of ...`` (sympy/sympy#28621: the characteristic
+    polynomial of two masses joined by ``k = "2e-70"`` with a unit wall spring), and with gmpy2 on
+    Python < 3.13 ``math.log`` of an ``mpz`` past 1e308 raises ``OverflowError`` (a potential
+    ``1e200*d**2``; Python's gh-120950). Exact numbers of tens to hundreds of digits come from
+    float literals such as ``2e-70`` (kept exact) and their products in determinants.
+    """
+
+
+def _raised_in_sympy(exc: BaseException) -> bool:
+    """Whether the innermost frame of ``exc``'s traceback is SymPy's (not springchain's own check)."""
+    tb = exc.__traceback__
+    if tb is None:
+        return False
+    while tb.tb_next is not None:
+        tb = tb.tb_next
+    return os.sep + "sympy" + os.sep in tb.tb_frame.f_code.co_filename
+
+
+@contextlib.contextmanager
+def sympy_numbers():
+    """Turn SymPy's internal arithmetic failures inside the block into :class:`SymbolicNumbersFailed`.
+
+    Only a ``ValueError`` or ``OverflowError`` raised from SymPy's own code is converted (the caller then
+    falls back to numeric values, as past a work cap); anything raised elsewhere propagates unchanged.
+    """
+    try:
+        yield
+    except (ValueError, OverflowError) as exc:
+        if not _raised_in_sympy(exc):
+            raise
+        raise SymbolicNumbersFailed(f"SymPy: {type(exc).__name__}: {str(exc)[:80]}") from exc
+
+
 def check(size: int, cap: int) -> None:
     """Raise :class:`WorkCapExceeded` when ``size`` is over ``cap``."""
     if size > cap:
         raise WorkCapExceeded(f"{size} > {cap}")
 
 
-__all__ = ["WorkCapExceeded", "MAX_DET_TERMS", "det_terms_bound", "monomials", "ops", "check"]
+__all__ = ["WorkCapExceeded", "NumbersTooLong", "MAX_NUMBER_DIGITS", "number_digits", "SymbolicNumbersFailed", "sympy_numbers", "MAX_DET_TERMS", "det_terms_bound", "monomials", "ops", "check"]

@@ -31,7 +31,13 @@ from dataclasses import dataclass, field
 import numpy as np
 import scipy.linalg
 
+from .errors import RunRefused
 from .lapack_bidiagonal import bidiagonal_svd
+
+#: Largest ratio of the spring factor's entries that bisection (stebz, which squares them) resolves in
+#: the relative sense; beyond it the values come from LAPACK's dbdsqr QR (O(n²)), up to QR_MAX masses.
+STEBZ_RANGE = 1e140
+QR_MAX = 4000
 
 
 @dataclass(frozen=True)
@@ -140,15 +146,35 @@ def singular_values(f: Bidiagonal, lowest: int | None = None, highest: int = 0) 
     s, n = f.size, f.n
     first = s + (s - n)  # Golub–Kahan index of the smallest physical ω (the padding zero skipped)
     t = _golub_kahan(f)
+    # stebz floors its pivots and its stopping tolerance at tiny * max(1, max entry²) (absolute): at
+    # entries of 1e149 that is 2e-10, which took ω² = 2 to 1.99999999768. Scaled by a power of 2 (exact)
+    # to a largest entry in [1/2, 1), the floor is tiny itself: relative accuracy down to ω ~ 1e-300.
+    scale = np.ldexp(1.0, -int(np.frexp(np.max(t))[1])) if t.size and np.max(t) > 0 else 1.0
+    nonzero = t[t > 0]
+    if nonzero.size > 1 and np.max(nonzero) > STEBZ_RANGE * np.min(nonzero):
+        # stebz squares the entries: past STEBZ_RANGE the small ones underflow (every ω² of a 14-mass
+        # chain of 1/3e149 kg and 1e80/1e-80 N/m came out as 3.2e-230, true 6.3e-231 ... 1.2e-229)
+        if s > QR_MAX:
+            raise RunRefused(f"the spring factor's entries sqrt(k/m) span {np.max(nonzero) / np.min(nonzero):.3g} "
+                             f"(more than {STEBZ_RANGE:g}) in a chain of {n} masses: float64 bisection cannot give "
+                             f"its ω relative accuracy, and the O(n²) QR route takes at most {QR_MAX} masses",
+                             "masses")
+        # dbdsqr's zero-shift QR: relatively accurate, no squares (its dqds, without vectors, lost 4e-4 here)
+        sigma, _ = bidiagonal_svd(f.d, f.e, f.upper, vectors=False, qr=True)
+        sigma = np.sort(sigma)[s - n:]
+        sigma[: f.rigid] = 0.0
+        if lowest is None or lowest + highest >= n:
+            return sigma
+        return np.concatenate([sigma[:lowest], sigma[n - highest:]])
 
     def select(a: int, b: int) -> np.ndarray:
         if b < a:
             return np.zeros(0)
         if s == 1:
             return np.abs(f.d[:1])
-        v = scipy.linalg.eigh_tridiagonal(np.zeros(2 * s), t, eigvals_only=True, select="i", select_range=(a, b),
-                                          lapack_driver="stebz", tol=np.finfo(float).tiny)
-        return np.sort(np.abs(v))
+        v = scipy.linalg.eigh_tridiagonal(np.zeros(2 * s), t * scale, eigvals_only=True, select="i",
+                                          select_range=(a, b), lapack_driver="stebz", tol=np.finfo(float).tiny)
+        return np.sort(np.abs(v)) / scale
 
     if lowest is None or lowest + highest >= n:
         w = select(first, 2 * s - 1)
