@@ -1,0 +1,392 @@
+"""Every failure the oracle found, as a minimal scene: issue 31's listed findings and the new ones.
+
+Each :class:`Case` is a scene (TOML text and tables) and the outputs to check; ``test_oracle.py`` runs
+:func:`oracle.checks.check_scene` (or a spectrum check) on it and expects no finding. Cases still failing
+carry ``xfail`` (strict): when the fix lands the test passes, pytest reports XPASS as a failure, and the
+mark is removed. ``known`` is issue 31's finding, or ``None`` for a finding this oracle found (``new``
+says what it is).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+from .scenes import GeneratedRecord
+
+
+@dataclass(frozen=True)
+class Case:
+    id: str
+    text: str = ""
+    tables: dict = field(default_factory=dict)
+    outputs: tuple = ("modes",)
+    frf_pair: tuple | None = None
+    record: GeneratedRecord | None = None
+    features: frozenset = frozenset()
+    known: str | None = None  # issue 31's wording
+    new: str | None = None  # what this oracle found (not in issue 31)
+    failing: bool = True
+
+
+def scene(name: str, params: dict, body: str) -> str:
+    p = "\n".join(f"{k} = {v!r}" for k, v in params.items())
+    return f'name = "{name}"\n\n[parameters]\n{p}\n\n{body.strip()}\n'
+
+
+#: Four unevenly spaced rows, the last one nonzero: the oscillator's largest |u| comes after the record.
+PULSE = GeneratedRecord((0.0, 0.13, 0.31, 0.4), (0.0, 1.0, -0.4, 0.7), (0.0, 0.05), (1.0, 5.0))
+
+CASES = [
+    # -- issue 31's findings (being fixed) ----------------------------------------------------------------
+    Case("spectrum_free_vibration_after_record", record=PULSE, outputs=("spectrum",),
+         known="response spectra miss the peak after the record ends"),
+    Case("rsa_record_free_vibration", scene("sdof_rsa", {"m": 1.0, "k": 1.5791367041742972}, '''
+[masses]
+p = "m"
+[[springs]]
+between = ["wall", "p"]
+k = "k"
+[damping]
+modal = 0.05
+'''), outputs=("rsa",), record=PULSE, known="response spectra miss the peak after the record ends (rsa, T = 5 s)"),
+    Case("wall_spring_1e-90", scene("weak_wall", {"m": 1.0, "k": 1.0, "kw": 1e-90}, '''
+[masses]
+p = "m"
+q = "m"
+[[springs]]
+between = ["wall", "p"]
+k = "kw"
+[[springs]]
+between = ["p", "q"]
+k = "k"
+'''), known="contrast: a wall spring 1e-90 of its neighbour prints omega^2 = 0.0"),
+    Case("weak_link_2e-70", scene("weak_link", {"m": 1.0}, '''
+[masses]
+p = "m"
+q = "m"
+[[springs]]
+between = ["wall", "p"]
+k = "1"
+[[springs]]
+between = ["p", "q"]
+k = "2e-70"
+'''), known="contrast: omega^2 = 0.0 printed for the elastic mode of a 2e-70 link (true 1e-70)"),
+    Case("frf_contrast_1e36", scene("frf36", {"m": 1.0, "k": 1.0, "K": 1e36}, '''
+[masses]
+p = "m"
+q = "m"
+[[springs]]
+between = ["wall", "p"]
+k = "k"
+[[springs]]
+between = ["p", "q"]
+k = "K"
+'''), outputs=("frf",), frf_pair=(0, 1), known="contrast: frf 'matrix is numerically singular' from 1e36"),
+    Case("lennard_jones_under_gravity", scene("lj", {"m": 0.3, "eps": 0.05, "r0": 1.12, "g": 0.1}, '''
+[masses]
+a = "m"
+b = "m"
+[[springs]]
+between = ["wall", "a"]
+potential = "eps*((r0/(r0 + d))**12 - 2*(r0/(r0 + d))**6)"
+[[springs]]
+between = ["a", "b"]
+potential = "eps*((r0/(r0 + d))**12 - 2*(r0/(r0 + d))**6)"
+[gravity]
+g = "g"
+'''), features=frozenset({"potential:lennard_jones"}),
+         known="Lennard-Jones springs under any constant load are refused"),
+    Case("spring_forces_hanging_contrast", scene("hang6", {"m": 1.0, "g": -9.81}, '''
+[masses]
+a = "m"
+b = "m"
+c = "m"
+d1 = "m"
+e = "m"
+f = "m"
+[[springs]]
+between = ["wall", "a"]
+k = "1e-6"
+[[springs]]
+between = ["a", "b"]
+k = "1.5848931924611134e-4"
+[[springs]]
+between = ["b", "c"]
+k = "0.025118864315095794"
+[[springs]]
+between = ["c", "d1"]
+k = "3.981071705534973"
+[[springs]]
+between = ["d1", "e"]
+k = "630.957344480193"
+[[springs]]
+between = ["e", "f"]
+k = "1e6"
+[gravity]
+g = "g"
+[simulation]
+dt = 1.0
+steps = 100
+'''), outputs=("simulate",), features=frozenset({"regime:wide"}),
+         known="time-history spring forces at contrast (simulate --springs, hanging chain 1e-6 ... 1e6)"),
+    Case("frf_infinite_at_a_near_node", scene("frf36d", {"m": 1.0, "k": 1.0, "K": 1e36, "c": 0.1}, '''
+[masses]
+p = "m"
+q = "m"
+[[springs]]
+between = ["wall", "p"]
+k = "K"
+[[springs]]
+between = ["p", "q"]
+k = "k"
+[[dampers]]
+between = ["q", "wall"]
+c = "c"
+'''), outputs=("frf",), frf_pair=(1, 1),
+         known="frf resonance table: '|H| = inf' at omega_n = 1e18, a mode whose coupling to the output is 1e-72 "
+               "(|H| there is 1.0 to 17 digits)"),
+    Case("frf_unconnected_pieces", scene("apart", {"m": 0.026, "M": 5.0, "Q": 0.35, "k": 0.41}, '''
+[masses]
+a = "m"
+b = "M"
+c = "Q"
+[[springs]]
+between = ["b", "c"]
+k = "k"
+[damping]
+modal = 0.018
+'''), outputs=("frf",), frf_pair=(0, 1), known="frf resonance table: resonances listed for H = 0 (unconnected)"),
+    Case("frf_peak_not_a_local_maximum", scene("farpeak", {
+        "m": 1408.997650436614, "w": 98898345.09000109, "c2": 1.0, "k": 2.165255687336383e-11,
+        "x": 170871782964.03098, "h": 15.811388300841896}, '''
+[masses]
+m1 = "m"
+base = "w"
+atom = "c2"
+[[springs]]
+between = ["m1", "base"]
+k = "sqrt(k)"
+[[springs]]
+between = ["base", "atom"]
+k = "2*x"
+[[springs]]
+between = ["wall", "base"]
+k = "3*h"
+[[springs]]
+between = ["wall", "m1"]
+k = "x/2"
+[damping]
+modal = 0.002550157606663858
+'''), outputs=("frf",), frf_pair=(2, 0),
+         known="frf resonance table: an 'exact peak' (omega = 584561.61) that is not a local maximum of |H| "
+               "(|H| rises through it); found by the generator"),
+    Case("prestressed_without_initial", scene("pre", {"m": 1.0, "k": 1.0, "T0": 0.5}, '''
+[masses]
+p = "m"
+q = "m"
+[[springs]]
+between = ["wall", "p"]
+potential = "T0*d + k*d**2/2"
+[[springs]]
+between = ["p", "q"]
+k = "k"
+'''), outputs=("simulate",), known="a pre-stressed potential scene without [initial] is told its motion is zero"),
+    # -- found by this oracle (not in issue 31) ------------------------------------------------------------
+    Case("N1_equilibrium_json_damped", scene("eqjson", {"m": 1.0, "k": 2.0, "beta": 0.5, "g": -1.0, "c": 0.1}, '''
+[masses]
+p = "m"
+[[springs]]
+between = ["wall", "p"]
+potential = "k*d**2/2 + beta*d**4/4"
+[[dampers]]
+between = ["p", "wall"]
+c = "c"
+[gravity]
+g = "g"
+'''), new="modes --json of a damped potential scene has no 'equilibrium' (README: --json adds it; "
+          "derive/report.py modes_json overwrites `extra` with the damping fields)"),
+    Case("N2_cubic_under_gravity", scene("cubic_sag", {"m": 1.0, "k": 2.0, "kappa": 0.5, "g": -1.0}, '''
+[masses]
+p = "m"
+q = "m"
+[[springs]]
+between = ["wall", "p"]
+k = "k"
+k3 = "kappa"
+[[springs]]
+between = ["p", "q"]
+k = "k"
+[gravity]
+g = "g"
+'''), features=frozenset({"spring:cubic", "gravity"}),
+         new="a cubic (k3) spring under gravity or a constant force: modes prints 'x_eq = K^-1 M g' = (-1, -1.5) "
+             "and the modes of the linear springs, ignoring k3: omega^2 = 0.7639, 5.2361 printed; about the true "
+             "equilibrium (-0.8477, -1.3477) they are 1.0154, 6.0625"),
+    Case("N3_potential_simulate_springs", scene("pot_springs", {"m": 1.0, "k": 1.0, "beta": 0.5}, '''
+[masses]
+p = "m"
+[[springs]]
+between = ["wall", "p"]
+potential = "k*d**2/2 + beta*d**4/4"
+[initial]
+x = [0.5]
+[simulation]
+dt = 0.01
+steps = 10
+'''), outputs=("simulate",),
+         new="simulate(springs=True) / --springs on a scene with a potential spring: AttributeError "
+             "'cubic_constants' (numeric/storeys.py spring_series)"),
+    Case("N3_chain_k3_simulate_springs", scene("chain_k3", {"m": 1.0, "k": 1.0, "kappa": 0.5}, '''
+[chain]
+n = 3
+mass = "m"
+k = "k"
+k3 = "kappa"
+left = "wall"
+right = "free"
+[initial]
+x = [0.1, 0.0, 0.0]
+[simulation]
+dt = 0.01
+steps = 10
+'''), outputs=("simulate",), features=frozenset({"form:chain", "spring:cubic"}),
+         new="simulate(springs=True) on a [chain] with k3: AttributeError 'cubic_constants'"),
+    Case("N4_potential_tension", scene("pot_k3", {"m": 1.0, "k": 1.0, "w": 2.0, "kappa": 1.0}, '''
+[masses]
+p = "m"
+q = "m"
+[[springs]]
+between = ["wall", "p"]
+potential = "k*(exp(w*d) - 1 - w*d)/w**2"
+[[springs]]
+between = ["p", "q"]
+k = "k"
+k3 = "kappa"
+[initial]
+x = [0.5, 0.0]
+[simulation]
+dt = 0.01
+steps = 10
+'''), outputs=("simulate",), features=frozenset({"potential:exp", "spring:cubic"}),
+         new="simulate(springs=True) with a potential spring beside a k3 spring: the potential spring's "
+             "'tension' is V''(0)*d, not V'(d) (here k*d instead of k*(exp(w d) - 1)/w: 0.5 vs 0.859)"),
+    Case("N5_last_frame_with_table", scene("last_frame", {"m": 1.0, "k": 1.0}, '''
+[masses]
+p = "m"
+[[springs]]
+between = ["wall", "p"]
+k = "k"
+[[forces]]
+on = "p"
+table = "f.csv"
+[initial]
+x = [1.0]
+[simulation]
+dt = 0.1
+steps = 16
+record_every = 3
+'''), tables={"f.csv": "t,f\n0,0\n1,1\n2,0\n"}, outputs=("simulate",), features=frozenset({"force:table"}),
+         new="exact method with a table load and steps not a multiple of record_every: the last recorded "
+             "frame (t = 1.6) is the initial state x = 1.0 (true 0.2838; verlet 0.5004 beside it)"),
+    Case("N6_overdamped_chain_warning", scene("od_chain", {"m": 1.75e-116, "k": 9e-118, "c": 7e128}, '''
+[chain]
+n = 3
+mass = "m"
+k = "k"
+left = "wall"
+right = "free"
+[[dampers]]
+between = ["i", "i+1"]
+c = "c"
+'''), features=frozenset({"form:chain"}),
+         new="modes of a strongly overdamped [chain] leak 'ComplexWarning: Casting complex values to real' "
+             "(numeric/linear_exact.py:144) on stderr"),
+    Case("N7_frf_low_resonance_wide_contrast", scene("trial", {
+        "energy": 7.0, "omega": 47227097.37989884, "m": 56855207.99507734, "beta": 0.003153239924458225, "k": 1.0,
+        "M": 196671362653.1338, "K": 1.3191229012370379e-05, "alpha": 3.0, "E": 1.5, "np": 1.0,
+        "Omega": 0.03869820547103473}, '''
+[masses]
+top = "energy"
+cart = "3*omega"
+q = "m"
+m3 = "beta"
+s = "k"
+[[springs]]
+between = ["top", "cart"]
+k = "M"
+[[springs]]
+between = ["cart", "q"]
+k = "K"
+[[springs]]
+between = ["q", "m3"]
+k = "omega/2"
+[[springs]]
+between = ["m3", "s"]
+k = "sqrt(alpha)"
+[[springs]]
+between = ["s", "top"]
+potential = "-E*np**2*log(1 - (d/np)**2)/2"
+[[springs]]
+between = ["wall", "m3"]
+k = "Omega"
+[[dampers]]
+between = ["cart", "m3"]
+c = "M"
+'''), outputs=("frf",), frf_pair=(2, 2), features=frozenset({"regime:wide"}),
+         new="frf H and the 'exact peak' off by 2.5e-9 relative (README: <= 1e-10) at the lowest resonance "
+             "(omega = 1.396e-5 rad/s) of a generated 5-mass loop (stiffness 1.3e-5 ... 2e11, a 2e11 dashpot); "
+             "found by the generator (also: '|H| = inf' claimed at omega_n = 1.798 where |H| is 2.8e-10)"),
+    Case("N9_rayleigh_prestressed_not_proportional", scene("ray7", {"m": 1.0, "k": 4.0, "T": 0.01}, '''
+[masses]
+a = "m"
+p = "m"
+q = "m"
+[[springs]]
+between = ["wall", "a"]
+k = "k"
+[[springs]]
+between = ["a", "p"]
+potential = "T*d + k*d**2/2"
+[damping]
+rayleigh = ["0.1", "0.01"]
+'''), features=frozenset({"potential:prestressed", "damping:rayleigh"}),
+         new="Rayleigh damping (C = alpha M + beta K, proportional by construction) on a scene whose pre-stressed "
+             "potential moves x_eq: modes --json says 'proportional': false and lists complex_modes (the zeta "
+             "values themselves are right)"),
+    Case("N10_chain_potential_constant_part", scene("chpot", {"m": 1.0, "k": 1.0, "beta": 0.5}, '''
+[chain]
+n = 3
+mass = "m"
+potential = "k*d**2/2 + beta*d**4/4"
+left = "wall"
+right = "free"
+[[forces]]
+on = 2
+f = "0.5 + 0.5*sin(2*t)"
+'''), features=frozenset({"form:chain", "potential:fput_beta", "force:harmonic2"}),
+         new="a [chain] with a potential and a force with a constant part ('0.5 + 0.5*sin(2*t)'): not refused "
+             "(f = '0.5' and gravity are, in one line: 'not supported yet for [chain] scenes'); modes prints the "
+             "modes about x = 0 (omega^2 0.198, 1.555, 3.247; about the equilibrium 0.259, 2.034, ...)"),
+    Case("N8_free_wall_chain_shape_order", scene("fw", {"m": 1.0, "k": 1.0}, '''
+[chain]
+n = 3
+mass = "m"
+k = "k"
+left = "free"
+right = "wall"
+'''), features=frozenset({"form:chain"}),
+         new="modes --json of a free-wall [chain]: shape_value lists the shape with i counted from the right "
+             "end (mass 2 first) while shape_mass_normalised beside it is in mass order"),
+    Case("N8_index_chain_no_shape_value", scene("idx", {"m": 1.0, "k": 1.0}, '''
+[chain]
+n = 3
+mass = "m*(1 + i % 2)"
+k = "k"
+left = "wall"
+right = "free"
+'''), features=frozenset({"form:chain"}),
+         new="modes --json of an index-dependent [chain] of 3 masses lists no shape_value (README: 'listed only "
+             "for chains of at most 40 masses'); its shapes appear only as shape_mass_normalised"),
+]
+
+__all__ = ["Case", "CASES", "PULSE", "scene"]
