@@ -37,6 +37,7 @@ TOL = {
     "frf.H": 1e-9,  # README: <= 1e-10 relative (complex)
     "frf.peak": 1e-9,
     "simulate.x": 1e-9,  # README: <= 1e-9 of the amplitude (or a note naming the float64 limit)
+    "simulate.aabs": 1e-8,  # derived from x and v: the forces over the masses
     "simulate.springs": 1e-8,  # of each series' own size
     "simulate.spring_eval": 1e-12,  # the tension of a given trajectory (no solve involved)
     "spectrum.sd": 1e-9,  # "exact" for piecewise-linear input (tested 2.8e-13)
@@ -355,9 +356,13 @@ def _check_damping(rep, md, ms, eq, js, recs, feats):
                 rep.add("modes.zeta", f"mode {j}: zeta not given (oracle {mp.nstr(o, 10)})", feats)
                 continue
             err = _rel(p, o, floor=1e-72 / TOL["modes.zeta"])
+            wd = r.get("omega_damped")
+            if wd is not None and o < 1:
+                err = max(err, _rel(wd, mp.sqrt(ms.omega2[j]) * mp.sqrt(1 - o * o)))
             worst = max(worst, err)
             if err > TOL["modes.zeta"]:
-                rep.add("modes.zeta", f"mode {j}: zeta {p!r} (oracle {mp.nstr(o, 17)})", feats)
+                rep.add("modes.zeta", f"mode {j}: zeta {p!r}, omega_d {wd!r} (oracle {mp.nstr(o, 17)}, "
+                                      f"{mp.nstr(mp.sqrt(ms.omega2[j]) * mp.sqrt(abs(1 - o * o)), 17)})", feats)
         note_error("modes.zeta", worst)
         return
     cm = js.get("complex_modes")
@@ -444,8 +449,9 @@ def _check_frf(rep, sc, scene, md, eq, pair, feats):
     try:
         with product(rep, "frf", feats):
             h = sc.frf(scene, name(i), name(o), transfer=False)
-            omega, H = np.asarray(h.omega), np.asarray(h.H)
+            omega, H, phase = np.asarray(h.omega), np.asarray(h.H), np.asarray(h.phase)
             res = list(h.resonances)
+            text = h.to_text()
     except Refused as exc:
         if not exc.message.startswith("traceback") and not _documented_refusal(exc.message):
             rep.add("frf", f"refused: {exc.message}", feats)
@@ -471,7 +477,15 @@ def _check_frf(rep, sc, scene, md, eq, pair, feats):
         if err > TOL["frf.H"]:
             rep.add("frf.H", f"H({omega[k]!r}) = {complex(H[k])!r} (oracle {mp.nstr(r, 17)})", feats)
             break
+        if connected and r != 0:  # the phase in degrees, unwrapped: the oracle's arg modulo 360
+            dphi = (phase[k] - float(mp.degrees(mp.arg(r))) + 180.0) % 360.0 - 180.0
+            if abs(dphi) > 1e-6:
+                rep.add("frf.phase", f"phase({omega[k]!r}) = {phase[k]!r} deg (oracle {mp.nstr(mp.degrees(mp.arg(r)), 12)} "
+                                     "mod 360)", feats)
+                break
     note_error("frf.H", worst)
+    if md.chain is not None and md.damped and "ζ not computed" in text:
+        rep.add("frf.resonances", "a damped [chain]'s resonance table says 'ζ not computed' (modes computes it)", feats)
     if not connected and any(r.participates for r in res):
         rep.add("frf.resonances", "input and output on unconnected pieces (H = 0): the table lists resonances "
                                   f"{[r.omega_n for r in res if r.participates]}", feats)
@@ -549,12 +563,38 @@ def _check_simulate(rep, sc, scene, md, eq, eq_error, feats, folder):
                                       f"at t = {times}; no float64 note", feats)
             ref_x = tr.x
             _compare_springs(rep, md, run, "modal", rows, ref_x, feats, limited, TOL["simulate.springs"])
+            if md.ground is not None and "aabs_modal" in run.extra and not limited:
+                _compare_aabs(rep, md, run, rows, tr, feats)
     elif md.springs:
         # no exact solution: the spring outputs of the run's own trajectory, evaluated by the oracle
         xs = np.asarray(run.x[method])[rows]
         if np.all(np.isfinite(xs)):
             ref_x = [[mp.mpf(float(v)) for v in row] for row in xs]
             _compare_springs(rep, md, run, method, rows, ref_x, feats, False, TOL["simulate.spring_eval"])
+
+
+def _compare_aabs(rep, md, run, rows, tr, feats):
+    """Absolute accelerations ẍ + a_g = (every force but the ground's inertial one) / m (README, Loads)."""
+    pa = np.asarray(run.extra["aabs_modal"])
+    ms = R.modes(md)
+    C = R.damping_matrix(md, ms) if md.damped else None
+    ref = []
+    for a, t in enumerate(tr.times):
+        x, v = tr.x[a], tr.v[a]
+        g = R.gradient(md, x)
+        row = []
+        for i in range(md.n):
+            f = -g[i] - (mp.fsum(C[i, j] * v[j] for j in range(md.n)) if C is not None else 0)
+            for ld in md.loads:
+                if ld.key != "ground":
+                    f += ld.b[i] * (ld.signal.value(t) if isinstance(ld.signal, R.Harm) else ld.signal.value(t, 1))
+            row.append(f / md.m[i])
+        ref.append(row)
+    scale = max(abs(v) for row in ref for v in row) or mp.mpf(1)
+    err = max(float(abs(mp.mpf(float(pa[r][i])) - ref[a][i]) / scale) for a, r in enumerate(rows) for i in range(md.n))
+    note_error("simulate.aabs", err)
+    if err > TOL["simulate.x"] * 10:
+        rep.add("simulate.aabs", f"aabs_modal off by {err:.3g} of its size", feats)
 
 
 def _compare_springs(rep, md, run, method, rows, ref_x, feats, limited, tol):
@@ -593,16 +633,24 @@ def _compare_springs(rep, md, run, method, rows, ref_x, feats, limited, tol):
 # -- response-spectrum analysis ----------------------------------------------------------------------------
 #: Most periods of the stiffest mode per record the rsa check runs (the product's spectrum cost grows with
 #: record length over period: issue 31's resource finding; the oracle's too).
-MAX_RSA_CYCLES = 2000
+MAX_RSA_CYCLES = 200
+#: Largest period over record step the rsa check asks the product for (its cost grows as T/step).
+MAX_PERIOD_OVER_STEP = 1e6
 
 
 def _check_rsa(rep, sc, scene, md, eq, record, feats, folder):
     if md.free_pieces():
         return _check_rsa_refused(rep, sc, scene, record, feats, folder)
-    wmax = mp.sqrt(max(R.modes(md, eq).omega2))
-    cycles = float(wmax) * (record.t[-1] - record.t[0]) / (2 * math.pi)
+    w2 = R.modes(md, eq).omega2
+    cycles = float(mp.sqrt(max(w2))) * (record.t[-1] - record.t[0]) / (2 * math.pi)
     if cycles > MAX_RSA_CYCLES:
         rep.skipped.append(f"rsa: {cycles:.3g} periods of the stiffest mode in the record")
+        return
+    slowest = 2 * math.pi / float(mp.sqrt(min(w2)))
+    if slowest / min(b - a for a, b in zip(record.t, record.t[1:])) > MAX_PERIOD_OVER_STEP:
+        rep.skipped.append(f"rsa: the slowest mode's period {slowest:.3g} s is {MAX_PERIOD_OVER_STEP:g}+ record steps "
+                           "(the product's free-vibration tail then costs ~T/step: issue 31's resource finding, "
+                           "test_finding[spectrum_time_long_period])")
         return
     csv_path = folder / "record.csv"
     csv_path.write_text(record.csv(), encoding="utf-8")
@@ -614,6 +662,9 @@ def _check_rsa(rep, sc, scene, md, eq, record, feats, folder):
         if not exc.message.startswith("traceback") and not _documented_refusal(exc.message):
             rep.add("rsa", f"refused: {exc.message}", feats)
         return
+    if eq is not None and any(v != 0 for v in eq.x) and any("about x = 0" in n for n in r.notes):
+        rep.add("rsa.note", "notes say 'the linearization about x = 0' while the scene's equilibrium is away from 0",
+                feats)
     if any(len(g) > 1 for g in _clusters(R.modes(md, eq).omega2, 1e-6)):
         rep.skipped.append("rsa: repeated frequencies (the per-mode split is not unique)")
         return
@@ -633,9 +684,7 @@ def _check_rsa(rep, sc, scene, md, eq, record, feats, folder):
             err = _rel(modal[j][key], o, floor=1e-72 if key == "zeta" else 0)
             worst = max(worst, err)
             if err > TOL["rsa"]:
-                after = " (oracle's peak is in the free vibration after the record)" if key == "sd" and any(
-                    free_part.values()) else ""
-                bad.append(f"mode {j + 1} {key} {modal[j][key]!r} (oracle {mp.nstr(o, 12)}){after}")
+                bad.append(f"mode {j + 1} {key} {modal[j][key]!r} (oracle {mp.nstr(o, 12)})")
         err = _rel(abs(modal[j]["participation_factor"]), abs(ref.gamma[j]))
         worst = max(worst, err)
         if err > TOL["rsa"]:
@@ -655,8 +704,10 @@ def _check_rsa(rep, sc, scene, md, eq, record, feats, folder):
         if err > TOL["rsa"]:
             bad.append(f"{how} base shear {got['base_shear']!r} (oracle {mp.nstr(comb['base_shear'], 12)})")
     note_error("rsa", worst)
-    for b in bad[:6]:
-        rep.add("rsa", b, feats)
+    after = any(free_part.values()) and any(" sd " in b for b in bad)
+    for b in bad[:6]:  # a wrong SD carries into everything after it: said on each line
+        rep.add("rsa", b + (" [an SD whose oracle peak is in the free vibration after the record]" if after else ""),
+                feats)
 
 
 def _check_rsa_refused(rep, sc, scene, record, feats, folder):
@@ -708,6 +759,27 @@ def check_record(rec, features=frozenset()) -> Report:
     return rep
 
 
+def check_spectrum_time(rec, budget: float = 20.0, features=frozenset()) -> Report:
+    """``response_spectrum`` of ``rec`` in a fresh process: an answer or a one-line refusal within ``budget``
+    seconds (the issue's item 5: time bounded whatever the periods and the record)."""
+    rep = Report()
+    code = ("import sys\nimport springchain as sc\ntry:\n"
+            f"    sc.response_spectrum(({list(rec.t)!r}, {list(rec.a)!r}), zeta={list(rec.zeta)!r}, "
+            f"periods={list(rec.periods)!r})\n"
+            "except (sc.RunRefused, sc.SceneError) as exc:\n    print(exc, file=sys.stderr)\n    sys.exit(2)\n")
+    env = dict(os.environ, SPRINGCHAIN_PROGRESS="0")
+    try:
+        proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=budget, env=env)
+    except subprocess.TimeoutExpired:
+        rep.add("spectrum.time", f"no answer within {budget:g} s (periods {list(rec.periods)}, record "
+                                 f"{rec.t[0]:g} ... {rec.t[-1]:g} s in {len(rec.t)} rows)", features)
+        return rep
+    err = proc.stderr.strip().splitlines()
+    if proc.returncode not in (0, 2) or (proc.returncode and len(err) != 1):
+        rep.add("spectrum.time", f"exit {proc.returncode}: {proc.stderr[-300:]!r}", features)
+    return rep
+
+
 # -- the command line -------------------------------------------------------------------------------------
 def run_cli(args, cwd: Path, timeout: float = 300):
     env = dict(os.environ, SPRINGCHAIN_PROGRESS="0")
@@ -737,8 +809,9 @@ def check_cli(rep, path: Path, feats, md=None) -> None:
 #: (id, predicate on (output, detail, features)) for the findings issue 31 lists (being fixed).
 KNOWN = (
     ("response spectra miss the peak after the record ends",
-     lambda o, d, f: o in ("spectrum.sd", "rsa") and "free vibration after the record" in d
-     or o in ("spectrum", "rsa") and "MemoryError" in d),
+     lambda o, d, f: o in ("spectrum.sd", "rsa") and "free vibration after the record" in d),
+    ("response spectra: time and memory grow without bound with period over step",
+     lambda o, d, f: o == "spectrum.time" or (o in ("rsa", "spectrum") and "MemoryError" in d)),
     ("contrast inside the accepted range breaks the core outputs",
      lambda o, d, f: ("is not a prime factor" in d or "numerically singular" in d
                       or (o == "modes.omega2" and ": 0.0 (oracle" in d)
@@ -750,6 +823,8 @@ KNOWN = (
     ("frf's resonance table says false things",
      lambda o, d, f: o in ("frf.resonances", "frf.peak") and ("node" in d or "unconnected" in d
                                                               or "not a local maximum" in d or "inf'" in d)),
+    ("smaller: damped [chain] frf says 'zeta not computed'; rsa on a potential scene says 'about x = 0'",
+     lambda o, d, f: (o == "frf.resonances" and "ζ not computed" in d) or o == "rsa.note"),
     ("pre-stressed potential scene without [initial] told its motion is zero",
      lambda o, d, f: o == "simulate" and "refused as motionless" in d),
 )
@@ -785,6 +860,9 @@ FOUND = (
 #: Findings whose root is the model the product builds (wrong equilibrium): their consequences in every
 #: output are theirs, checked before issue 31's symptoms.
 ROOTS = (
+    ("N11 a constant ground acceleration is left out of a potential scene's equilibrium",
+     lambda o, d, f: "ground:const" in f and any(x.startswith("potential:") for x in f)
+     and (o.startswith("modes") or o.startswith("frf") or o.startswith("rsa"))),
     ("N2 cubic (k3) springs under constant loads: modes about the linear sag",
      lambda o, d, f: o in ("modes.omega2", "modes.shape", "modes.gamma", "modes.zeta", "modes.complex",
                            "modes.equilibrium", "frf.H", "frf.peak", "frf.resonances", "rsa") and "spring:cubic" in f

@@ -35,11 +35,18 @@ def scene(name: str, params: dict, body: str) -> str:
 
 #: Four unevenly spaced rows, the last one nonzero: the oscillator's largest |u| comes after the record.
 PULSE = GeneratedRecord((0.0, 0.13, 0.31, 0.4), (0.0, 1.0, -0.4, 0.7), (0.0, 0.05), (1.0, 5.0))
+#: Evenly spaced rows ending at 0: a record the product's spectrum gets right (to keep other cases apart).
+EVEN = GeneratedRecord((0.0, 0.1, 0.2, 0.3, 0.4), (0.0, 1.0, -0.4, 0.7, 0.0), (0.05,), (1.0,))
 
 CASES = [
     # -- issue 31's findings (being fixed) ----------------------------------------------------------------
     Case("spectrum_free_vibration_after_record", record=PULSE, outputs=("spectrum",),
          known="response spectra miss the peak after the record ends"),
+    Case("spectrum_time_long_period", record=GeneratedRecord((0.0, 0.02, 0.04), (0.5, -0.1, 0.0), (0.05,), (1e9,)),
+         outputs=("spectrum_time",),
+         known="response spectra: time grows as period/step (T = 1e9 s on a 0.02 s record: no answer in 20 s; "
+               "T = 1e7 s takes 7 s; found as an rsa that did not finish in 300 s on a generated scene whose "
+               "slowest mode has T = 1.4e9 s)"),
     Case("rsa_record_free_vibration", scene("sdof_rsa", {"m": 1.0, "k": 1.5791367041742972}, '''
 [masses]
 p = "m"
@@ -191,6 +198,34 @@ potential = "T0*d + k*d**2/2"
 between = ["p", "q"]
 k = "k"
 '''), outputs=("simulate",), known="a pre-stressed potential scene without [initial] is told its motion is zero"),
+    Case("damped_chain_frf_zeta_not_computed", scene("dchain", {"m": 0.25, "k": 3.0, "c": 0.05}, '''
+[chain]
+n = 4
+mass = "m"
+k = "k*(1 + i % 2)"
+left = "wall"
+right = "free"
+[[dampers]]
+between = [0, "wall"]
+c = "c"
+'''), outputs=("frf",), frf_pair=(0, 3), features=frozenset({"form:chain"}),
+         known="smaller: damped [chain] frf prints 'zeta not computed' while modes computes it"),
+    Case("rsa_potential_note_about_zero", scene("rsapot", {"m": 1.0, "k": 2.0, "beta": 0.5, "g": -1.0}, '''
+[masses]
+p = "m"
+q = "m"
+[[springs]]
+between = ["wall", "p"]
+potential = "k*d**2/2 + beta*d**4/4"
+[[springs]]
+between = ["p", "q"]
+k = "k"
+[damping]
+modal = 0.05
+[gravity]
+g = "g"
+'''), outputs=("rsa",), record=EVEN,
+         known="smaller: rsa on a potential scene says 'linearization about x = 0' (its numbers are about x_eq)"),
     # -- found by this oracle (not in issue 31) ------------------------------------------------------------
     Case("N1_equilibrium_json_damped", scene("eqjson", {"m": 1.0, "k": 2.0, "beta": 0.5, "g": -1.0, "c": 0.1}, '''
 [masses]
@@ -367,6 +402,18 @@ f = "0.5 + 0.5*sin(2*t)"
          new="a [chain] with a potential and a force with a constant part ('0.5 + 0.5*sin(2*t)'): not refused "
              "(f = '0.5' and gravity are, in one line: 'not supported yet for [chain] scenes'); modes prints the "
              "modes about x = 0 (omega^2 0.198, 1.555, 3.247; about the equilibrium 0.259, 2.034, ...)"),
+    Case("N11_ground_constant_potential_equilibrium", scene("gpot", {"m": 1.0, "k": 2.0, "beta": 0.5, "A": -1.0}, '''
+[masses]
+p = "m"
+[[springs]]
+between = ["wall", "p"]
+potential = "k*d**2/2 + beta*d**4/4"
+[ground]
+acceleration = "A"
+'''), features=frozenset({"potential:fput_beta", "ground:const"}),
+         new="a potential scene under a constant ground acceleration (README: a static load, like gravity): the "
+             "equilibrium ignores it (extension 0.0; true 0.47347, from k d + beta d^3 = -m A) and omega^2 = 2.0 "
+             "is printed (true 2.33625)"),
     Case("N8_free_wall_chain_shape_order", scene("fw", {"m": 1.0, "k": 1.0}, '''
 [chain]
 n = 3
@@ -389,4 +436,4 @@ right = "free"
              "for chains of at most 40 masses'); its shapes appear only as shape_mass_normalised"),
 ]
 
-__all__ = ["Case", "CASES", "PULSE", "scene"]
+__all__ = ["Case", "CASES", "PULSE", "EVEN", "scene"]

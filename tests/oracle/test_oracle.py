@@ -54,6 +54,8 @@ def _param(case: Case):
 def run_case(case: Case, folder: Path) -> C.Report:
     if case.outputs == ("spectrum",):
         return C.check_record(case.record, case.features)
+    if case.outputs == ("spectrum_time",):
+        return C.check_spectrum_time(case.record, 20.0, case.features)
     gen = S.GeneratedScene(case.text, case.tables, (), case.features, case.id)
     return C.check_scene(gen, folder, frf_pair=case.frf_pair, record=case.record, outputs=set(case.outputs))
 
