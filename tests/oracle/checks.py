@@ -787,22 +787,26 @@ def run_cli(args, cwd: Path, timeout: float = 300):
                           timeout=timeout, env=env)
 
 
-def check_cli(rep, path: Path, feats, md=None) -> None:
-    """``springchain modes PATH --json``: exit 0 with one JSON object, or exit 2 with one line on stderr."""
+def check_cli(rep, path: Path, feats, md=None, argv=("modes", "{scene}", "--json"), timeout: float = 300) -> None:
+    """``springchain ARGV`` (default ``modes PATH --json``): exit 0 (with ``--json``: one JSON object on stdout),
+    or exit 2 with one line on stderr naming the error."""
+    args = [a.replace("{scene}", str(path)) for a in argv]
     try:
-        proc = run_cli(["modes", str(path), "--json"], path.parent)
+        proc = run_cli(args, path.parent, timeout)
     except subprocess.TimeoutExpired:
-        rep.add("cli", "springchain modes --json did not finish in 300 s", feats)
+        rep.add("cli", f"springchain {' '.join(argv)} did not finish in {timeout:g} s (a hang)", feats)
         return
     if proc.returncode == 0:
-        try:
-            json.loads(proc.stdout)
-        except ValueError:
-            rep.add("cli", f"exit 0 but stdout is not one JSON object: {proc.stdout[:200]!r}", feats)
+        if "--json" in args:
+            try:
+                json.loads(proc.stdout)
+            except ValueError:
+                rep.add("cli", f"exit 0 but stdout is not one JSON object: {proc.stdout[:200]!r}", feats)
         return
     err = proc.stderr.strip().splitlines()
     if proc.returncode != 2 or len(err) != 1 or not err[0].startswith("springchain: error:"):
-        rep.add("cli", f"exit {proc.returncode}, stderr {len(err)} lines: {proc.stderr[-300:]!r}", feats)
+        rep.add("cli", f"springchain {argv[0]}: exit {proc.returncode}, stderr {len(err)} lines, ending "
+                       f"{proc.stderr.strip().splitlines()[-1][:200] if err else ''!r}", feats)
 
 
 # -- the issue's findings -----------------------------------------------------------------------------------
@@ -823,6 +827,8 @@ KNOWN = (
     ("frf's resonance table says false things",
      lambda o, d, f: o in ("frf.resonances", "frf.peak") and ("node" in d or "unconnected" in d
                                                               or "not a local maximum" in d or "inf'" in d)),
+    ("contrast inside the accepted range breaks the core outputs (the command line: a traceback)",
+     lambda o, d, f: o == "cli" and "numerically singular" in d),
     ("smaller: damped [chain] frf says 'zeta not computed'; rsa on a potential scene says 'about x = 0'",
      lambda o, d, f: (o == "frf.resonances" and "ζ not computed" in d) or o == "rsa.note"),
     ("pre-stressed potential scene without [initial] told its motion is zero",
@@ -836,7 +842,7 @@ FOUND = (
     ("N1 modes --json drops 'equilibrium' of a damped potential scene",
      lambda o, d, f: o == "modes.equilibrium" and "has no 'equilibrium'" in d),
     ("N3 simulate springs=True: AttributeError cubic_constants",
-     lambda o, d, f: o == "simulate" and "cubic_constants" in d),
+     lambda o, d, f: o in ("simulate", "cli") and "cubic_constants" in d),
     ("N4 simulate springs=True: a potential spring's tension is V''(0) d, not V'(d)",
      lambda o, d, f: o == "simulate.springs" and any(x.startswith("potential:") for x in f)
      and "spring:cubic" in f),
@@ -849,6 +855,10 @@ FOUND = (
      and "not a local maximum" not in d),
     ("N8 [chain] modes --json: no shape_value (index-dependent) / shape_value in reversed order (free-wall)",
      lambda o, d, f: o == "modes.shape" and "form:chain" in f),
+    ("N12 participation factors attached to the wrong modes at extreme contrast (omega^2 right)",
+     lambda o, d, f: o == "modes.gamma" and "regime:extreme" in f),
+    ("N13 modes hangs in SymPy (damping closed forms) at extreme parameter values",
+     lambda o, d, f: o == "cli" and "a hang" in d),
     ("N9 Rayleigh damping called non-proportional (complex modes) when a pre-stressed potential moves x_eq",
      lambda o, d, f: o in ("modes.zeta", "modes.complex") and ("said proportional = False" in d
                                                                or "oracle has no complex mode" in d

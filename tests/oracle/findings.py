@@ -23,6 +23,8 @@ class Case:
     frf_pair: tuple | None = None
     record: GeneratedRecord | None = None
     features: frozenset = frozenset()
+    cli: tuple = ()  # command-line arguments ("{scene}" is the scene's path): checked for exit 0 or one line
+    timeout: float = 300.0  # seconds the command may take
     known: str | None = None  # issue 31's wording
     new: str | None = None  # what this oracle found (not in issue 31)
     failing: bool = True
@@ -226,6 +228,18 @@ modal = 0.05
 g = "g"
 '''), outputs=("rsa",), record=EVEN,
          known="smaller: rsa on a potential scene says 'linearization about x = 0' (its numbers are about x_eq)"),
+    Case("cli_frf_contrast_1e36", scene("frf36", {"m": 1.0, "k": 1.0, "K": 1e36}, '''
+[masses]
+p = "m"
+q = "m"
+[[springs]]
+between = ["wall", "p"]
+k = "k"
+[[springs]]
+between = ["p", "q"]
+k = "K"
+'''), outputs=("cli",), cli=("frf", "{scene}", "--input", "p", "--output", "q", "--json"),
+         known="contrast: 'springchain frf' at contrast 1e36 ends in a traceback (exit 1) instead of one line"),
     # -- found by this oracle (not in issue 31) ------------------------------------------------------------
     Case("N1_equilibrium_json_damped", scene("eqjson", {"m": 1.0, "k": 2.0, "beta": 0.5, "g": -1.0, "c": 0.1}, '''
 [masses]
@@ -271,6 +285,19 @@ steps = 10
 '''), outputs=("simulate",),
          new="simulate(springs=True) / --springs on a scene with a potential spring: AttributeError "
              "'cubic_constants' (numeric/storeys.py spring_series)"),
+    Case("N3_cli_simulate_springs", scene("pot_springs", {"m": 1.0, "k": 1.0, "beta": 0.5}, '''
+[masses]
+p = "m"
+[[springs]]
+between = ["wall", "p"]
+potential = "k*d**2/2 + beta*d**4/4"
+[initial]
+x = [0.5]
+[simulation]
+dt = 0.01
+steps = 10
+'''), outputs=("cli",), cli=("simulate", "{scene}", "--springs", "--no-figures"),
+         new="'springchain simulate --springs' on a potential scene: a traceback (AttributeError cubic_constants)"),
     Case("N3_chain_k3_simulate_springs", scene("chain_k3", {"m": 1.0, "k": 1.0, "kappa": 0.5}, '''
 [chain]
 n = 3
@@ -414,6 +441,53 @@ acceleration = "A"
          new="a potential scene under a constant ground acceleration (README: a static load, like gravity): the "
              "equilibrium ignores it (extension 0.0; true 0.47347, from k d + beta d^3 = -m A) and omega^2 = 2.0 "
              "is printed (true 2.33625)"),
+    Case("N12_gamma_on_wrong_modes", scene("gam", {"r0": 4.842407363348041e+85, "m": 8.874252669080051e-100,
+                                                    "x": 8.49967488917427e-39, "K": 2.4863551500489254e+48,
+                                                    "k": 1.338275454088706e-56, "Omega": 3.239742272314865e+89}, '''
+[masses]
+s = "sqrt(r0)"
+floor3 = "r0"
+m1 = "m/3"
+z1 = "x"
+[[springs]]
+between = ["s", "floor3"]
+k = "3*r0"
+[[springs]]
+between = ["floor3", "m1"]
+k = "K"
+[[springs]]
+between = ["floor3", "z1"]
+k = "k"
+[[springs]]
+between = ["s", "wall"]
+k = "Omega"
+'''), features=frozenset({"regime:extreme"}),
+         new="at extreme contrast (masses 3e-100 ... 5e85, omega^2 1.6e-18 ... 8e147) omega^2 is printed right but "
+             "the participation factors belong to other modes: Gamma = 6.96e42, 3.8e-17, -1.1e-100, ... printed for "
+             "modes whose Gamma is 9.2e-20, 6.96e42, 2.64e21 (found by the generator)"),
+    Case("N13_modes_hang_damping_closed_form", scene("h6", {
+        "B": 6.993932514095252e+127, "c": 1.5178166621250607e-31, "m": 5.385133973702211e+41,
+        "E": 3.433181247333999e-30, "nu": 1.1402926230363904e-86, "k": 6.202436704823775e-78}, '''
+[masses]
+left = "m"
+u = "4*E"
+bob = "3*B"
+[[springs]]
+between = ["left", "u"]
+k = "nu"
+[[springs]]
+between = ["wall", "left"]
+k = "k/3"
+[[dampers]]
+between = ["left", "wall"]
+c = "4*E"
+[[dampers]]
+between = ["bob", "u"]
+c = "1.5*c"
+'''), outputs=("cli",), cli=("modes", "{scene}", "--json"), timeout=30.0,
+         new="'springchain modes' hangs (> 100 s; stack: sympy cancel in derive/damping_report.py _closed_forms) on "
+             "3 masses and 2 dashpots with values from 1e-86 to 1e128 (the same topology with moderate values: 3 s); "
+             "the symbolic caps count operations, not the size of the exact rationals. Found by the generator"),
     Case("N8_free_wall_chain_shape_order", scene("fw", {"m": 1.0, "k": 1.0}, '''
 [chain]
 n = 3

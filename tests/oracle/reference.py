@@ -137,12 +137,13 @@ class Spring:
         """k alone, or a potential whose V''' vanishes (checked at a few extensions)."""
         if self.potential is None:
             return self.k3 is None
-        def flat(d):  # the third derivative vanishes relative to the second (the law's own scale)
-            j = self.jet(d, 3)
-            return abs(j.derivative(3)) <= mp.mpf(10) ** (-mp.dps + 10) * abs(j.derivative(2))
+        def flat(d):  # the third derivative is zero (jets of polynomials are exact); at 400 digits a quartic
+            j = self.jet(d, 3)  # term 1e-130 of the quadratic one still shows (the product decides by degree)
+            return abs(j.derivative(3)) <= mp.mpf(10) ** (-mp.dps + 20) * abs(j.derivative(2))
 
         try:
-            return all(flat(d) for d in (mp.mpf(0), mp.mpf("0.37"), mp.mpf("-0.61"), mp.mpf("0.013")))
+            with mp.workdps(max(mp.dps, 400)):
+                return all(flat(d) for d in (mp.mpf(0), mp.mpf("0.37"), mp.mpf("-0.61"), mp.mpf("0.013")))
         except ExpressionError:  # not finite somewhere near the rest length: not a quadratic
             return False
 
@@ -587,7 +588,11 @@ def _equilibrium(md: Model, start) -> Equilibrium:
     if tree is not None:
         return _finish(md, tree, accelerating=accelerating)
     lam, step, x = mp.mpf(0), mp.mpf(1), zero
+    trials = 0
     while lam < 1:
+        trials += 1
+        if trials > 60:
+            raise Unsupported("equilibrium: the continuation in the load needs more than 60 steps")
         trial = min(lam + step, mp.mpf(1))
         y = _newton(md, x, load, g0, trial)
         if y is not None and _stable(md, y):
@@ -601,16 +606,38 @@ def _equilibrium(md: Model, start) -> Equilibrium:
     return _finish(md, x, accelerating=accelerating)
 
 
+class _Bundle:
+    """The springs between one pair of ends (p < q, the wall -1 lowest) as one law of D = x_q − x_p."""
+
+    def __init__(self, p: int, q: int):
+        self.p, self.q, self.members = p, q, []  # (spring, +1 if it runs p -> q)
+
+    @property
+    def key(self) -> str:
+        return "+".join(s.key for s, _ in self.members)
+
+    def tension(self, D):
+        return mp.fsum(sg * s.tension(sg * D) for s, sg in self.members)
+
+    def stiffness(self, D):
+        return mp.fsum(s.stiffness(sg * D) for s, sg in self.members)
+
+
 def _tree_equilibrium(md: Model, load):
-    """The equilibrium of a statically determinate scene (its spring graph, the wall one node, has no loop):
-    each spring's tension is the load beyond it, each extension solves V'(d) = T on the branch of d = 0
-    (V'' > 0 from 0 to d, else :class:`NoEquilibrium`), positions follow from the wall (free pieces: their
-    centre of mass at 0). None for a scene with a loop (Newton then)."""
+    """The equilibrium of a statically determinate scene (its graph of spring bundles, the wall one node, has no
+    loop; springs between the same two ends act as one): each bundle's tension is the load beyond it, each
+    extension solves tension(D) = T on the branch of D = 0 (stiffness > 0 from 0 to D, else
+    :class:`NoEquilibrium`), positions follow from the wall (free pieces: their centre of mass at 0). None for a
+    scene with a loop (Newton then)."""
     n = md.n
+    bundles: dict = {}
+    for s in md.springs:
+        p, q = sorted((s.a, s.b))
+        bundles.setdefault((p, q), _Bundle(p, q)).members.append((s, 1 if (s.a, s.b) == (p, q) else -1))
     adj: dict = {v: [] for v in range(-1, n)}
-    for k, s in enumerate(md.springs):
-        adj[s.a].append((s.b, k))
-        adj[s.b].append((s.a, k))
+    for key, b in bundles.items():
+        adj[b.p].append((b.q, key))
+        adj[b.q].append((b.p, key))
     seen, order, parent = set(), [], {}
     for root in [WALL] + list(range(n)):
         if root in seen:
@@ -621,13 +648,13 @@ def _tree_equilibrium(md: Model, load):
         while stack:
             v = stack.pop()
             order.append(v)
-            for w, k in adj[v]:
+            for w, key in adj[v]:
                 if w in seen:
-                    if parent.get(v) is None or parent[v][1] != k:
-                        return None  # a loop (or two springs between the same ends)
+                    if parent.get(v) is None or parent[v][1] != key:
+                        return None  # a loop
                     continue
                 seen.add(w)
-                parent[w] = (v, k)
+                parent[w] = (v, key)
                 stack.append(w)
     beyond = {v: (load[v] if v != WALL else mp.mpf(0)) for v in range(-1, n)}
     for v in reversed(order):  # loads summed up each subtree
@@ -638,12 +665,11 @@ def _tree_equilibrium(md: Model, load):
         if parent.get(v) is None:
             x[v] = x.get(v, mp.mpf(0))
             continue
-        u, k = parent[v]
-        s = md.springs[k]
-        # the subtree below v pulls with its load: V'(d) = +load if v is the spring's b end, -load if its a end
-        T = beyond[v] if s.b == v else -beyond[v]
-        d = _extension_for(s, T)
-        x[v] = x[u] + d if s.b == v else x[u] - d
+        u, key = parent[v]
+        b = bundles[key]
+        # the subtree below v pulls with its load: tension(D) = load if v is the bundle's q end, -load if its p end
+        D = _extension_for(b, beyond[v] if b.q == v else -beyond[v])
+        x[v] = x[u] + D if b.q == v else x[u] - D
     xs = [x[i] for i in range(n)]
     for piece in md.free_pieces():
         shift = mp.fsum(md.m[i] * xs[i] for i in piece) / mp.fsum(md.m[i] for i in piece)
@@ -652,8 +678,8 @@ def _tree_equilibrium(md: Model, load):
     return xs
 
 
-def _extension_for(s: Spring, T):
-    """d with V'(d) = T on the branch of d = 0 where V'' > 0."""
+def _extension_for(s, T):
+    """d with V'(d) = T on the branch of d = 0 where V'' > 0 (``s``: a :class:`Spring` or a :class:`_Bundle`)."""
     t0 = s.tension(mp.mpf(0))
     if T == t0:
         return mp.mpf(0)

@@ -56,6 +56,11 @@ def run_case(case: Case, folder: Path) -> C.Report:
         return C.check_record(case.record, case.features)
     if case.outputs == ("spectrum_time",):
         return C.check_spectrum_time(case.record, 20.0, case.features)
+    if case.outputs == ("cli",):
+        rep = C.Report()
+        path = S.GeneratedScene(case.text, case.tables, (), case.features, case.id).write(folder)
+        C.check_cli(rep, path, case.features, argv=case.cli, timeout=case.timeout)
+        return rep
     gen = S.GeneratedScene(case.text, case.tables, (), case.features, case.id)
     return C.check_scene(gen, folder, frf_pair=case.frf_pair, record=case.record, outputs=set(case.outputs))
 

@@ -342,3 +342,93 @@ k = "k"
         ms = R.modes(md)
         gam = R.participation(md, ms)
         assert near(mp.fsum(g * g for g in gam), md.total_mass, mp.mpf("1e-40"))
+
+
+LOADED = scene('''
+[masses]
+a = "m"
+b = "2*m"
+c = "m/2"
+[[springs]]
+between = ["wall", "a"]
+k = "k"
+[[springs]]
+between = ["a", "b"]
+k = "3*k"
+[[dampers]]
+between = ["b", "c"]
+c = "cd"
+[[forces]]
+on = "b"
+f = "F/2 + F*sin(W*t + 0.3)"
+[[forces]]
+on = "c"
+table = "f.csv"
+[ground]
+table = "g.csv"
+[gravity]
+g = "grav"
+[damping]
+rayleigh = ["0.05", "0.002"]
+[initial]
+x = [0.1, -0.2, 0.05]
+v = [0.0, 0.3, -0.1]
+''', "m = 1.5\nk = 4.0\ncd = 0.7\nF = 0.8\nW = 2.3\ngrav = -0.5")
+
+
+def test_loaded_trajectory_against_dop853():
+    """The trajectory engine (modal state space, harmonics in closed form, tables piece by piece, a damped free
+    piece: c hangs on b by a dashpot only) against SciPy's DOP853 at rtol 1e-12, integrated row to row of the
+    tables on M x'' = F(t) − C x' − K x assembled here by hand."""
+    import numpy as np
+    from scipy.integrate import solve_ivp
+
+    tables = {"f.csv": "t,f\n0.2,0\n0.7,1.5\n1.1,-0.5\n1.6,0\n", "g.csv": "t,a\n0,0.3\n0.9,-0.6\n1.3,0.2\n"}
+    md = R.read(LOADED, tables)
+    m, k, cd, F, W, grav = 1.5, 4.0, 0.7, 0.8, 2.3, -0.5
+    M = np.diag([m, 2 * m, m / 2])
+    K = np.array([[4 * k, -3 * k, 0], [-3 * k, 3 * k, 0], [0, 0, 0]])
+    C = np.array([[0, 0, 0], [0, cd, -cd], [0, -cd, cd]]) + 0.05 * M + 0.002 * K
+    fT = lambda t: np.interp(t, [0.2, 0.7, 1.1, 1.6], [0, 1.5, -0.5, 0]) if 0.2 <= t <= 1.6 else 0.0  # noqa: E731
+    gT = lambda t: np.interp(t, [0, 0.9, 1.3], [0.3, -0.6, 0.2]) if 0 <= t <= 1.3 else 0.0  # noqa: E731
+
+    def rhs(t, y):
+        x, v = y[:3], y[3:]
+        f = M @ np.full(3, grav) - M @ np.ones(3) * gT(t)
+        f[1] += F / 2 + F * np.sin(W * t + 0.3)
+        f[2] += fT(t)
+        return np.concatenate([v, np.linalg.solve(M, f - C @ v - K @ x)])
+
+    times = [0.5, 1.2, 2.5, 4.0]
+    breaks = [0.0, 0.2, 0.7, 0.9, 1.1, 1.3, 1.6, 4.0]
+    y = np.array([0.1, -0.2, 0.05, 0.0, 0.3, -0.1])
+    ref = {}
+    for a, b in zip(breaks, breaks[1:]):
+        sol = solve_ivp(rhs, (a, b), y, method="DOP853", rtol=1e-12, atol=1e-14, dense_output=True)
+        for t in times:
+            if a <= t <= b:
+                ref[t] = sol.sol(t)[:3]
+        y = sol.y[:, -1]
+    tr = R.trajectory(md, times)
+    for r, t in enumerate(times):
+        assert np.allclose([float(v) for v in tr.x[r]], ref[t], rtol=0, atol=1e-9), (t, tr.x[r], ref[t])
+
+
+@pytest.mark.parametrize("left, right, family", [
+    ("wall", "wall", lambda j, n: mp.sin(j * mp.pi / (2 * (n + 1))) ** 2),
+    ("free", "free", lambda j, n: mp.sin((j - 1) * mp.pi / (2 * n)) ** 2),
+    ("wall", "free", lambda j, n: mp.sin((2 * j - 1) * mp.pi / (2 * (2 * n + 1))) ** 2),
+    ("ring", "ring", None),
+])
+def test_chain_closed_forms(left, right, family):
+    """Uniform [chain] of 7 masses: ω_j² = (4k/m)·sin²(...) for fixed–fixed, free–free, fixed–free ends; a ring's
+    ω² = (4k/m)·sin²(πj/n) each twice but 0 and (n even) the top; so the oracle's [chain] reading is the README's."""
+    text = f'name = "ch"\n[parameters]\nm = 2.0\nk = 3.0\n[chain]\nn = 7\nmass = "m"\nk = "k"\nleft = "{left}"\nright = "{right}"\n'
+    with mp.workdps(40):
+        ms = R.modes(R.read(text))
+        n, m, k = 7, mp.mpf(2), mp.mpf(3)
+        if family is None:
+            expected = sorted(4 * k / m * mp.sin(mp.pi * j / n) ** 2 for j in range(n))
+        else:
+            expected = [4 * k / m * family(j, n) for j in range(1, n + 1)]
+        assert all(near(a, b, mp.mpf("1e-30")) or abs(a - b) < mp.mpf("1e-35") for a, b in zip(ms.omega2, expected))
