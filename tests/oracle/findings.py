@@ -46,7 +46,7 @@ CASES = [
          known="response spectra miss the peak after the record ends"),
     Case("spectrum_time_long_period", record=GeneratedRecord((0.0, 0.02, 0.04), (0.5, -0.1, 0.0), (0.05,), (1e9,)),
          outputs=("spectrum_time",),
-         known="response spectra: time grows as period/step (T = 1e9 s on a 0.02 s record: no answer in 20 s; "
+         known="response spectra: time grows as period/step (T = 1e9 s on a 0.02 s record: no answer in 15 s; "
                "T = 1e7 s takes 7 s; found as an rsa that did not finish in 300 s on a generated scene whose "
                "slowest mode has T = 1.4e9 s)"),
     Case("rsa_record_free_vibration", scene("sdof_rsa", {"m": 1.0, "k": 1.5791367041742972}, '''
@@ -484,10 +484,35 @@ c = "4*E"
 [[dampers]]
 between = ["bob", "u"]
 c = "1.5*c"
-'''), outputs=("cli",), cli=("modes", "{scene}", "--json"), timeout=30.0,
+'''), outputs=("cli",), cli=("modes", "{scene}", "--json"), timeout=20.0,
          new="'springchain modes' hangs (> 100 s; stack: sympy cancel in derive/damping_report.py _closed_forms) on "
              "3 masses and 2 dashpots with values from 1e-86 to 1e128 (the same topology with moderate values: 3 s); "
              "the symbolic caps count operations, not the size of the exact rationals. Found by the generator"),
+    Case("N14_modes_hang_rayleigh_targets", scene("v3", {
+        "K": 4.809548920040937, "m": 0.040160135993826354, "k": 13.948993900564439, "E": 0.3578227611390599,
+        "F0": 18.974974538670008}, '''
+[masses]
+atom = "K"
+q = "0.5*K"
+floor2 = "m*K"
+[[springs]]
+between = ["wall", "atom"]
+k = "k*K"
+[[springs]]
+between = ["q", "floor2"]
+k = "F0"
+[[springs]]
+between = ["wall", "floor2"]
+k = "sqrt(k)"
+[[springs]]
+between = ["floor2", "wall"]
+k = "0.5*E"
+[damping]
+rayleigh_targets = {zeta = [0.05, 0.05], modes = [1, 2]}
+'''), outputs=("cli",), cli=("modes", "{scene}", "--json"), timeout=20.0,
+         new="'springchain modes --json' hangs (> 80 s; stack: sympy radsimp in derive/rayleigh_targets.py "
+             "closed_form) on three masses with linear springs, Rayleigh damping from targets and parameters that "
+             "are generic floats (the same scene with round values: 3 s). Found by the generator"),
     Case("N8_free_wall_chain_shape_order", scene("fw", {"m": 1.0, "k": 1.0}, '''
 [chain]
 n = 3

@@ -987,6 +987,7 @@ class Damped:
     zeta_diag: list
     proportional: bool
     eigenvalues: list
+    nearly_proportional: bool = False  # off-diagonal ΦᵀCΦ within 1e-10 of the diagonal
 
     def flat(self):
         return list(self.zeta_diag) + [v for lam in self.eigenvalues for v in (mp.re(lam), mp.im(lam))]
@@ -1008,6 +1009,9 @@ def damped(md: Model, eq: Equilibrium | None = None) -> Damped:
         # basis of modes, so the block is diagonalised by a rotation)
         prop = all(abs(G[i, j]) <= mp.mpf(10) ** (-dps // 2) * top for i in range(n) for j in range(n)
                    if (i, j) not in same)
+        # the README's test (rsa): off-diagonal terms within 1e-10 of the diagonal (their effect is second order)
+        near = all(abs(G[i, j]) <= mp.mpf("1e-10") * mp.sqrt(abs(G[i, i] * G[j, j])) for i in range(n) for j in range(n)
+                   if (i, j) not in same)
         zd = [mp.mpf(0)] * n
         for g in groups:
             block = mp.matrix(len(g), len(g))
@@ -1017,7 +1021,7 @@ def damped(md: Model, eq: Equilibrium | None = None) -> Damped:
             ev = sorted(mp.eigsy(block, eigvals_only=True)) if len(g) > 1 else [G[g[0], g[0]]]
             for j, v in zip(g, ev):
                 zd[j] = v / (2 * mp.sqrt(ms.omega2[j])) if ms.omega2[j] > 0 else mp.mpf(0)
-        return Damped(zd, prop, _quadratic_eigenvalues(ms, G))
+        return Damped(zd, prop, _quadratic_eigenvalues(ms, G), near)
 
     return settled(at, base, extra=30, rel=1e-18, floor=1e-75)
 
