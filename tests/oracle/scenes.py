@@ -242,9 +242,9 @@ def _finish(c, P: _Names, feats: set, mass_names, head: str, spring_lines, n: in
             between = c.pick((["i", "i+1"], ["i", "wall"], [0, "wall"], [0, n - 1]))
             if between == [0, n - 1] and n < 2 or between == ["i", "i+1"] and n < 2:
                 between = ["i", "wall"]
-            c = P.positive("c")
+            cval = P.positive("c")
             text = ", ".join(q(e) if isinstance(e, str) else str(e) for e in between)
-            blocks.append(f"[[dampers]]\nbetween = [{text}]\nc = {q(c)}")
+            blocks.append(f"[[dampers]]\nbetween = [{text}]\nc = {q(cval)}")
         else:
             a, b = c.distinct(ends, 2)
             blocks.append(f"[[dampers]]\nbetween = [{q(a)}, {q(b)}]\nc = {q(P.positive('c'))}")
