@@ -255,6 +255,8 @@ DOCUMENTED = (
     r"targets that need|alpha < 0|beta < 0|elastic modes|two modes of equal",
     r"float64",
     r"no elastic mode",
+    # not in the README (a documentation gap, reported): the chain frf's dynamic stiffness takes neighbours only
+    r"dashpots couple masses further apart than neighbours",
 )
 
 
@@ -400,8 +402,8 @@ def _check_damping(rep, md, ms, eq, js, recs, feats):
                 err = max(err, _rel(wd, mp.sqrt(ms.omega2[j]) * mp.sqrt(1 - o * o)))
             worst = max(worst, err)
             if err > TOL["modes.zeta"]:
-                rep.add("modes.zeta", f"mode {j}: zeta {p!r}, omega_d {wd!r} (oracle {mp.nstr(o, 17)}, "
-                                      f"{mp.nstr(mp.sqrt(ms.omega2[j]) * mp.sqrt(abs(1 - o * o)), 17)})", feats)
+                owd = mp.nstr(mp.sqrt(ms.omega2[j]) * mp.sqrt(1 - o * o), 17) if o < 1 else "0 (overdamped)"
+                rep.add("modes.zeta", f"mode {j}: zeta {p!r}, omega_d {wd!r} (oracle {mp.nstr(o, 17)}, {owd})", feats)
         note_error("modes.zeta", worst)
         return
     cm = js.get("complex_modes")
@@ -438,7 +440,10 @@ def _check_damping(rep, md, ms, eq, js, recs, feats):
 
 
 def _check_participation(rep, md, ms, js, recs, m, feats):
-    applies = md.has_wall() or md.ground is not None
+    if md.chain is not None:  # README: open chains with a wall end or [ground]
+        applies = "wall" in (md.chain["left"], md.chain["right"]) or md.ground is not None
+    else:
+        applies = md.has_wall() or md.ground is not None
     part = js.get("participation")
     if not applies:
         if part is not None:
@@ -898,6 +903,8 @@ FOUND = (
      lambda o, d, f: o == "modes.gamma" and "regime:extreme" in f),
     ("N13/N14 modes hangs in SymPy (damping ratios' or Rayleigh targets' closed forms)",
      lambda o, d, f: o in ("cli", "modes") and "a hang" in d),
+    ("N15 damped [chain]: zeta of an overdamped mode is wrong",
+     lambda o, d, f: o == "modes.zeta" and "form:chain" in f and "omega_d 0.0" in d),
     ("N9 Rayleigh damping called non-proportional (complex modes) when a pre-stressed potential moves x_eq",
      lambda o, d, f: o in ("modes.zeta", "modes.complex") and ("said proportional = False" in d
                                                                or "oracle has no complex mode" in d

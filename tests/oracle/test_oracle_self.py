@@ -275,7 +275,9 @@ def test_spectrum_rectangular_pulse_closed_form(period, zeta):
         else:
             z = mp.mpf(zeta)
             wd = w * mp.sqrt(1 - z * z)
-            u = lambda t: -(a0 / w**2) * (1 - mp.exp(-z * w * t) * (mp.cos(wd * t) + z * w / wd * mp.sin(wd * t)))  # noqa: E731
+            def u(t):  # the step response
+                return -(a0 / w**2) * (1 - mp.exp(-z * w * t) * (mp.cos(wd * t) + z * w / wd * mp.sin(wd * t)))
+
             du = lambda t: mp.diff(u, t)  # noqa: E731
             cands = [abs(u(td))]
             t1 = mp.pi / wd  # first stationary point of the step response
@@ -309,7 +311,8 @@ modal = 0.05
         ref = R.rsa(md, lambda T, z: mp.mpf("0.01") * T)
         m, k = mp.mpf(3), mp.mpf(12)
         T = 2 * mp.pi / mp.sqrt(k / m)
-        assert near(abs(ref.gamma[0]), mp.sqrt(m)) and near(ref.zeta[0], mp.mpf("0.05"))  # a number in an expression field is its decimal
+        # a number in an expression field is its decimal (0.05 = 1/20), a [parameters] value its binary float
+        assert near(abs(ref.gamma[0]), mp.sqrt(m)) and near(ref.zeta[0], mp.mpf("0.05"))
         sd = mp.mpf("0.01") * T
         assert near(ref.sd[0], sd)
         for how in ("srss", "cqc"):
