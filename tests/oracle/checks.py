@@ -220,17 +220,22 @@ def _check_scene(gen, folder, frf_pair, record, cli, outputs) -> Report:
                 eq_error = "unstable"
         except R.NoEquilibrium as exc:
             eq_error = str(exc)
-        except R.Unsupported as exc:
-            rep.skipped.append(f"equilibrium: {exc}")
+        except R.OracleError as exc:
+            rep.skipped.append(f"equilibrium: {type(exc).__name__}: {exc}")
             return rep
-    if "modes" in outputs:
-        _check_modes(rep, sc, scene, md, eq, eq_error, feats)
-    if "frf" in outputs and frf_pair is not None and eq_error is None:
-        _check_frf(rep, sc, scene, md, eq, frf_pair, feats)
-    if "simulate" in outputs:
-        _check_simulate(rep, sc, scene, md, eq, eq_error, feats, folder)
-    if "rsa" in outputs and record is not None and eq_error is None:
-        _check_rsa(rep, sc, scene, md, eq, record, feats, folder)
+    stages = [("modes", lambda: _check_modes(rep, sc, scene, md, eq, eq_error, feats)),
+              ("frf", lambda: frf_pair is not None and eq_error is None
+               and _check_frf(rep, sc, scene, md, eq, frf_pair, feats)),
+              ("simulate", lambda: _check_simulate(rep, sc, scene, md, eq, eq_error, feats, folder)),
+              ("rsa", lambda: record is not None and eq_error is None
+               and _check_rsa(rep, sc, scene, md, eq, record, feats, folder))]
+    for name, stage in stages:
+        if name not in outputs:
+            continue
+        try:
+            stage()
+        except R.OracleError as exc:  # what the oracle cannot compute is skipped and listed, never failed
+            rep.skipped.append(f"{name}: oracle: {type(exc).__name__}: {exc}")
     if "cli" in outputs:
         check_cli(rep, path, feats, md)
     return rep
@@ -252,7 +257,7 @@ DOCUMENTED = (
     r"past the symbolic work cap|work cap",
     r"at most \d+ masses|more than \d+ masses",
     r"critically damped",
-    r"targets that need|alpha < 0|beta < 0|elastic modes|two modes of equal",
+    r"targets that need|alpha < 0|beta < 0|gives (alpha|beta) = \S+ < 0|elastic modes|two modes of equal",
     r"float64",
     r"no elastic mode",
     # not in the README (a documentation gap, reported): the chain frf's dynamic stiffness takes neighbours only
@@ -905,6 +910,10 @@ FOUND = (
      lambda o, d, f: o in ("cli", "modes") and "a hang" in d),
     ("N15 damped [chain]: zeta of an overdamped mode is wrong",
      lambda o, d, f: o == "modes.zeta" and "form:chain" in f and "omega_d 0.0" in d),
+    ("N16 exact method, damped, under a constant load with an enormous sag: positions off by decades, no note",
+     lambda o, d, f: o in ("simulate.x", "simulate.aabs") and "regime:extreme" in f
+     and any(x.startswith("damping:") for x in f)
+     and any(x in f for x in ("gravity", "ground:const", "force:const", "force:harmonic2"))),
     ("N9 Rayleigh damping called non-proportional (complex modes) when a pre-stressed potential moves x_eq",
      lambda o, d, f: o in ("modes.zeta", "modes.complex") and ("said proportional = False" in d
                                                                or "oracle has no complex mode" in d

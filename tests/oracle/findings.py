@@ -528,6 +528,26 @@ c = "c"
          new="a [chain] of 3 equal masses with a dashpot c = 3 from every mass to the ground (C = 3 M: proportional, "
              "zeta_j = c/(2 m omega_j)): modes --json gives zeta = 1.5797 for the mode omega^2 = 1, whose zeta is "
              "1.5 exactly (the other elastic mode's 0.866 is right). Found by the generator"),
+    Case("N16_damped_huge_sag", scene("sag2", {"m": 1e60, "k": 1e-100, "g": -10.0}, '''
+[masses]
+p = "m"
+[[springs]]
+between = ["wall", "p"]
+k = "k"
+[damping]
+modal = 0.2
+[gravity]
+g = "g"
+[initial]
+x = [0.04]
+[simulation]
+dt = 0.01
+steps = 40
+record_every = 10
+'''), outputs=("simulate",), features=frozenset({"regime:extreme", "damping:modal", "gravity"}),
+         new="exact method, damped (modal 0.2), one mass 1e60 kg on a 1e-100 N/m spring under gravity (sag 1e161 m): "
+             "x(0.1 s) = 4.06e63 m where the free fall gives -0.01 m, no float64 note (undamped: right); "
+             "found by the generator (also a 13-mass chain under a constant ground acceleration, off by 7e40)"),
     Case("N8_free_wall_chain_shape_order", scene("fw", {"m": 1.0, "k": 1.0}, '''
 [chain]
 n = 3

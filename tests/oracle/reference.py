@@ -895,6 +895,8 @@ def _modes_at(md: Model, x_eq=None) -> ModeSet:
             Phi[i, c] = Q[i, j]
     rigid = len(md.free_pieces())
     top = max([abs(v) for v in lam] + [mp.mpf(10) ** -300])
+    if rigid and lam[0] < -mp.mpf(10) ** (-md.dps // 2) * top:
+        raise NoEquilibrium(f"unstable: K has the negative eigenvalue {mpmath.nstr(lam[0], 6)} (M-scaled)")
     for j in range(rigid):
         if abs(lam[j]) > mp.mpf(10) ** (-md.dps // 2) * top:
             raise OracleError(f"rigid mode {j}: eigenvalue {lam[j]} is not 0")
@@ -1043,7 +1045,10 @@ def _eq_at(m2: Model, eq, dps):
         return None
     x = [mp.mpf(v) for v in eq.x]
     if any(v != 0 for v in x):
-        x = equilibrium(m2, start=x).x
+        try:
+            x = equilibrium(m2, start=x).x
+        except NoEquilibrium:  # Newton from the lower-precision point stalls: solve again at this precision
+            x = equilibrium(m2).x
     return x
 
 
