@@ -914,6 +914,8 @@ FOUND = (
      lambda o, d, f: o in ("simulate.x", "simulate.aabs") and "regime:extreme" in f
      and any(x.startswith("damping:") for x in f)
      and any(x in f for x in ("gravity", "ground:const", "force:const", "force:harmonic2"))),
+    ("N17 simulate: a damped rigid mode alone (a free mass with a dashpot to the wall) ends in a TypeError",
+     lambda o, d, f: o in ("simulate", "cli") and "not 'complex'" in d),
     ("N9 Rayleigh damping called non-proportional (complex modes) when a pre-stressed potential moves x_eq",
      lambda o, d, f: o in ("modes.zeta", "modes.complex") and ("said proportional = False" in d
                                                                or "oracle has no complex mode" in d

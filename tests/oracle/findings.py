@@ -548,6 +548,18 @@ record_every = 10
          new="exact method, damped (modal 0.2), one mass 1e60 kg on a 1e-100 N/m spring under gravity (sag 1e161 m): "
              "x(0.1 s) = 4.06e63 m where the free fall gives -0.01 m, no float64 note (undamped: right); "
              "found by the generator (also a 13-mass chain under a constant ground acceleration, off by 7e40)"),
+    Case("N17_damped_free_mass_simulate", scene("dm1", {"m": 2.0, "c": 1.0}, '''
+[masses]
+p = "m"
+[[dampers]]
+between = ["p", "wall"]
+c = "c"
+[initial]
+v = [1.0]
+'''), outputs=("simulate",),
+         new="simulate of one free mass slowed by a dashpot to the wall (x = v0 m/c (1 - exp(-c t/m)) exactly): "
+             "TypeError 'float() argument must be ... not complex' (also with Rayleigh alpha instead of the "
+             "dashpot); found by the generator"),
     Case("N8_free_wall_chain_shape_order", scene("fw", {"m": 1.0, "k": 1.0}, '''
 [chain]
 n = 3

@@ -9,7 +9,7 @@ Four kinds of test:
   generator as the hypothesis strategy, driven by ``random.Random(seed)`` so CI checks the same scenes every
   run): load, modes, frf, simulate(springs=True) and rsa through the public API, every number compared with
   the oracle (:mod:`oracle.checks`). A finding already listed (issue 31's, or a case of ``findings``) is
-  counted; anything else fails with the scene's text. ``SPRINGCHAIN_ORACLE_SCENES`` scenes per CI run (12);
+  counted; anything else fails with the scene's text. ``SPRINGCHAIN_ORACLE_SCENES`` scenes per CI run (24);
   the ``slow`` variant checks ``24 × SPRINGCHAIN_SLOW_BUDGET`` larger ones.
 * ``test_hypothesis_search`` — hypothesis searching the same domain, on demand (``ORACLE_SEARCH=N``).
 * ``test_generated_record[seed]`` — response spectra of piecewise-linear records against the exact oscillator;
@@ -33,9 +33,9 @@ from oracle import scenes as S
 from oracle.findings import CASES, Case, scene
 
 #: Generated scenes per CI run (seeded: the same scenes every run), and in the slow run.
-CI_SCENES = int(os.environ.get("SPRINGCHAIN_ORACLE_SCENES", "12"))
+CI_SCENES = int(os.environ.get("SPRINGCHAIN_ORACLE_SCENES", "24"))
 SLOW_SCENES = max(1, int(24 * SLOW_BUDGET))
-CI_RECORDS = 8
+CI_RECORDS = 12
 
 _SETTINGS = dict(deadline=None, database=None, derandomize=True, phases=(Phase.explicit, Phase.generate),  # no
                  # shrinking: each draw costs seconds of derivation; the failure message carries the scene
