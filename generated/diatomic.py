@@ -134,8 +134,9 @@ def omega2(k1, k2, m1, m2, n=N):
     """Squared angular frequencies (no closed form), ascending, shape (n,).
 
     Singular values of the bidiagonal spring factor G (GᵀG = M^-1/2 K M^-1/2) by bisection on its
-    Golub–Kahan form: accurate to float64 in the relative sense at any positive masses and springs;
-    rigid modes exactly 0. Cost O(n²)."""
+    Golub–Kahan form: accurate to float64 in the relative sense at any positive masses and springs
+    whose sqrt(k/m) lie within 1e140 of each other (beyond, up to MAX_DENSE masses, the dense
+    spring-factor SVD); rigid modes exactly 0. Cost O(n²)."""
     _rm = 1.0 / _np.sqrt(_masses(k1=k1, k2=k2, m1=m1, m2=m2, n=n))
     _rk = _np.sqrt(_spring_constants(k1=k1, k2=k2, m1=m1, m2=m2, n=n))
     _a = _rk[:n - 1] * _rm[:n - 1]
@@ -144,12 +145,96 @@ def omega2(k1, k2, m1, m2, n=N):
     _s = _a.shape[0]
     _t = _np.empty(2 * _s - 1)
     _t[0::2], _t[1::2] = _a, _b
-    _sv = _linalg.eigh_tridiagonal(_np.zeros(2 * _s), _t, eigvals_only=True, select='i',
-                                        select_range=(_s, 2 * _s - 1), lapack_driver='stebz',
-                                        tol=_np.finfo(_np.float64).tiny)
-    _w = _np.sort(_np.abs(_sv))[_s - n:] ** 2
+    # scaled by a power of 2 to a largest entry in [1/2, 1): stebz's pivot floor and stopping
+    # tolerance are tiny * max(1, max entry²) absolute, 2e-10 at entries of 1e149
+    _sc = _np.ldexp(1.0, -_np.frexp(_np.max(_t))[1])
+    _nz = _t[_t > 0]
+    if _nz.size < 2 or _np.max(_nz) <= 1e140 * _np.min(_nz):
+        _sv = _linalg.eigh_tridiagonal(_np.zeros(2 * _s), _t * _sc, eigvals_only=True, select='i',
+                                            select_range=(_s, 2 * _s - 1), lapack_driver='stebz',
+                                            tol=_np.finfo(_np.float64).tiny)
+    elif n <= _MAX_DENSE:
+        # entries more than 1e140 apart: stebz squares them (the small ones underflow), so the
+        # spring-factor SVD of the dense modules (relatively accurate at any positive values; O(n³))
+        return _dense_omega2(_masses(k1=k1, k2=k2, m1=m1, m2=m2, n=n), _spring_constants(k1=k1, k2=k2, m1=m1, m2=m2, n=n), _spring_ends(n=n), n)
+    else:
+        raise _ValueError(f'omega2(): the spring factor\'s entries sqrt(k/m) span more than 1e140 in a chain '
+                         f'of {n} masses: float64 bisection cannot give its ω relative accuracy, and the '
+                         f'dense spring-factor route takes at most MAX_DENSE = {_MAX_DENSE} masses')
+    _w = (_np.sort(_np.abs(_sv))[_s - n:] / _sc) ** 2
     _w[:_RIGID_MODES] = 0.0
     return _w
+
+
+def _dense_omega2(_m, _k, _ends, n):
+    """ω² of an open chain of n masses by the spring-factor helper below (its globals bound here)."""
+    N, SPRING_ENDS, RIGID_PIECES = n, _ends, (tuple(range(n)),)
+    def _accurate_modes(m, k):
+        """ω² (ascending, rigid modes exactly 0 first) and M-orthonormal physical shapes (columns).
+
+        The spring-factor route, accurate to float64 in the relative sense at any
+        positive parameter values: a subtraction-free LDLᵀ of K = Bᵀ diag(k) B
+        (eliminating in the diagonally dominant parts, pivoting on D = M^-1/2 K M^-1/2),
+        then the one-sided Jacobi SVD (LAPACK dgejsv) of F = M^-1/2 L Λ^1/2 (F Fᵀ = D).
+        Rigid-body modes come from the structure (RIGID_PIECES), never from a threshold.
+        """
+        _m = _np.asarray(m, dtype=_np.float64)
+        _k = _np.asarray(k, dtype=_np.float64)
+        _ends = _np.asarray(SPRING_ENDS, dtype=_np.intp).reshape(-1, 2)
+        _a, _b = _ends[:, 0], _ends[:, 1]
+        _W = _np.zeros((N, N))
+        _in = (_a >= 0) & (_b >= 0) & (_a != _b)
+        _np.add.at(_W, (_a[_in], _b[_in]), _k[_in])
+        _np.add.at(_W, (_b[_in], _a[_in]), _k[_in])
+        _wall = _np.zeros(N)
+        _one = (_a >= 0) != (_b >= 0)
+        _np.add.at(_wall, _np.where(_a[_one] >= 0, _a[_one], _b[_one]), _k[_one])
+        _d = _wall + _W.sum(axis=1)
+        _alive = _np.ones(N, dtype=bool)
+        _rm = _np.sqrt(_m)
+        _F = _np.zeros((N, N), order="F")
+        _c = 0
+        for _ in range(N):
+            _score = _np.where(_alive, _d / _m, -1.0)
+            _p = int(_np.argmax(_score))
+            if not _score[_p] > 0.0:
+                break
+            _dp = _d[_p]
+            _alive[_p] = False
+            _nb = _np.flatnonzero(_W[_p])
+            _w = _W[_p, _nb]
+            _F[_p, _c] = _np.sqrt(_dp) / _rm[_p]
+            _F[_nb, _c] = -(_w / _np.sqrt(_dp)) / _rm[_nb]
+            _c += 1
+            _W[_p, :] = 0.0
+            _W[:, _p] = 0.0
+            if _nb.size:
+                _W[_np.ix_(_nb, _nb)] += _np.outer(_w, _w / _dp)
+                _W[_nb, _nb] = 0.0
+                _wall[_nb] += _w * (_wall[_p] / _dp)
+                _d[_nb] = _wall[_nb] + _W[_nb].sum(axis=1)
+        _R = _np.zeros((N, len(RIGID_PIECES)))
+        for _j, _idx in enumerate(RIGID_PIECES):
+            _R[list(_idx), _j] = _rm[list(_idx)] / _np.linalg.norm(_rm[list(_idx)])
+        if _c != N - len(RIGID_PIECES):
+            raise FloatingPointError("parameter values outside the float range of the accurate mode route")
+        if _c:
+            _sva, _u, _, _work, _, _info = _linalg.lapack.dgejsv(_np.asfortranarray(_F[:, :_c]),
+                                                                     joba=2, jobu=0, jobv=3, jobr=0, jobt=0, jobp=0)
+            if _info != 0:
+                raise _np.linalg.LinAlgError(f"dgejsv failed to converge (info = {_info})")
+            _s = _sva * (_work[0] / _work[1])
+            _o = _np.argsort(_s, kind="stable")
+            _s, _V = _s[_o], _u[:, :_c][:, _o]
+            if _R.shape[1]:
+                _V = _V - _R @ (_R.T @ _V)
+            _V = _V - 0.5 * (_V @ (_V.T @ _V - _np.eye(_c)))
+        else:
+            _s, _V = _np.zeros(0), _np.zeros((N, 0))
+        _w2 = _np.concatenate([_np.zeros(_R.shape[1]), _s * _s])
+        return _w2, _np.hstack([_R, _V]) / _rm[:, None]
+
+    return _accurate_modes(_m, _k)[0]
 
 
 #: The unit cell ([chain] periodic in i with period 2 (found from the expressions)): mass names, and springs as (a, b, reach) from mass a of
