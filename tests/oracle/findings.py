@@ -42,14 +42,14 @@ EVEN = GeneratedRecord((0.0, 0.1, 0.2, 0.3, 0.4), (0.0, 1.0, -0.4, 0.7, 0.0), (0
 
 CASES = [
     # -- issue 31's findings (being fixed) ----------------------------------------------------------------
-    Case("spectrum_free_vibration_after_record", record=PULSE, outputs=("spectrum",),
+    Case("spectrum_free_vibration_after_record", failing=False, record=PULSE, outputs=("spectrum",),
          known="response spectra miss the peak after the record ends"),
-    Case("spectrum_time_long_period", record=GeneratedRecord((0.0, 0.02, 0.04), (0.5, -0.1, 0.0), (0.05,), (1e9,)),
+    Case("spectrum_time_long_period", failing=False, record=GeneratedRecord((0.0, 0.02, 0.04), (0.5, -0.1, 0.0), (0.05,), (1e9,)),
          outputs=("spectrum_time",),
          known="response spectra: time grows as period/step (T = 1e9 s on a 0.02 s record: no answer in 15 s; "
                "T = 1e7 s takes 7 s; found as an rsa that did not finish in 300 s on a generated scene whose "
                "slowest mode has T = 1.4e9 s)"),
-    Case("rsa_record_free_vibration", scene("sdof_rsa", {"m": 1.0, "k": 1.5791367041742972}, '''
+    Case("rsa_record_free_vibration", failing=False, scene("sdof_rsa", {"m": 1.0, "k": 1.5791367041742972}, '''
 [masses]
 p = "m"
 [[springs]]
@@ -58,7 +58,7 @@ k = "k"
 [damping]
 modal = 0.05
 '''), outputs=("rsa",), record=PULSE, known="response spectra miss the peak after the record ends (rsa, T = 5 s)"),
-    Case("wall_spring_1e-90", scene("weak_wall", {"m": 1.0, "k": 1.0, "kw": 1e-90}, '''
+    Case("wall_spring_1e-90", failing=False, scene("weak_wall", {"m": 1.0, "k": 1.0, "kw": 1e-90}, '''
 [masses]
 p = "m"
 q = "m"
@@ -69,7 +69,7 @@ k = "kw"
 between = ["p", "q"]
 k = "k"
 '''), known="contrast: a wall spring 1e-90 of its neighbour prints omega^2 = 0.0"),
-    Case("weak_link_2e-70", scene("weak_link", {"m": 1.0}, '''
+    Case("weak_link_2e-70", failing=False, scene("weak_link", {"m": 1.0}, '''
 [masses]
 p = "m"
 q = "m"
@@ -442,7 +442,7 @@ acceleration = "A"
          new="a potential scene under a constant ground acceleration (README: a static load, like gravity): the "
              "equilibrium ignores it (extension 0.0; true 0.47347, from k d + beta d^3 = -m A) and omega^2 = 2.0 "
              "is printed (true 2.33625)"),
-    Case("N12_gamma_on_wrong_modes", scene("gam", {"r0": 4.842407363348041e+85, "m": 8.874252669080051e-100,
+    Case("N12_gamma_on_wrong_modes", failing=False, scene("gam", {"r0": 4.842407363348041e+85, "m": 8.874252669080051e-100,
                                                     "x": 8.49967488917427e-39, "K": 2.4863551500489254e+48,
                                                     "k": 1.338275454088706e-56, "Omega": 3.239742272314865e+89}, '''
 [masses]
@@ -466,7 +466,7 @@ k = "Omega"
          new="at extreme contrast (masses 3e-100 ... 5e85, omega^2 1.6e-18 ... 8e147) omega^2 is printed right but "
              "the participation factors belong to other modes: Gamma = 6.96e42, 3.8e-17, -1.1e-100, ... printed for "
              "modes whose Gamma is 9.2e-20, 6.96e42, 2.64e21 (found by the generator)"),
-    Case("N13_modes_hang_damping_closed_form", scene("h6", {
+    Case("N13_modes_hang_damping_closed_form", failing=False, scene("h6", {
         "B": 6.993932514095252e+127, "c": 1.5178166621250607e-31, "m": 5.385133973702211e+41,
         "E": 3.433181247333999e-30, "nu": 1.1402926230363904e-86, "k": 6.202436704823775e-78}, '''
 [masses]
