@@ -313,21 +313,45 @@ def _mp_solve(el: Elements, omega: float, i: int, o: int, dps: int) -> complex:
         return complex(X[o])
 
 
+def mp_start_digits(el: Elements, omega: float) -> int:
+    """Digits the elimination starts at for ``Z(ω)``: 30 beyond the decades between its largest and
+    smallest element terms (springs k, dashpots ω c, masses ω² m; Rayleigh and modal damping
+    through k, m and ω), so that the smallest term survives being added to the largest — a
+    contrast of 1e36 needs more than the 30 digits a well-scaled Z does (mpmath's elimination
+    calls a pivot below ε·‖Z‖ singular)."""
+    terms = [np.abs(el.stiffness), omega * np.abs(el.damping), omega * omega * np.abs(el.masses)]
+    if el.rayleigh is not None:
+        a, b = (abs(float(v)) for v in el.rayleigh)
+        terms += [omega * a * np.abs(el.masses), omega * b * np.abs(el.stiffness)]
+    v = np.concatenate([np.asarray(t, dtype=float).reshape(-1) for t in terms])
+    v = v[np.isfinite(v) & (v > 0)]
+    decades = math.log10(float(v.max()) / float(v.min())) if v.size else 0.0
+    return int(min(MP_MAX_DPS, 30 + math.ceil(decades)))
+
+
+def _mp_settled(el: Elements, omega: float, input: int, output: int) -> complex:
+    """H at one ω, doubling the digits from :func:`mp_start_digits` until two agree to :data:`MP_AGREE`
+    (a pivot mpmath calls singular at some precision is retried at the next)."""
+    dps, prev = mp_start_digits(el, omega), None
+    while True:
+        try:
+            cur = _mp_solve(el, omega, input, output, dps)
+        except ZeroDivisionError:  # a pivot below ε·‖Z‖ at this precision
+            cur = None
+        if cur is not None and prev is not None and abs(cur - prev) <= MP_AGREE * abs(cur):
+            return cur
+        if dps >= MP_MAX_DPS:
+            raise RunRefused(f"frequency response at ω = {omega:.6g} rad/s: H did not settle within {MP_MAX_DPS} "
+                             "digits (ω on an undamped resonance, or a contrast past 1e900)", quantity="frf")
+        prev, dps = cur, min(2 * dps, MP_MAX_DPS)
+
+
 def mp_receptance(el: Elements, omega: np.ndarray, input: int, output: int) -> np.ndarray:
     """H at each ω by Gaussian elimination in mpmath on Z assembled exactly from the elements,
-    doubling the precision from 30 digits until two results agree to :data:`MP_AGREE`."""
+    doubling the precision from :func:`mp_start_digits` until two results agree to :data:`MP_AGREE`."""
     out = np.empty(len(omega), dtype=complex)
     for j, w in enumerate(np.asarray(omega, dtype=float).tolist()):  # frequencies that failed the certificate
-        dps, prev = 30, None
-        while True:
-            cur = _mp_solve(el, w, input, output, dps)
-            if prev is not None and abs(cur - prev) <= MP_AGREE * abs(cur):
-                break
-            if dps >= MP_MAX_DPS:
-                raise RunRefused(f"frequency response at ω = {w:.6g} rad/s: H did not settle within {MP_MAX_DPS} "
-                                 "digits", quantity="frf")
-            prev, dps = cur, 2 * dps
-        out[j] = cur
+        out[j] = _mp_settled(el, w, input, output)
     return out
 
 
