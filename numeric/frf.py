@@ -167,6 +167,17 @@ def receptance(op: Operator, omega: np.ndarray, input: int, output: int, certify
     ndarray, shape (W,), complex
     """
     omega = np.asarray(omega, dtype=float).reshape(-1)
+    with np.errstate(all="ignore"):  # float64 overflow is caught below (dense: by its certificate)
+        H = _receptance(op, omega, input, output, certify)
+    if certify and not np.all(np.isfinite(H)):
+        bad = int(np.argmax(~np.isfinite(H)))
+        raise RunRefused(f"frequency response at ω = {omega[bad]:.6g} rad/s: H overflows float64 on this route "
+                         "(element values near the 1e±150 limits multiplied by ω²); a [masses] scene of at most "
+                         f"{MPMATH_MAX_MASSES} masses is solved in extended precision", quantity="frf")
+    return H
+
+
+def _receptance(op: Operator, omega: np.ndarray, input: int, output: int, certify: bool) -> np.ndarray:
     if op.dense is not None:
         return op.dense.receptance(omega, input, output, certify=certify)
     if op.chain is not None:

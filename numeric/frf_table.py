@@ -10,9 +10,9 @@ Three questions, each answered on an accurate route, never by a threshold on a f
    repeated ω sums its modes; the sum does not depend on the basis). ``R = 0`` — a node at the
    input or the output — leaves |H| finite at ω_j (:func:`sees`). A float64 residue below
    :data:`NODE_SUSPECT` of the subspace's largest component² is settled in mpmath (scenes of at
-   most :data:`frf_dense.MPMATH_MAX_MASSES` masses): the residue at d and 2d digits (d beyond the
-   element contrast), a node when it is below 10^−d of that scale at 2d digits (noise falls with
-   the precision, a true residue does not). Larger scenes judge by the float64 residue against
+   most :data:`frf_dense.MPMATH_MAX_MASSES` masses) at doubling precision: a true residue settles
+   however small it is (1e-68 of the scale beside a mass ratio of 1e34), the noise around an exact
+   node keeps falling (:func:`_mp_sees`). Larger scenes judge by the float64 residue against
    :data:`NODE_FLOAT` (said in a note); scenes past :data:`SHAPES_MAX` masses are not checked.
 3. **Where are the peaks?** Every interior local maximum of |H| on the (resonance-refined) grid
    is bracketed by its two neighbours and maximised by a bounded Brent search on the certified
@@ -44,6 +44,8 @@ NARROW_ZETA = 1e-12
 #: A grid maximum counts when it beats both neighbours by more than this (relative; the certified
 #: values are good to 1e-11, so rounding cannot make one).
 SIGNIFICANT = 1e-9
+#: A found maximum is checked with certified values this fraction of its bracket to each side.
+VERIFY = 1e-3
 #: A peak farther than this many ζ from ω_d (relative) is reported as shifted.
 SHIFT_ZETAS = 3.0
 
@@ -169,8 +171,11 @@ def sees(el, omega: list[float], input: int, output: int) -> Seen:
 
 
 def _mp_sees(el, group: np.ndarray, input: int, output: int) -> bool:
-    """The residue of the modes ``group`` (positions in ascending ω) settled in mpmath: False for an
-    exact node (below 10^-d of the scale at 2d digits, d beyond the contrast)."""
+    """The residue of the modes ``group`` (positions in ascending ω) settled in mpmath at d, 2d, 4d, …
+    digits (d = 30 beyond the decades of the springs and masses): a true residue, however small,
+    settles (two successive values agree to 1e-6); rounding noise around an exact node falls with
+    every doubling — two falls each past half the digits mean a node. Unsettled at
+    :data:`frf_dense.MP_MAX_DPS` digits: seen (|H| = ∞ is then the claim)."""
     import mpmath
 
     from .frf_dense import MP_MAX_DPS, mp_modes
@@ -180,12 +185,25 @@ def _mp_sees(el, group: np.ndarray, input: int, output: int) -> bool:
         v = v[v > 0]
         return math.log10(float(v.max() / v.min())) if v.size else 0.0
 
-    d = int(min(MP_MAX_DPS // 2, 30 + math.ceil(decades(el.stiffness) + decades(el.masses))))
-    with mpmath.workdps(2 * d):
-        _, shapes = mp_modes(el, mpmath)
-        residue = mpmath.fsum(shapes[j][output] * shapes[j][input] for j in group.tolist())
-        scale = max(abs(shapes[j][i]) ** 2 for j in group.tolist() for i in range(el.n))
-        return bool(abs(residue) > mpmath.mpf(10) ** (-d) * scale)
+    def ratio(dps):
+        with mpmath.workdps(dps):
+            _, shapes = mp_modes(el, mpmath)
+            residue = mpmath.fsum(shapes[j][output] * shapes[j][input] for j in group.tolist())
+            scale = max(abs(shapes[j][i]) ** 2 for j in group.tolist() for i in range(el.n))
+            return abs(residue) / scale
+
+    dps = int(min(MP_MAX_DPS, 30 + math.ceil(decades(el.stiffness) + decades(el.masses))))
+    seq = [(dps, ratio(dps))]
+    while dps < MP_MAX_DPS:
+        dps = min(2 * dps, MP_MAX_DPS)
+        seq.append((dps, ratio(dps)))
+        (_, a), (_, b) = seq[-2], seq[-1]
+        if b != 0 and abs(a - b) <= 1e-6 * b:
+            return True
+        if b == 0 or (len(seq) >= 3 and all(seq[k][1] < seq[k - 1][1] * mpmath.mpf(10) ** (-seq[k - 1][0] // 2)
+                                            for k in (len(seq) - 2, len(seq) - 1))):
+            return False
+    return True
 
 
 # -- 3. peaks -----------------------------------------------------------------------------------------
@@ -207,8 +225,6 @@ def local_maxima(solve, omega: np.ndarray, H: np.ndarray, poles: list[float]) ->
     list of (ω, H)
         Ascending ω; H certified.
     """
-    from scipy.optimize import minimize_scalar
-
     m = np.abs(np.asarray(H))
     if m.shape[0] < 3:
         return []
@@ -225,14 +241,36 @@ def local_maxima(solve, omega: np.ndarray, H: np.ndarray, poles: list[float]) ->
         if poles.size and np.any((poles >= a) & (poles <= b)):
             continue
         top = float(m[k])
-        f = lambda u: -abs(solve(np.array([a + u * (b - a)]), False)[0]) / top  # noqa: E731
-        sol = minimize_scalar(f, bounds=(0.0, 1.0), method="bounded", options={"xatol": 1e-12})
-        w = a + float(sol.x) * (b - a)
-        value = complex(solve(np.array([w]), True)[0]) if a < w < b else 0j
-        if not abs(value) > top:  # no higher point than the grid's (a flat top): keep the grid point
+        w, value = _maximise(solve, a, b, top, certify=False)
+        if w is not None and not _verified(solve, a, b, w, value):  # float64 trials misled the search
+            w, value = _maximise(solve, a, b, top, certify=True)
+        if w is None or not abs(value) > top:  # no higher point than the grid's (a flat top): keep the grid point
             w, value = float(omega[k]), complex(H[k])
         out.append((w, value))
     return out
+
+
+def _maximise(solve, a: float, b: float, top: float, certify: bool) -> tuple[float | None, complex]:
+    """Brent's bounded search for the maximum of |H| on (a, b), in the bracket's own coordinate (its
+    tolerance relative to b − a, not to ω); the value at the result certified. (None, 0) when the
+    search ends on the bracket's edge."""
+    from scipy.optimize import minimize_scalar
+
+    def f(u):
+        h = abs(solve(np.array([a + u * (b - a)]), certify)[0]) / top
+        return -h if np.isfinite(h) else 0.0  # a trial float64 cannot evaluate counts as low
+    sol = minimize_scalar(f, bounds=(0.0, 1.0), method="bounded", options={"xatol": 1e-12})
+    w = a + float(sol.x) * (b - a)
+    if not a < w < b:
+        return None, 0j
+    return w, complex(solve(np.array([w]), True)[0])
+
+
+def _verified(solve, a: float, b: float, w: float, value: complex) -> bool:
+    """The certified |H| at ``w ± VERIFY (b − a)`` is below ``|value|`` (so the maximum is within that)."""
+    h = VERIFY * (b - a)
+    side = np.abs(solve(np.array([max(w - h, a), min(w + h, b)]), True))
+    return bool(np.all(side <= abs(value)))
 
 
 def attribute(resonances: list[Resonance], peaks: list[tuple[float, float]]) -> tuple[list[Resonance], list]:
