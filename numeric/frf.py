@@ -456,11 +456,13 @@ def _grid(lo: float, hi: float, points: int, res: list[Resonance]) -> np.ndarray
     extra = []
     g = np.geomspace(0.03, 30.0, REFINE_POINTS // 2)
     for r in [r for r in res if r.participates][:MAX_REFINED]:
-        width = r.zeta if r.searched and r.zeta > UNDAMPED_GAP / g[0] else UNDAMPED_GAP / g[0]  # (NaN: the gap)
-        near = r.omega_d * np.concatenate([1 - width * g, 1 + width * g])
-        extra.append(near[(near > 0)])
-        if r.searched and not np.isnan(r.zeta):
+        widths = [UNDAMPED_GAP / g[0]]  # the gap's scale (undamped, narrow, ζ not computed) ...
+        if r.searched and not np.isnan(r.zeta):  # ... and the half-power width of a damped peak
+            widths = [r.zeta] + (widths if r.zeta < UNDAMPED_GAP / g[0] else [])
             extra.append([r.omega_d])
+        for width in widths:
+            near = r.omega_d * np.concatenate([1 - width * g, 1 + width * g])
+            extra.append(near[(near > 0)])
     grid = np.union1d(base, np.concatenate(extra)) if extra else base
     grid = grid[(grid >= lo) & (grid <= hi)]
     for r in res:  # never on (or within the gap of) an undamped ω_j

@@ -121,7 +121,10 @@ class DenseReceptance:
             w = omega[lo:lo + chunk]
             Z = 1j * w[:, None, None] * G[None]
             Z[:, np.arange(n), np.arange(n)] += d[lo:lo + chunk]
-            q = np.linalg.solve(Z, b[lo:lo + chunk].astype(complex)[..., None])[..., 0]
+            try:
+                q = np.linalg.solve(Z, b[lo:lo + chunk].astype(complex)[..., None])[..., 0]
+            except np.linalg.LinAlgError:  # Z overflowed or is singular in float64: left to the certificate
+                q = np.full(b[lo:lo + chunk].shape, np.nan, dtype=complex)
             out[lo:lo + chunk] = q @ Phi.T
         return out
 
@@ -323,9 +326,10 @@ def mp_start_digits(el: Elements, omega: float) -> int:
     if el.rayleigh is not None:
         a, b = (abs(float(v)) for v in el.rayleigh)
         terms += [omega * a * np.abs(el.masses), omega * b * np.abs(el.stiffness)]
-    v = np.concatenate([np.asarray(t, dtype=float).reshape(-1) for t in terms])
+    with np.errstate(all="ignore"):
+        v = np.concatenate([np.asarray(t, dtype=float).reshape(-1) for t in terms])
     v = v[np.isfinite(v) & (v > 0)]
-    decades = math.log10(float(v.max()) / float(v.min())) if v.size else 0.0
+    decades = math.log10(float(v.max())) - math.log10(float(v.min())) if v.size else 0.0
     return int(min(MP_MAX_DPS, 30 + math.ceil(decades)))
 
 

@@ -44,8 +44,8 @@ NARROW_ZETA = 1e-12
 #: A grid maximum counts when it beats both neighbours by more than this (relative; the certified
 #: values are good to 1e-11, so rounding cannot make one).
 SIGNIFICANT = 1e-9
-#: A found maximum is checked with certified values this fraction of its bracket to each side.
-VERIFY = 1e-3
+#: A found maximum is checked with certified values these fractions of its bracket to each side.
+VERIFY = (1e-3, 1e-6, 1e-9)
 #: A peak farther than this many ζ from ω_d (relative) is reported as shifted.
 SHIFT_ZETAS = 3.0
 
@@ -174,7 +174,8 @@ def _mp_sees(el, group: np.ndarray, input: int, output: int) -> bool:
     """The residue of the modes ``group`` (positions in ascending ω) settled in mpmath at d, 2d, 4d, …
     digits (d = 30 beyond the decades of the springs and masses): a true residue, however small,
     settles (two successive values agree to 1e-6); rounding noise around an exact node falls with
-    every doubling — two falls each past half the digits mean a node. Unsettled at
+    the digits — a fall by more than 10^(p/2) from p to 2p digits, to below 10^-p, means a node (a
+    true residue below ~10^-(1.5 d) of the scale would be taken for one). Unsettled at
     :data:`frf_dense.MP_MAX_DPS` digits: seen (|H| = ∞ is then the claim)."""
     import mpmath
 
@@ -193,16 +194,15 @@ def _mp_sees(el, group: np.ndarray, input: int, output: int) -> bool:
             return abs(residue) / scale
 
     dps = int(min(MP_MAX_DPS, 30 + math.ceil(decades(el.stiffness) + decades(el.masses))))
-    seq = [(dps, ratio(dps))]
+    a = ratio(dps)
     while dps < MP_MAX_DPS:
-        dps = min(2 * dps, MP_MAX_DPS)
-        seq.append((dps, ratio(dps)))
-        (_, a), (_, b) = seq[-2], seq[-1]
-        if b != 0 and abs(a - b) <= 1e-6 * b:
+        prev, dps = dps, min(2 * dps, MP_MAX_DPS)
+        b = ratio(dps)
+        if b != 0 and abs(a - b) <= 1e-6 * b:  # settled: a true residue
             return True
-        if b == 0 or (len(seq) >= 3 and all(seq[k][1] < seq[k - 1][1] * mpmath.mpf(10) ** (-seq[k - 1][0] // 2)
-                                            for k in (len(seq) - 2, len(seq) - 1))):
-            return False
+        if b == 0 or (b < a * mpmath.mpf(10) ** (-(prev // 2)) and b < mpmath.mpf(10) ** (-(dps // 2))):
+            return False  # noise falling with the digits: an exact node
+        a = b
     return True
 
 
@@ -267,9 +267,12 @@ def _maximise(solve, a: float, b: float, top: float, certify: bool) -> tuple[flo
 
 
 def _verified(solve, a: float, b: float, w: float, value: complex) -> bool:
-    """The certified |H| at ``w ± VERIFY (b − a)`` is below ``|value|`` (so the maximum is within that)."""
-    h = VERIFY * (b - a)
-    side = np.abs(solve(np.array([max(w - h, a), min(w + h, b)]), True))
+    """The certified |H| at ``w ± h (b − a)`` for each h of :data:`VERIFY` (down to a few ulps of w) is
+    below ``|value|``: a local maximum at every scale the bracket resolves."""
+    h = np.array([v * (b - a) for v in VERIFY if v * (b - a) > 4 * np.spacing(w)])
+    if not h.size:
+        return True
+    side = np.abs(solve(np.concatenate([np.maximum(w - h, a), np.minimum(w + h, b)]), True))
     return bool(np.all(side <= abs(value)))
 
 

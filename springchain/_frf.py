@@ -243,13 +243,19 @@ def frf(scene: str | Path | Scene, input, output, omega_min: float | None = None
     if isinstance(points, bool) or not isinstance(points, int) or not 2 <= points <= MAX_POINTS:
         raise RunRefused(f"points {points!r}: accepted: a whole number 2 ... {MAX_POINTS}", quantity="points")
     system, _ = _system(sc)
-    model, modes = None, None
+    model, modes, zeta_note = None, None, None
     if sc.chain is None and system.damped:  # the resonance table from the damped modes `modes` prints
         from .derive.damping_report import damped_modes
         from .derive.model import Model
 
+        from .derive.accurate import NotAccurate
+
         model = Model(sc)
-        modes = [(r.omega_n, r.zeta, r.omega_d) for r in damped_modes(model, None).rows]
+        try:
+            modes = [(r.omega_n, r.zeta, r.omega_d) for r in damped_modes(model, None).rows]
+        except NotAccurate:  # ζ unsettled in extended precision: the table from the float64 state matrix
+            zeta_note = ("damping ratios did not settle in extended precision (as `modes` says): the resonance "
+                         "table's ζ and ω_d are from the float64 modal state matrix (H itself is certified)")
     elif sc.chain is not None and system.damped:
         modes = _chain_modes(sc, system)
     response = frequency_response(system, i, o, lo, hi, points, modes)
@@ -273,6 +279,7 @@ def frf(scene: str | Path | Scene, input, output, omega_min: float | None = None
 
         notes.append(f"damping ratios not computed (as `modes`): dashpots on a chain of {sc.chain.n} masses (the "
                      f"dense modal state matrix is used up to {DENSE_MAX} masses, or ζ below what it resolves)")
+    notes += [zeta_note] if zeta_note else []
     notes += list(response.notes)
     name = lambda k: str(k) if sc.chain is not None else sc.mass_names[k]  # noqa: E731
     return FrequencyResponse(sc, name(i), name(o), response.omega, response.H, response.resonances, tf, notes,
