@@ -83,6 +83,8 @@ class Operator:
     chain: object = field(default=None, repr=False)
     #: A long ring's elements (:class:`numeric.elements.Elements`): certify the tridiagonal solve.
     elements: object = field(default=None, repr=False)
+    #: Notes the solves leave (a float64 limit met): one line each, collected by the response.
+    notes: list = field(default_factory=list, repr=False, compare=False)
 
     @property
     def n(self) -> int:
@@ -127,7 +129,12 @@ def operator(system: System) -> Operator:
 
         impedances = chain_elements(el.masses, el.spring_ends, el.stiffness, el.damper_ends, el.damping)
         zero = (np.zeros(n), np.zeros(max(n - 1, 0)), 0.0)
-        return Operator(system.masses, zero, zero if el.damped else None, True, chain=impedances)
+        dense = None
+        if n <= RING_DENSE:  # short chains: the certified modal route (mpmath where float64 cannot certify)
+            from .frf_dense import DenseReceptance
+
+            dense = DenseReceptance.from_elements(el)
+        return Operator(system.masses, zero, zero if el.damped else None, True, dense=dense, chain=impedances)
     dense = None
     if n <= RING_DENSE:
         from .frf_dense import DenseReceptance
@@ -183,7 +190,7 @@ def _receptance(op: Operator, omega: np.ndarray, input: int, output: int, certif
     if op.chain is not None:
         from .frf_chain import chain_receptance
 
-        return chain_receptance(op.chain, omega, input, output)
+        return chain_receptance(op.chain, omega, input, output, certify=certify, notes=op.notes)
     if op.banded:
         return _receptance_banded(op, omega, input, output)
     n = op.n
@@ -514,10 +521,11 @@ def frequency_response(system: System, input: int, output: int, omega_min: float
     H = receptance(op, grid, input, output)
     notes = []
     top = hi
-    partial = op.banded and natural[natural > 0].shape[0] > len(res)
-    if partial and res:  # a long chain: only its lowest resonances are known, so peaks only below them
-        top = min(hi, res[-1].omega_d)
-        notes.append(f"local maxima of |H| searched below ω = {top:.6g} rad/s (the {len(res)} lowest modes: "
+    elastic = natural[natural > 0]
+    if op.banded and natural.shape[0] < op.n and elastic.shape[0] > MAX_REFINED:
+        # a long chain: only its lowest modes are known, so peaks only below the last of them
+        top = min(hi, float(elastic[MAX_REFINED - 1]))
+        notes.append(f"local maxima of |H| searched below ω = {top:.6g} rad/s (the {MAX_REFINED} lowest modes: "
                      "the grid does not resolve the others)")
     below = grid <= top
     solve = lambda w, certify: receptance(op, w, input, output, certify=certify)  # noqa: E731
@@ -537,4 +545,5 @@ def frequency_response(system: System, input: int, output: int, omega_min: float
     if how == "unchecked" and any(r.singular for r in inside):
         notes.append("nodes at the input or output not checked (more than 400 masses): an undamped mode with a "
                      "node there is listed with |H| = ∞ though |H| is finite at it")
+    notes += list(dict.fromkeys(op.notes))  # a float64 limit a solve met (each once)
     return Response(grid, H, inside, True, extra, notes)
