@@ -39,7 +39,8 @@ import scipy.linalg
 from ..generated.contract import MAX_DENSE, End
 from .errors import RunRefused
 from .frf_dense import MPMATH_MAX_MASSES, dense_chunk
-from .frf_table import NARROW_ZETA, Resonance, attribute, connected, local_maxima, sees
+from .frf_table import (NARROW_ZETA, NODE_FLOAT, REPEATED, SETTLE_MAX, Resonance, attribute, connected,
+                        local_maxima, sees)
 from .system import System
 
 #: Resonances refined (the lowest in range); long chains have more modes than any grid.
@@ -125,16 +126,16 @@ def operator(system: System) -> Operator:
         return Operator(system.masses, K, C, False, dense=DenseReceptance.from_elements(el))
     n = system.n
     if system.ends[0] is not End.RING:
-        from .frf_chain import chain_elements
-
-        impedances = chain_elements(el.masses, el.spring_ends, el.stiffness, el.damper_ends, el.damping)
         zero = (np.zeros(n), np.zeros(max(n - 1, 0)), 0.0)
-        dense = None
         if n <= RING_DENSE:  # short chains: the certified modal route (mpmath where float64 cannot certify)
             from .frf_dense import DenseReceptance
 
-            dense = DenseReceptance.from_elements(el)
-        return Operator(system.masses, zero, zero if el.damped else None, True, dense=dense, chain=impedances)
+            return Operator(system.masses, zero, zero if el.damped else None, True,
+                            dense=DenseReceptance.from_elements(el))
+        from .frf_chain import chain_elements
+
+        impedances = chain_elements(el.masses, el.spring_ends, el.stiffness, el.damper_ends, el.damping)
+        return Operator(system.masses, zero, zero if el.damped else None, True, chain=impedances)
     dense = None
     if n <= RING_DENSE:
         from .frf_dense import DenseReceptance
@@ -381,8 +382,17 @@ def resonances(system: System, op: Operator, input: int, output: int, omega: np.
     ask = [wn for wn, z, _ in rows if 0 <= z < NARROW_ZETA]
     seen = sees(el, ask, input, output)
     flags = iter(seen.flags)
-    return [Resonance(wn, z, wd, participates=next(flags) if 0 <= z < NARROW_ZETA else True)
-            for wn, z, wd in rows], seen.how
+    out = []
+    for wn, z, wd in rows:
+        sees_it = next(flags) if 0 <= z < NARROW_ZETA else True
+        last = out[-1] if out else None
+        if (last is not None and abs(wn - last.omega_n) <= REPEATED * wn and abs(wd - last.omega_d) <= REPEATED * wn
+                and (z == last.zeta or abs(z - last.zeta) <= REPEATED * max(z, last.zeta))):
+            out[-1] = Resonance(last.omega_n, last.zeta, last.omega_d, participates=last.participates,
+                                multiplicity=last.multiplicity + 1)  # a repeated frequency: one resonance
+            continue
+        out.append(Resonance(wn, z, wd, participates=sees_it))
+    return out, seen.how
 
 
 #: ζ of a pole of the float64 state matrix below this is its rounding (an undamped mode).
@@ -518,6 +528,15 @@ def frequency_response(system: System, input: int, output: int, omega_min: float
         return Response(grid, np.zeros(grid.shape[0], dtype=complex), [], False)
     inside = [r for r in res if lo <= r.omega_d <= hi]
     grid = _grid(lo, hi, points, inside)
+    if op.C is not None:  # every undamped ω as well (a damped mode the ζ route missed still shows its peak)
+        near = natural[(natural >= lo) & (natural <= hi)][:MAX_REFINED]
+        g = np.geomspace(0.03, 30.0, REFINE_POINTS // 2) * UNDAMPED_GAP / 0.03
+        extra = (near[:, None] * np.concatenate([1 - g, 1 + g])[None, :]).ravel()
+        extra = extra[(extra >= lo) & (extra <= hi)]
+        for r in inside:  # kept off the gaps of the singular ones
+            if r.undamped or r.narrow:
+                extra = extra[np.abs(extra / r.omega_d - 1) >= (UNDAMPED_GAP if r.participates else SILENT_GAP)]
+        grid = np.union1d(grid, extra)
     H = receptance(op, grid, input, output)
     notes = []
     top = hi
@@ -540,8 +559,8 @@ def frequency_response(system: System, input: int, output: int, omega_min: float
         order = np.argsort(grid, kind="stable")
         grid, H = grid[order], H[order]
     if how == "float64" and any(not r.participates for r in inside):
-        notes.append("nodes at the input or output judged in float64 (residue below 1e-8 of the mode's largest "
-                     f"component²): scenes of more than {MPMATH_MAX_MASSES} masses are not settled in mpmath")
+        notes.append(f"nodes at the input or output judged in float64 (residue below {NODE_FLOAT:g} of the mode's "
+                     f"largest): scenes of more than {SETTLE_MAX} masses are not settled in mpmath")
     if how == "unchecked" and any(r.singular for r in inside):
         notes.append("nodes at the input or output not checked (more than 400 masses): an undamped mode with a "
                      "node there is listed with |H| = ∞ though |H| is finite at it")

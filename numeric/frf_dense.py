@@ -270,7 +270,21 @@ def mp_modes(el: Elements, mpmath) -> tuple[list, list[list]]:
 
 
 def _mp_modal_damping(el: Elements, mpmath):
-    """C = M Φ diag(2ζⱼωⱼ) Φᵀ M of modal damping at the current precision (:func:`mp_modes`)."""
+    """C = M Φ diag(2ζⱼωⱼ) Φᵀ M of modal damping at the current precision (:func:`mp_modes`), computed
+    once per scene and precision (every frequency the certificate rejects needs it)."""
+    key = (mpmath.mp.dps, el.masses.tobytes(), el.spring_ends.tobytes(), el.stiffness.tobytes(),
+           np.asarray(el.modal_zeta).tobytes())
+    if key not in _MODAL_C:
+        if len(_MODAL_C) > 16:
+            _MODAL_C.clear()
+        _MODAL_C[key] = _mp_modal_damping_at(el, mpmath)
+    return _MODAL_C[key].copy()
+
+
+_MODAL_C: dict = {}
+
+
+def _mp_modal_damping_at(el: Elements, mpmath):
     n = el.n
     lam, shapes = mp_modes(el, mpmath)
     m = [_mp(v, mpmath) for v in el.masses.tolist()]

@@ -97,8 +97,8 @@ class FrequencyResponse:
                 lines.append(f"  ω = {r.omega_n:.8g} rad/s: a mode with a node at the input or output (no resonance "
                              "in this H: |H| is finite there)")
         for wk, hk in self.extra_peaks:
-            lines.append(f"  local maximum |H| = {hk:.6e} m/N at ω = {wk:.8g} rad/s (between resonances: no single "
-                         "mode's peak)")
+            lines.append(f"  local maximum |H| = {hk:.6e} m/N at ω = {wk:.8g} rad/s (no listed damped resonance's own "
+                         "peak)")
         if self.transfer is not None:
             lines += ["transfer function (adj(M s² + C s + K)[out, in] / det(M s² + C s + K), cancelled):",
                       self.transfer.text().rstrip("\n"), "LaTeX:", self.transfer.latex().rstrip("\n")]
@@ -160,6 +160,8 @@ def _resonance_line(r) -> str:
                 + ("" if r.peak_omega is None else f"   local maximum |H| = {r.peak_magnitude:.6e} m/N at "
                    f"ω = {r.peak_omega:.8g} rad/s"))
     line = f"  ω_n = {r.omega_n:.8g} rad/s   ζ = {r.zeta:.4g}   ω_d = {r.omega_d:.8g} rad/s"
+    if r.multiplicity > 1:
+        line += f" ({r.multiplicity} modes: a repeated frequency)"
     if r.undamped:
         return line + "   |H| = ∞ at ω_n (undamped; the grid stops 1e-4 short on each side)"
     if r.narrow:
