@@ -256,37 +256,38 @@ def local_maxima(solve, omega: np.ndarray, H: np.ndarray, poles: list[float]) ->
         a, b = float(omega[k - 1]), float(omega[j + 1])
         if poles.size and np.any((poles >= a) & (poles <= b)):
             continue
-        top = float(m[k])
-        a, b, top = _zoom(solve, a, b, float(omega[k]), top)
-        w, value = _maximise(solve, a, b, top, certify=False)
+        a, b, best = _zoom(solve, a, b, (float(omega[k]), complex(H[k])))
+        w, value = _maximise(solve, a, b, abs(best[1]), certify=False)
         if w is None or not _verified(solve, a, b, w, value):  # float64 trials misled the search
-            w, value = _maximise(solve, a, b, top, certify=True)
-        if w is None or not abs(value) > top:  # no higher point than the grid's (a flat top): keep the grid point
-            w, value = float(omega[k]), complex(H[k])
-        out.append((w, value))
+            w, value = _maximise(solve, a, b, abs(best[1]), certify=True)
+        out.append((w, value) if w is not None and abs(value) > abs(best[1]) else best)  # else the best sample
     return out
 
 
-def _zoom(solve, a: float, b: float, w: float, top: float) -> tuple[float, float, float]:
-    """Narrow the bracket (a, b) of a grid maximum at ``w`` until the peak is resolved in it: certified
-    values at :data:`ZOOM_POINTS` points across the bracket, then the bracket of their largest, until
-    that largest no longer grows (by 1e-6) and both its neighbours are at least :data:`RESOLVED` of it
-    — a peak far narrower than the grid spacing (ζ = 1e-9 between points 1e-4 apart) is a needle no
-    bounded search finds. At most :data:`ZOOM_STEPS` times. Returns the bracket and its top."""
+def _zoom(solve, a: float, b: float, best: tuple[float, complex]) -> tuple[float, float, tuple[float, complex]]:
+    """Narrow the bracket (a, b) of a grid maximum ``best = (ω, H)`` until the peak is resolved in it:
+    certified values at :data:`ZOOM_POINTS` points across the bracket, then the bracket of their
+    largest, until that largest no longer grows (by 1e-6) and both its neighbours are at least
+    :data:`RESOLVED` of it — a peak far narrower than the grid spacing (ζ = 1e-9 between points 1e-4
+    apart) is a needle no bounded search finds. At most :data:`ZOOM_STEPS` times. Returns the
+    bracket and the best point sampled."""
+    w, top = best[0], abs(best[1])
     for _ in range(ZOOM_STEPS):
         if b - a <= 64 * np.spacing(w):
             break
         inner = np.geomspace(a, b, ZOOM_POINTS)[1:-1] if a > 0 else np.linspace(a, b, ZOOM_POINTS)[1:-1]
         pts = np.union1d(np.union1d(inner, [w]), [a, b])
-        h = np.abs(solve(pts, True))
+        H = solve(pts, True)
+        h = np.abs(H)
         k = int(np.argmax(h[1:-1])) + 1
         if not h[k] >= top:
             break
         grew = h[k] > top * (1 + 1e-6)
         a, b, w, top = float(pts[k - 1]), float(pts[k + 1]), float(pts[k]), float(h[k])
+        best = (w, complex(H[k]))
         if not grew and min(h[k - 1], h[k + 1]) >= RESOLVED * top:
             break
-    return a, b, top
+    return a, b, best
 
 
 def _maximise(solve, a: float, b: float, top: float, certify: bool) -> tuple[float | None, complex]:

@@ -207,12 +207,16 @@ def reference(case: Case, omega, i: int, o: int, digits: int | None = None) -> n
     out = []
     for w in omega:
         d = digits or _digits(case, w)
-        got = []
-        for dps in (d, 2 * d):
-            with mpmath.workdps(dps):
-                got.append(_solve(case, _mpf(w), i, o))
-        a, b = got
-        assert abs(a - b) <= mpmath.mpf(10) ** (-30) * abs(b) or (a == 0 and b == 0), "reference did not settle"
+        with mpmath.workdps(d):
+            a = _solve(case, _mpf(w), i, o)
+        while True:  # doubling until two precisions agree (modal damping's shapes may need more digits)
+            d *= 2
+            with mpmath.workdps(d):
+                b = _solve(case, _mpf(w), i, o)
+            if abs(a - b) <= mpmath.mpf(10) ** (-30) * abs(b) or (a == 0 and b == 0):
+                break
+            assert d < 4000, "reference did not settle"
+            a = b
         out.append(complex(b))
     return np.array(out)
 
@@ -584,18 +588,57 @@ def chain_cases(draw, long: bool = False):
     return Case.of_chain(n, *ends, m0, m1, k0, k1, dampers, rayleigh), i, o
 
 
-_FOUND = [  # failures the generator found, kept as examples (see the module docstring)
+_FOUND = [  # failures the generator found in the frf's own code, kept as examples
+    # peak search misled by float64 trials (a mass contrast of 1e68): a "peak" that was no maximum
+    (Case((1.00023, 1.98747e+68, 1.00023, 1.00023, 0.316301), ((0, 1, 7.45003e-60), (1, 2, 2.77032e-16),
+          (2, 3, 0.0478025), (3, 4, 1.00023), (0, 4, 1.00023)), ((0, -1, 1.00023),)), 1, 0),
+    # OverflowError: the mpmath digit count from max/min of terms overflowing float64
+    (Case((9.87143e-74, 1.25893, 1.0, 1.0, 1.0), ((0, 1, 54138.8), (1, 2, 6.32339e+145), (2, 3, 9.34231e-69),
+          (3, 4, 6.14428e+113), (0, 4, 7.93194e-47)), ((0, 2, 4.53897e+143),), (8.61443e-38, 1.54386e-113)), 0, 0),
+    # a true residue 1.6e-68 of the scale (mass ratio 1e34) called a node
+    (Case((2.64881e-09, 3.33544e-43), ((0, 1, 2.64881e-29),)), 0, 0),
+    # mpmath residue exactly 0 at the first precision, noise after: "|H| = ∞" claimed for a node
+    (Case((5.93497e+33, 1.0, 1.0, 1.0, 0.0794328), ((0, 1, 8.88601e-69), (2, 3, 172.057), (0, 4, 1.0),
+          (-1, 1, 1e-150))), 3, 2),
+    # ζ = 8e-12: the grid refined at 1e-4, the listed "peak" on the flank
+    (Case((1.59804e-43, 5.05344e-43, 9.26971e-48, 1.76187e-48, 5.68892e-39, 5.05344e-43),
+          ((0, 1, 5.05345e-43), (2, 3, 8.74446e-42), (3, 4, 5.05344e-43), (4, 5, 9.47286e-43), (0, 5, 4.9346e-48),
+           (2, 4, 5.05344e-43)), ((0, -1, 5.05344e-43),)), 0, 0),
+    # modal damping at 1e150 masses: sqrt of a negative ω² noise made derive's G complex (a traceback)
+    (Case((1e+150, 0.00031239, 1e+150), ((0, 1, 7.23195e+42), (1, 2, 3.55223e+112), (0, 2, 8.06626e-42),
+          (0, 2, 6.56135e+31), (-1, 2, 2.2446), (-1, 1, 2.69085e-12)), modal=(0.05,)), 2, 2),
+    # chains: light modes (λ ~ 1e-11 beside 1) "rigid" in chain_damped, the sweep 2.4e-8 off at a peak
+    (Case.of_chain(8, "wall", "free", 4.1251e+62, 1.30853e+41, 2.35359e-52, 1.30853e+41, ((4, -1, 1.30853e+41),)), 0, 0),
+    # float64 trials 99.8 % off: the search ended on the bracket's edge, the grid point was listed
+    (Case.of_chain(6, "wall", "wall", 3.04125e+58, 3.04125e+58, 0.373395, 1.09146e-67, (), (1.33351e-65, 5.70784e+27)),
+     4, 2),
+    # a needle peak (ζ ~ 1e-9) between grid points 1e-4 apart
+    (Case.of_chain(5, "free", "wall", 4.29482e-122, 9.82889e-112, 2.08205e-115, 1.25741e-137,
+                   ((4, -1, 1.19241e-125), (2, -1, 1.04299e-107))), 1, 0),
+    # the zoom's best point dropped for the grid point
+    (Case.of_chain(5, "free", "free", 6.43994e+30, 6.43994e+30, 1.46763e+58, 8.1811e+29, ((4, -1, 3.325e+41),)), 1, 3),
+    # a dashpot between masses 2 and 0 of an open chain: refused by the dynamic-stiffness route
+    (Case.of_chain(3, "free", "free", 3.66517e-115, 2.16919e-94, 1.28604e-91, 1.15903e-114,
+                   ((2, 0, 7.5335e-100), (1, -1, 4.83339e-141))), 2, 1),
+]
+#: Found on 30-mass chains (the slow run): two modes 6e-9 apart grouped as one repeated ω (their residues
+#: cancel: "a node" said at two poles); a real residue of 5e-10 of the scale judged a node in float64.
+_FOUND_LONG = [
+    (Case.of_chain(30, "free", "free", 1.0, 1.0, 1.52756e-05, 2493.5), 0, 0),
+    (Case.of_chain(30, "free", "free", 2493.5, 1.0, 2493.5, 2493.5), 0, 0),
 ]
 
 
-def _with_examples(test):
-    for case in _FOUND:
-        test = example(drawn=case)(test)
-    return test
+def _with_examples(found):
+    def wrap(test):
+        for case in found:
+            test = example(drawn=case)(test)
+        return test
+    return wrap
 
 
 @settings(max_examples=EXAMPLES)
-@_with_examples
+@_with_examples(_FOUND)
 @given(drawn=st.one_of(cases(), chain_cases()))
 def test_frf_over_the_accepted_domain(tmp_path_factory, drawn):
     case, i, o = drawn
@@ -604,6 +647,7 @@ def test_frf_over_the_accepted_domain(tmp_path_factory, drawn):
 
 @pytest.mark.slow
 @settings(max_examples=int(400 * SLOW_BUDGET))
+@_with_examples(_FOUND + _FOUND_LONG)
 @given(drawn=st.one_of(cases(), chain_cases(long=True)))
 def test_frf_over_the_accepted_domain_exhaustive(tmp_path_factory, drawn):
     case, i, o = drawn
