@@ -86,6 +86,8 @@ class Operator:
     elements: object = field(default=None, repr=False)
     #: Notes the solves leave (a float64 limit met): one line each, collected by the response.
     notes: list = field(default_factory=list, repr=False, compare=False)
+    #: What is left of the extended-precision budget of a long chain's sweeps (mass-frequencies).
+    budget: dict = field(default_factory=dict, repr=False, compare=False)
 
     @property
     def n(self) -> int:
@@ -191,7 +193,7 @@ def _receptance(op: Operator, omega: np.ndarray, input: int, output: int, certif
     if op.chain is not None:
         from .frf_chain import chain_receptance
 
-        return chain_receptance(op.chain, omega, input, output, certify=certify, notes=op.notes)
+        return chain_receptance(op.chain, omega, input, output, certify=certify, notes=op.notes, budget=op.budget)
     if op.banded:
         return _receptance_banded(op, omega, input, output)
     n = op.n
@@ -541,7 +543,7 @@ def frequency_response(system: System, input: int, output: int, omega_min: float
     notes = []
     top = hi
     elastic = natural[natural > 0]
-    if op.banded and natural.shape[0] < op.n and elastic.shape[0] > MAX_REFINED:
+    if op.banded and elastic.shape[0] > MAX_REFINED:
         # a long chain: only its lowest modes are known, so peaks only below the last of them
         top = min(hi, float(elastic[MAX_REFINED - 1]))
         notes.append(f"local maxima of |H| searched below ω = {top:.6g} rad/s (the {MAX_REFINED} lowest modes: "

@@ -128,66 +128,73 @@ def _kernel():
     return _receptance_impl
 
 
-def _solution(e, f, z, src, out, stretch):
-    """The response to a unit force on mass ``src`` from the left and right dynamic stiffnesses ``e``,
-    ``f``: displacements ``out`` (n,) and the link stretches ``stretch[p] = x_p − x_{p−1}`` (n,), each
-    from transmissibilities (no difference of two displacements is ever formed)."""
-    n = e.shape[0]
-    t = complex(0.0, 0.0)
-    if src < n - 1:
-        t = z[src + 1] * f[src + 1] / (z[src + 1] + f[src + 1])
-    out[src] = 1.0 / (e[src] + t)
-    for p in range(src + 1, n):
-        u = z[p] + f[p]
-        out[p] = out[p - 1] * z[p] / u
-        stretch[p] = -out[p - 1] * f[p] / u
-    for p in range(src, 0, -1):
-        u = z[p] + e[p - 1]
-        out[p - 1] = out[p] * z[p] / u
-        stretch[p] = out[p] * e[p - 1] / u
-    stretch[0] = 0.0
-
-
-def _certified_factory(solution):
-    """The certified sweep, calling ``solution`` (:func:`_solution`, compiled or not)."""
-
-    def certified(m, gk, gc, zk, zc, omega, i, o, out, bound):
-        """H(ω_w) and a bound on its error per frequency: every rounding of the sweep is a relative
-        change of an element by at most γ, so ``|ΔH| ≤ γ Σ_e |p_e ∂H/∂p_e|`` with ``∂H/∂k = −(bᵀx)(bᵀy)``
-        for a link (x, y: the responses to unit forces on the input and the output), ``ω² m x_p y_p``
-        for a mass, ``g x_p y_p`` for the ground; ``bound`` gets that sum (times γ: the caller's)."""
-        n = m.shape[0]
-        a = np.empty(n, dtype=np.complex128)
-        z = np.empty(n, dtype=np.complex128)
-        e = np.empty(n, dtype=np.complex128)
-        f = np.empty(n, dtype=np.complex128)
-        x = np.empty(n, dtype=np.complex128)
-        y = np.empty(n, dtype=np.complex128)
-        sx = np.empty(n, dtype=np.complex128)
-        sy = np.empty(n, dtype=np.complex128)
-        for w in range(omega.shape[0]):
-            om = omega[w]
-            om2 = om * om
-            for p in range(n):
-                a[p] = complex(gk[p] - om2 * m[p], om * gc[p])
-                z[p] = complex(zk[p], om * zc[p])
-            e[0] = a[0]
-            for p in range(1, n):
-                e[p] = a[p] + z[p] * e[p - 1] / (z[p] + e[p - 1])
-            f[n - 1] = a[n - 1]
-            for p in range(n - 2, -1, -1):
-                f[p] = a[p] + z[p + 1] * f[p + 1] / (z[p + 1] + f[p + 1])
-            solution(e, f, z, i, x, sx)
-            solution(e, f, z, o, y, sy)
-            out[w] = x[o]
-            total = 0.0
-            for p in range(n):
-                total += (om2 * m[p] + gk[p] + om * gc[p]) * abs(x[p]) * abs(y[p])
-                if p > 0:
-                    total += (zk[p] + om * zc[p]) * abs(sx[p]) * abs(sy[p])
-            bound[w] = total
-
-    return certified
+def _certified_impl(m, gk, gc, zk, zc, omega, i, o, out, bound):
+    """H(ω_w) and a bound on its error per frequency: every rounding of the sweep is a relative change
+    of an element by at most γ, so ``|ΔH| ≤ γ Σ_e |p_e ∂H/∂p_e|`` with ``∂H/∂k = −(bᵀx)(bᵀy)`` for a
+    link (x, y: the responses to unit forces on the input and the output), ``ω² m x_p y_p`` for a
+    mass, ``g x_p y_p`` for the ground; ``bound`` gets that sum (times γ: the caller's). The
+    responses come from the left and right dynamic stiffnesses ``e``, ``f`` by transmissibilities,
+    the link stretches ``x_p − x_{p−1}`` likewise (no difference of two displacements is formed)."""
+    n = m.shape[0]
+    a = np.empty(n, dtype=np.complex128)
+    z = np.empty(n, dtype=np.complex128)
+    e = np.empty(n, dtype=np.complex128)
+    f = np.empty(n, dtype=np.complex128)
+    ue = np.empty(n, dtype=np.complex128)  # 1 / (z_p + e_{p−1}) and 1 / (z_p + f_p): one division each,
+    uf = np.empty(n, dtype=np.complex128)  # shared by the sweeps and both responses
+    ay = np.empty(n)  # |y_p| and |y_p − y_{p−1}| of the response to the unit force on the output
+    sy = np.zeros(n)
+    for w in range(omega.shape[0]):
+        om = omega[w]
+        om2 = om * om
+        for p in range(n):
+            a[p] = complex(gk[p] - om2 * m[p], om * gc[p])
+            z[p] = complex(zk[p], om * zc[p])
+        e[0] = a[0]
+        for p in range(1, n):
+            ue[p] = 1.0 / (z[p] + e[p - 1])
+            e[p] = a[p] + z[p] * e[p - 1] * ue[p]
+        f[n - 1] = a[n - 1]
+        for p in range(n - 2, -1, -1):
+            uf[p + 1] = 1.0 / (z[p + 1] + f[p + 1])
+            f[p] = a[p] + z[p + 1] * f[p + 1] * uf[p + 1]
+        # y (force on o): magnitudes kept; then x (force on i) summed against them on the fly
+        t = complex(0.0, 0.0)
+        if o < n - 1:
+            t = z[o + 1] * f[o + 1] * uf[o + 1]
+        y = 1.0 / (e[o] + t)
+        ay[o] = abs(y)
+        for p in range(o + 1, n):
+            sy[p] = abs(y * f[p] * uf[p])
+            y = y * z[p] * uf[p]
+            ay[p] = abs(y)
+        y = 1.0 / (e[o] + t)
+        for p in range(o, 0, -1):
+            sy[p] = abs(y * e[p - 1] * ue[p])
+            y = y * z[p] * ue[p]
+            ay[p - 1] = abs(y)
+        t = complex(0.0, 0.0)
+        if i < n - 1:
+            t = z[i + 1] * f[i + 1] * uf[i + 1]
+        x0 = 1.0 / (e[i] + t)
+        total = (om2 * m[i] + gk[i] + om * gc[i]) * abs(x0) * ay[i]
+        x = x0
+        for p in range(i + 1, n):
+            total += (zk[p] + om * zc[p]) * abs(x * f[p] * uf[p]) * sy[p]
+            x = x * z[p] * uf[p]
+            total += (om2 * m[p] + gk[p] + om * gc[p]) * abs(x) * ay[p]
+            if p == o:
+                out[w] = x
+        x = x0
+        for p in range(i, 0, -1):
+            total += (zk[p] + om * zc[p]) * abs(x * e[p - 1] * ue[p]) * sy[p]
+            x = x * z[p] * ue[p]
+            total += (om2 * m[p - 1] + gk[p - 1] + om * gc[p - 1]) * abs(x) * ay[p - 1]
+            if p - 1 == o:
+                out[w] = x
+        if o == i:
+            out[w] = x0
+        bound[w] = total
 
 
 @functools.lru_cache(maxsize=1)
@@ -197,23 +204,23 @@ def _certified_kernel():
     if available():
         import numba
 
-        return numba.njit(_certified_factory(numba.njit(cache=True)(_solution)))
-    return _certified_factory(_solution)
+        return numba.njit(cache=True)(_certified_impl)
+    return _certified_impl
 
 
 #: Relative change of an element that one sweep's roundings amount to (a few operations per element).
 GAMMA = 16 * float(np.finfo(float).eps)
 #: Largest certified error of |H| (relative) accepted from float64; beyond it the mpmath sweep.
 CERTIFIED = 1e-11
-#: Most element-frequencies (n × uncertified frequencies) swept in mpmath per call (~2 s); past it the
+#: Most mass-frequencies (n × uncertified frequencies) swept in mpmath per response (~3 s); past it the
 #: float64 value stands, with its certified bound said in a note.
-MP_BUDGET = 200_000
+MP_BUDGET = 20_000
 #: Two mpmath precisions agreeing to this settle a value.
 MP_AGREE = 1e-15
 
 
 def chain_receptance(el: ChainElements, omega: np.ndarray, input: int, output: int,
-                     certify: bool = False, notes: list | None = None) -> np.ndarray:
+                     certify: bool = False, notes: list | None = None, budget: dict | None = None) -> np.ndarray:
     """``H(iω) = X_output / F_input`` of an open chain, shape (W,), complex (module docstring).
 
     Parameters
@@ -228,6 +235,9 @@ def chain_receptance(el: ChainElements, omega: np.ndarray, input: int, output: i
         certified to :data:`CERTIFIED` (near a light resonance the sweep's error is ε/ζ) is swept again
         in mpmath (:func:`mp_chain_receptance`) within :data:`MP_BUDGET`, past which the float64 value
         stands and ``notes`` gets one line with its bound.
+    budget : dict, optional
+        ``{"left": mass-frequencies}`` shared by the calls of one response (default: a fresh
+        :data:`MP_BUDGET`); decremented here.
     """
     omega = np.ascontiguousarray(np.asarray(omega, dtype=float).reshape(-1))
     out = np.empty(omega.shape[0], dtype=complex)
@@ -237,17 +247,28 @@ def chain_receptance(el: ChainElements, omega: np.ndarray, input: int, output: i
     bound = np.empty(omega.shape[0])
     _certified_kernel()(el.mass, el.ground_k, el.ground_c, el.link_k, el.link_c, omega, int(input), int(output),
                         out, bound)
-    rel = GAMMA * bound / np.abs(out)
-    bad = np.flatnonzero(~(rel <= CERTIFIED))
-    allowed = max(0, MP_BUDGET // max(el.n, 1))
+    with np.errstate(all="ignore"):
+        rel = GAMMA * bound / np.abs(out)
+    under = (out == 0) & (bound == 0)  # |H| below float64's range (an evanescent far transfer): 0 it stays
+    if np.any(under) and notes is not None:
+        note = ("|H| is below the float64 range (under 1e-308: printed as 0) at some frequencies (a far transfer "
+                "above the band of the chain)")
+        notes[:] = [n for n in notes if n != note] + [note]
+    bad = np.flatnonzero(~(rel <= CERTIFIED) & ~under)
+    budget = {} if budget is None else budget
+    left = budget.setdefault("left", MP_BUDGET)
+    allowed = max(0, left // max(el.n, 1))
     for j in bad[:allowed].tolist():
         out[j] = mp_chain_receptance(el, float(omega[j]), int(input), int(output))
+    budget["left"] = left - el.n * min(allowed, bad.size)
     rest = bad[allowed:]
     if rest.size and notes is not None:
-        worst = float(np.max(rel[rest]))
-        notes.append(f"H at {rest.size} of {omega.shape[0]} frequencies (near light resonances) is certified to "
-                     f"{worst:.2g} relative only: the float64 limit ε/ζ of the dynamic-stiffness sweep of "
-                     f"{el.n} masses (extended precision takes at most {MP_BUDGET:,} mass-frequencies)")
+        worst = budget["worst"] = max(budget.get("worst", 0.0), float(np.nanmax(np.where(np.isfinite(rel[rest]),
+                                                                                         rel[rest], np.inf))))
+        note = (f"H near resonances is certified to {worst:.2g} relative only at some frequencies: the float64 "
+                f"limit of the dynamic-stiffness sweep of {el.n} masses (ε/ζ near a light resonance, ε/gap near "
+                f"an undamped one; extended precision takes at most {MP_BUDGET:,} mass-frequencies)")
+        notes[:] = [n for n in notes if not n.startswith("H near resonances is certified to")] + [note]
     return out
 
 
