@@ -77,7 +77,7 @@ def damped_rows(masses: np.ndarray, spring_ends: np.ndarray, stiffness: np.ndarr
         lam, V = scipy.linalg.eig(A)
         refined = A.shape[0] <= REFINE_MAX_STATES
         if refined:
-            lam, _ = _refine_small(A, lam, V, -1.0)
+            lam, _ = _refine_small(A, lam, V.astype(complex), -1.0)  # (all-real λ: V comes real)
         # oscillatory: relative to |λ| (a light mode's λ ~ 1e-11 beside λ ~ 1 is no zero)
         osc = sorted((v for v in lam if v.imag > 1e-12 * abs(v)), key=abs)
         # G's entries are float64 products of the modes (normwise accurate): Re λ is known to about
