@@ -123,7 +123,7 @@ def _modal_damping(model: Model, dps: int):
             G = Phi.T * C * Phi
         if model.modal_zeta is not None:
             for j in range(n):
-                G[j, j] += 2 * _mp(model.modal_zeta[j].subs(subs), dps) * mpmath.sqrt(w2[j])
+                G[j, j] += 2 * _mp(model.modal_zeta[j].subs(subs), dps) * mpmath.sqrt(max(w2[j], 0))  # ω² noise < 0
         return w2, G
 
 

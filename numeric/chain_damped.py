@@ -77,9 +77,9 @@ def damped_rows(masses: np.ndarray, spring_ends: np.ndarray, stiffness: np.ndarr
         lam, V = scipy.linalg.eig(A)
         refined = A.shape[0] <= REFINE_MAX_STATES
         if refined:
-            lam, _ = _refine_small(A, lam, V, -1.0)
-        tiny = 1e-12 * float(np.max(np.abs(lam)))
-        osc = sorted((v for v in lam if v.imag > tiny), key=abs)
+            lam, _ = _refine_small(A, lam, V.astype(complex), -1.0)  # (all-real λ: V comes real)
+        # oscillatory: relative to |λ| (a light mode's λ ~ 1e-11 beside λ ~ 1 is no zero)
+        osc = sorted((v for v in lam if v.imag > 1e-12 * abs(v)), key=abs)
         # G's entries are float64 products of the modes (normwise accurate): Re λ is known to about
         # ε‖G‖ (refined) or ε‖A‖ (LAPACK alone), so a ζ whose σ is below RESOLVED times that is not
         # resolved and given as NaN (said, never printed)
@@ -87,13 +87,14 @@ def damped_rows(masses: np.ndarray, spring_ends: np.ndarray, stiffness: np.ndarr
         floor = RESOLVED * _EPS * norm
         rows += [(float(abs(v)), float(-v.real / abs(v)) if -v.real > floor else float("nan"), float(v.imag))
                  for v in osc]
-        real = [float(v.real) for v in lam if abs(v.imag) <= tiny]
-        rows += [(0.0, None, 0.0)] * sum(1 for r in real if abs(r) <= tiny)
-        rest = sorted((r for r in real if abs(r) > tiny), key=lambda r: -r)
+        real = sorted((float(v.real) for v in lam if abs(v.imag) <= 1e-12 * abs(v)), key=abs)
+        zeros = int(np.count_nonzero(w[kept] == 0))  # a damped rigid mode: λ = 0 (by structure) and -g
+        rows += [(0.0, None, 0.0)] * zeros
+        rest = sorted(real[zeros:], key=lambda r: -r)
         while len(rest) >= 2:  # overdamped: real pairs, slowest with fastest
             r1, r2 = rest.pop(0), rest.pop(-1)
-            wn = float(np.sqrt(r1 * r2))
-            rows.append((wn, float(-(r1 + r2) / (2 * wn)), 0.0))
+            wn = float(np.sqrt(r1 * r2)) if r1 * r2 > 0 else 0.0  # (a pair with a rounding zero: no ω_n)
+            rows.append((wn, float(-(r1 + r2) / (2 * wn)), 0.0) if wn > 0 else (0.0, None, 0.0))
     rows.sort(key=lambda r: r[0])
     rows = rows[:n]
     if el.n <= MP_MAX and any(z is not None and z != z for _, z, _ in rows):

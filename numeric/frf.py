@@ -39,6 +39,8 @@ import scipy.linalg
 from ..generated.contract import MAX_DENSE, End
 from .errors import RunRefused
 from .frf_dense import MPMATH_MAX_MASSES, dense_chunk
+from .frf_table import (NARROW_ZETA, NODE_FLOAT, REPEATED, SETTLE_MAX, Resonance, attribute, connected,
+                        local_maxima, sees)
 from .system import System
 
 #: Resonances refined (the lowest in range); long chains have more modes than any grid.
@@ -50,8 +52,6 @@ UNDAMPED_GAP = 1e-4
 #: Closest relative distance to an undamped ω_j of a mode with a node at the input or output
 #: (H is finite there, but the solve's error grows like 1/gap times |X|/|X_out|).
 SILENT_GAP = 1e-2
-#: Below this ζ a resonance counts as undamped.
-UNDAMPED_ZETA = 1e-9
 #: Largest ring solved by the certified modal route of :mod:`numeric.frf_dense` (the tridiagonal
 #: solve with a Sherman–Morrison corner loses κ·ε: 1e-9 N/m next to 1e3 N/m springs): the rings
 #: whose every frequency it certifies or settles in mpmath.
@@ -84,6 +84,10 @@ class Operator:
     chain: object = field(default=None, repr=False)
     #: A long ring's elements (:class:`numeric.elements.Elements`): certify the tridiagonal solve.
     elements: object = field(default=None, repr=False)
+    #: Notes the solves leave (a float64 limit met): one line each, collected by the response.
+    notes: list = field(default_factory=list, repr=False, compare=False)
+    #: What is left of the extended-precision budget of a long chain's sweeps (mass-frequencies).
+    budget: dict = field(default_factory=dict, repr=False, compare=False)
 
     @property
     def n(self) -> int:
@@ -124,10 +128,15 @@ def operator(system: System) -> Operator:
         return Operator(system.masses, K, C, False, dense=DenseReceptance.from_elements(el))
     n = system.n
     if system.ends[0] is not End.RING:
+        zero = (np.zeros(n), np.zeros(max(n - 1, 0)), 0.0)
+        if n <= RING_DENSE:  # short chains: the certified modal route (mpmath where float64 cannot certify)
+            from .frf_dense import DenseReceptance
+
+            return Operator(system.masses, zero, zero if el.damped else None, True,
+                            dense=DenseReceptance.from_elements(el))
         from .frf_chain import chain_elements
 
         impedances = chain_elements(el.masses, el.spring_ends, el.stiffness, el.damper_ends, el.damping)
-        zero = (np.zeros(n), np.zeros(max(n - 1, 0)), 0.0)
         return Operator(system.masses, zero, zero if el.damped else None, True, chain=impedances)
     dense = None
     if n <= RING_DENSE:
@@ -168,12 +177,23 @@ def receptance(op: Operator, omega: np.ndarray, input: int, output: int, certify
     ndarray, shape (W,), complex
     """
     omega = np.asarray(omega, dtype=float).reshape(-1)
+    with np.errstate(all="ignore"):  # float64 overflow is caught below (dense: by its certificate)
+        H = _receptance(op, omega, input, output, certify)
+    if certify and not np.all(np.isfinite(H)):
+        bad = int(np.argmax(~np.isfinite(H)))
+        raise RunRefused(f"frequency response at ω = {omega[bad]:.6g} rad/s: H overflows float64 on this route "
+                         "(element values near the 1e±150 limits multiplied by ω²); a [masses] scene of at most "
+                         f"{MPMATH_MAX_MASSES} masses is solved in extended precision", quantity="frf")
+    return H
+
+
+def _receptance(op: Operator, omega: np.ndarray, input: int, output: int, certify: bool) -> np.ndarray:
     if op.dense is not None:
         return op.dense.receptance(omega, input, output, certify=certify)
     if op.chain is not None:
         from .frf_chain import chain_receptance
 
-        return chain_receptance(op.chain, omega, input, output)
+        return chain_receptance(op.chain, omega, input, output, certify=certify, notes=op.notes, budget=op.budget)
     if op.banded:
         return _receptance_banded(op, omega, input, output)
     n = op.n
@@ -310,27 +330,6 @@ def _gtsv(gtsv, off: np.ndarray, diag: np.ndarray, b: np.ndarray) -> np.ndarray:
 
 
 # -- resonances -----------------------------------------------------------------------------------------
-@dataclass(frozen=True)
-class Resonance:
-    """One mode's resonance: undamped ω_n, ratio ζ, damped ω_d; the peak of |H| if damped and found."""
-
-    omega_n: float
-    zeta: float
-    omega_d: float
-    peak_omega: float | None = None
-    peak_magnitude: float | None = None
-    #: False for a mode with a node at the input or the output (no resonance in this H).
-    participates: bool = True
-
-    @property
-    def undamped(self) -> bool:
-        return self.zeta <= UNDAMPED_ZETA
-
-    def as_json(self) -> dict:
-        return {"omega_n": self.omega_n, "zeta": None if np.isnan(self.zeta) else self.zeta, "omega_d": self.omega_d,
-                "peak_omega": self.peak_omega, "peak_magnitude": self.peak_magnitude}
-
-
 def undamped_omegas(system: System, count: int | None = None) -> np.ndarray:
     """Undamped ω ascending (rigid zeros first): the accurate spectrum for ``[masses]`` scenes, the
     closed form or bisection on the bidiagonal spring factor for chains (``count`` lowest plus the
@@ -356,48 +355,57 @@ def undamped_omegas(system: System, count: int | None = None) -> np.ndarray:
     return singular_values(f) if count is None or count + 1 >= n else singular_values(f, count, 1)
 
 
-def _participation(system: System, input: int, output: int) -> list[Resonance]:
-    """Undamped resonances of a ``[masses]`` scene with whether each appears in H(in → out):
-    the modal residue ``Σ φ_out φ_in`` over the (possibly repeated) ω_j is nonzero."""
-    from .spectrum import spectrum
+def resonances(system: System, op: Operator, input: int, output: int, omega: np.ndarray | None = None,
+               modes: list | None = None, el=None) -> tuple[list[Resonance], str]:
+    """Elastic resonances, ascending, and how nodes were judged (:func:`numeric.frf_table.sees`).
 
-    spec = spectrum(system.masses, system.spring_ends, system.stiffness)
-    prod = spec.shapes[output] * spec.shapes[input]
-    scale = max(float(np.max(np.abs(prod), initial=0.0)), 1e-300)
-    out, j = [], spec.rigid
-    w = spec.omega
-    while j < w.shape[0]:
-        end = j + 1
-        while end < w.shape[0] and w[end] - w[j] <= 1e-12 * w[j]:
-            end += 1
-        residue = float(np.sum(prod[j:end]))
-        out.append(Resonance(float(w[j]), 0.0, float(w[j]), participates=abs(residue) > 1e-9 * scale))
-        j = end
-    return out
+    Undamped scenes: the undamped ω_j (ζ = 0). Damped scenes: the damped modes ``modes`` —
+    ``(ω_n, ζ, ω_d)`` rows as ``springchain modes`` computes them (the same ζ and ω; rigid and
+    overdamped rows, ζ None or ω_d = 0, are no resonance; ζ NaN: not computed) — or, without them,
+    the poles of the modal state matrix (``[masses]`` scenes). Every undamped (or narrow) row is
+    checked for a node at the input or output. Chains list their :data:`MAX_REFINED` lowest.
+    """
+    from .elements import Elements
 
-
-def resonances(system: System, op: Operator, input: int, output: int,
-               omega: np.ndarray | None = None, modes: list | None = None) -> list[Resonance]:
-    """Elastic resonances, ascending: undamped ω_j (ζ = 0) without damping; with damping the damped
-    modes ``modes`` — ``(ω_n, ζ, ω_d)`` rows as ``springchain modes`` computes them (the same ζ and ω;
-    rigid and overdamped rows, ζ None or ω_d = 0, are no resonance) — or, without them, the poles
-    of the modal state matrix; the undamped ω_j for chains (their peaks are found by the search)."""
-    if op.C is None and not op.banded:
-        return _participation(system, input, output)
-    if modes is not None and not op.banded:
-        return [Resonance(float(wn), float(z), float(wd)) for wn, z, wd in modes if z is not None and wd > 0]
+    el = Elements.from_system(system) if el is None else el
     omega = undamped_omegas(system, MAX_REFINED) if omega is None else omega
     elastic = omega[omega > 0]
-    if op.C is None or op.banded:  # a chain: its lowest MAX_REFINED (more than any grid resolves)
-        zeta = 0.0 if op.C is None else float("nan")  # a damped chain: ζ not computed (no dense solve)
-        return [Resonance(float(w), zeta, float(w)) for w in elastic[:MAX_REFINED]]
-    return _poles(op.dense)
+    if modes is not None:
+        rows = [(float(wn), float("nan") if z is None else float(z), float(wd)) for wn, z, wd in modes
+                if wd > 0 and not (z is None and wn == 0)]
+    elif op.C is None:
+        rows = [(float(w), 0.0, float(w)) for w in elastic]
+    elif op.dense is not None:
+        rows = [(r.omega_n, r.zeta, r.omega_d) for r in _poles(op.dense)]
+    else:  # a damped chain without its modes: ζ not computed
+        rows = [(float(w), float("nan"), float(w)) for w in elastic]
+    if op.banded:
+        rows = rows[:MAX_REFINED]
+    ask = [wn for wn, z, _ in rows if 0 <= z < NARROW_ZETA]
+    seen = sees(el, ask, input, output)
+    flags = iter(seen.flags)
+    out = []
+    for wn, z, wd in rows:
+        sees_it = next(flags) if 0 <= z < NARROW_ZETA else True
+        last = out[-1] if out else None
+        if (last is not None and abs(wn - last.omega_n) <= REPEATED * wn and abs(wd - last.omega_d) <= REPEATED * wn
+                and (z == last.zeta or abs(z - last.zeta) <= REPEATED * max(z, last.zeta))):
+            out[-1] = Resonance(last.omega_n, last.zeta, last.omega_d, participates=last.participates,
+                                multiplicity=last.multiplicity + 1)  # a repeated frequency: one resonance
+            continue
+        out.append(Resonance(wn, z, wd, participates=sees_it))
+    return out, seen.how
+
+
+#: ζ of a pole of the float64 state matrix below this is its rounding (an undamped mode).
+POLE_NOISE = 1e-13
 
 
 def _poles(dense) -> list[Resonance]:
     """Oscillatory poles of ``q̈ + G q̇ + Ω² q = 0`` in the accurate modal basis, the state scaled to
     ``(ω q, q̇)`` (balanced: every block of size ω). A rigid mode without damping is a double zero
-    (a Jordan block whose eigenvalues rounding splits into ±√ε i): no resonance, and left out."""
+    (a Jordan block whose eigenvalues rounding splits into ±√ε i): no resonance, and left out. A ζ
+    below :data:`POLE_NOISE` is rounding: 0."""
     w, G = dense.omega_n, dense.G
     n = w.shape[0]
     scale = np.where(w > 0, w, 1.0)
@@ -409,7 +417,8 @@ def _poles(dense) -> list[Resonance]:
     elastic = w[w > 0]
     floor = 1e-4 * float(elastic[0]) if elastic.size else np.inf
     osc = sorted((l for l in lam if l.imag > 1e-12 * abs(l) and abs(l) > floor), key=lambda l: l.imag)
-    return [Resonance(float(abs(l)), float(max(-l.real / abs(l), 0.0)), float(l.imag)) for l in osc]
+    zeta = [max(-l.real / abs(l), 0.0) for l in osc]
+    return [Resonance(float(abs(l)), z if z >= POLE_NOISE else 0.0, float(l.imag)) for l, z in zip(osc, zeta)]
 
 
 def default_range(res: list[Resonance], omega: np.ndarray) -> tuple[float, float]:
@@ -435,12 +444,20 @@ class Response:
     H : ndarray, shape (W,), complex
         Receptance X_out / F_in [m/N].
     resonances : list of Resonance
-        In range, ascending.
+        In range, ascending; each damped one with the local maximum of |H| attributed to it.
+    connected : bool
+        False when no spring or dashpot joins input and output: ``H ≡ 0``.
+    extra_peaks : list of (float, float)
+        Local maxima ``(ω, |H|)`` of |H| attributed to no resonance.
+    notes : list of str
     """
 
     omega: np.ndarray = field(repr=False)
     H: np.ndarray = field(repr=False)
     resonances: list = field(default_factory=list, repr=False)
+    connected: bool = True
+    extra_peaks: list = field(default_factory=list, repr=False)
+    notes: list = field(default_factory=list, repr=False)
 
     @property
     def magnitude(self) -> np.ndarray:
@@ -458,32 +475,20 @@ def _grid(lo: float, hi: float, points: int, res: list[Resonance]) -> np.ndarray
     extra = []
     g = np.geomspace(0.03, 30.0, REFINE_POINTS // 2)
     for r in [r for r in res if r.participates][:MAX_REFINED]:
-        width = r.zeta if r.zeta > UNDAMPED_GAP / g[0] else UNDAMPED_GAP / g[0]  # (NaN: the gap)
-        near = r.omega_d * np.concatenate([1 - width * g, 1 + width * g])
-        extra.append(near[(near > 0)])
-        if not r.undamped and not np.isnan(r.zeta):
+        widths = [UNDAMPED_GAP / g[0]]  # the gap's scale (undamped, narrow, ζ not computed) ...
+        if r.searched and not np.isnan(r.zeta):  # ... and the half-power width of a damped peak
+            widths = [r.zeta] + (widths if r.zeta < UNDAMPED_GAP / g[0] else [])
             extra.append([r.omega_d])
+        for width in widths:
+            near = r.omega_d * np.concatenate([1 - width * g, 1 + width * g])
+            extra.append(near[(near > 0)])
     grid = np.union1d(base, np.concatenate(extra)) if extra else base
     grid = grid[(grid >= lo) & (grid <= hi)]
     for r in res:  # never on (or within the gap of) an undamped ω_j
-        if r.undamped:  # wider around a mode H does not see: Z is near-singular but H is not large
+        if r.undamped or r.narrow:  # wider around a mode H does not see: Z is near-singular but H is not large
             gap = UNDAMPED_GAP if r.participates else SILENT_GAP
             grid = grid[np.abs(grid / r.omega_d - 1) >= gap * (1 - 1e-9)]
     return grid
-
-
-def _peak(op: Operator, r: Resonance, input: int, output: int) -> tuple[float, float] | None:
-    """The local maximum of |H| near a damped resonance (bounded search), or None (none inside)."""
-    from scipy.optimize import minimize_scalar
-
-    half = min(3 * r.zeta, 0.5) * r.omega_d
-    a, b = r.omega_d - half, r.omega_d + half
-    f = lambda w: -abs(receptance(op, np.array([w]), input, output, certify=False)[0])  # noqa: E731
-    sol = minimize_scalar(f, bounds=(a, b), method="bounded", options={"xatol": 1e-13 * r.omega_d})
-    w = float(sol.x)
-    if not (a + 1e-6 * half < w < b - 1e-6 * half) or -sol.fun <= max(-f(a), -f(b)):
-        return None
-    return w, float(abs(receptance(op, np.array([w]), input, output)[0]))  # the peak's value, certified
 
 
 def frequency_response(system: System, input: int, output: int, omega_min: float | None = None,
@@ -500,29 +505,66 @@ def frequency_response(system: System, input: int, output: int, omega_min: float
     points : int
         Log-spaced base points (the refinement adds up to ``REFINE_POINTS + 2`` per resonance).
     modes : list of (float, float or None, float), optional
-        The damped modes ``(ω_n, ζ, ω_d)`` of a damped ``[masses]`` scene as ``springchain modes``
-        computes them: the resonance table and the default range then use the same numbers.
+        The damped modes ``(ω_n, ζ, ω_d)`` of a damped scene as ``springchain modes`` computes them:
+        the resonance table and the default range then use the same numbers.
 
     Returns
     -------
     Response
     """
+    from .elements import Elements
+
+    el = Elements.from_system(system)
     op = operator(system)
     natural = undamped_omegas(system, MAX_REFINED)
-    res = resonances(system, op, input, output, natural, modes)
+    joined = connected(el, input, output)
+    res, how = resonances(system, op, input, output, natural, modes, el) if joined else ([], "mpmath")
     lo, hi = default_range(res, natural) if omega_min is None or omega_max is None else (0.0, 0.0)
     lo = omega_min if omega_min is not None else lo
     hi = omega_max if omega_max is not None else hi
     if not lo < hi:
         raise RunRefused(f"omega_min {lo:g} >= omega_max {hi:g}: accepted: omega_min < omega_max",
                          quantity="omega_min" if omega_min is not None else "omega_max")
+    if not joined:  # no spring or dashpot path: H ≡ 0 exactly, nothing to solve
+        grid = np.geomspace(lo, hi, points)
+        return Response(grid, np.zeros(grid.shape[0], dtype=complex), [], False)
     inside = [r for r in res if lo <= r.omega_d <= hi]
-    if not op.banded:  # the exact peak of the lowest MAX_REFINED damped resonances
-        inside = [r if r.undamped or not r.participates or k >= MAX_REFINED
-                  else Resonance(r.omega_n, r.zeta, r.omega_d, *(_peak(op, r, input, output) or (None, None)))
-                  for k, r in enumerate(inside)]
     grid = _grid(lo, hi, points, inside)
-    peaks = [r.peak_omega for r in inside if r.peak_omega is not None and lo <= r.peak_omega <= hi]
+    if op.C is not None:  # every undamped ω as well (a damped mode the ζ route missed still shows its peak)
+        near = natural[(natural >= lo) & (natural <= hi)][:MAX_REFINED]
+        g = np.geomspace(0.03, 30.0, REFINE_POINTS // 2) * UNDAMPED_GAP / 0.03
+        extra = (near[:, None] * np.concatenate([1 - g, 1 + g])[None, :]).ravel()
+        extra = extra[(extra >= lo) & (extra <= hi)]
+        for r in inside:  # kept off the gaps of the singular ones
+            if r.undamped or r.narrow:
+                extra = extra[np.abs(extra / r.omega_d - 1) >= (UNDAMPED_GAP if r.participates else SILENT_GAP)]
+        grid = np.union1d(grid, extra)
+    H = receptance(op, grid, input, output)
+    notes = []
+    top = hi
+    elastic = natural[natural > 0]
+    if op.banded and elastic.shape[0] > MAX_REFINED:
+        # a long chain: only its lowest modes are known, so peaks only below the last of them
+        top = min(hi, float(elastic[MAX_REFINED - 1]))
+        notes.append(f"local maxima of |H| searched below ω = {top:.6g} rad/s (the {MAX_REFINED} lowest modes: "
+                     "the grid does not resolve the others)")
+    below = grid <= top
+    solve = lambda w, certify: receptance(op, w, input, output, certify=certify)  # noqa: E731
+    poles = [r.omega_n for r in res if r.singular]
+    peaks = local_maxima(solve, grid[below], H[below], poles)
+    inside, extra = attribute(inside, [(w, abs(h)) for w, h in peaks])
     if peaks:
-        grid = np.union1d(grid, peaks)
-    return Response(grid, receptance(op, grid, input, output), inside)
+        w_p = np.array([w for w, _ in peaks])
+        h_p = np.array([h for _, h in peaks], dtype=complex)
+        keep = ~np.isin(w_p, grid)
+        grid, H = np.concatenate([grid, w_p[keep]]), np.concatenate([H, h_p[keep]])
+        order = np.argsort(grid, kind="stable")
+        grid, H = grid[order], H[order]
+    if how == "float64" and any(not r.participates for r in inside):
+        notes.append(f"nodes at the input or output judged in float64 (residue below {NODE_FLOAT:g} of the mode's "
+                     f"largest): scenes of more than {SETTLE_MAX} masses are not settled in mpmath")
+    if how == "unchecked" and any(r.singular for r in inside):
+        notes.append("nodes at the input or output not checked (more than 400 masses): an undamped mode with a "
+                     "node there is listed with |H| = ∞ though |H| is finite at it")
+    notes += list(dict.fromkeys(op.notes))  # a float64 limit a solve met (each once)
+    return Response(grid, H, inside, True, extra, notes)

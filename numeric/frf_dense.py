@@ -13,7 +13,9 @@
 3. **Refinement with residuals in extended precision** where it is not: ``r`` from the elements
    in 50-digit arithmetic (x, ω and the parameters are exact binary numbers, so γ drops to
    ~1e-45), ``x_lo ← x_lo + Φ Z_q⁻¹ Φᵀ r`` (the corrections kept apart from x: a double-length
-   solution), up to :data:`REFINE_STEPS` times, certified the same way.
+   solution), up to :data:`REFINE_STEPS` times, certified the same way — with the row of Z⁻¹ refined
+   alike (a float64 row 1e12 off at a mass contrast of 1e150 certified a wrong H) and only once the
+   last correction is below :data:`CONVERGED` of the value.
 4. **Extended precision** for the frequencies the certificate still rejects: Gaussian elimination in
    mpmath on Z assembled exactly from the elements (parameters as exact binary fractions; modal
    damping from mpmath's ``eigsy``), at 30, 60, 120, … digits until two agree to 1e-15 —
@@ -42,6 +44,8 @@ CERTIFIED = 1e-11
 ROW_ALLOWANCE = 1e-6
 #: Refinement steps (residuals in extended precision) before the mpmath solve.
 REFINE_STEPS = 3
+#: A refined value is certified only once its last correction is below this fraction of it.
+CONVERGED = 1e-6
 #: Largest scene solved in mpmath where float64 cannot be certified.
 MPMATH_MAX_MASSES = 24
 #: Two mpmath precisions agreeing to this relative difference settle a value.
@@ -121,7 +125,10 @@ class DenseReceptance:
             w = omega[lo:lo + chunk]
             Z = 1j * w[:, None, None] * G[None]
             Z[:, np.arange(n), np.arange(n)] += d[lo:lo + chunk]
-            q = np.linalg.solve(Z, b[lo:lo + chunk].astype(complex)[..., None])[..., 0]
+            try:
+                q = np.linalg.solve(Z, b[lo:lo + chunk].astype(complex)[..., None])[..., 0]
+            except np.linalg.LinAlgError:  # Z overflowed or is singular in float64: left to the certificate
+                q = np.full(b[lo:lo + chunk].shape, np.nan, dtype=complex)
             out[lo:lo + chunk] = q @ Phi.T
         return out
 
@@ -211,6 +218,7 @@ class DenseReceptance:
         row = x if output == input else self.solve(omega, output)
         bad = np.flatnonzero(~(self.error_bound(x, row, *self.residual(omega, x, input)) <= CERTIFIED * np.abs(H)))
         x_lo = np.zeros_like(x)  # corrections, kept apart from x: x + x_lo is a double-length solution
+        row_lo = np.zeros_like(row)
         r = None
         for _ in range(REFINE_STEPS):  # refinement with residuals in extended precision
             if not bad.size:
@@ -218,10 +226,18 @@ class DenseReceptance:
             w = omega[bad]
             if r is None:
                 r, _ = self.mp_residual(w, x[bad], input, x_lo[bad])
-            x_lo[bad] += self.solve(w, r)
+            step = self.solve(w, r)
+            x_lo[bad] += step
             H[bad] = x[bad, output] + x_lo[bad, output]
+            if output != input:  # the certificate's weights (the row of Z⁻¹) refined alike: a float64 row
+                rr, _ = self.mp_residual(w, row[bad], output, row_lo[bad])  # off by 1e12 certified a wrong H
+                row_lo[bad] += self.solve(w, rr)
+                weights = row[bad] + row_lo[bad]
+            else:
+                weights = x[bad] + x_lo[bad]
             r, hidden = self.mp_residual(w, x[bad], input, x_lo[bad])
-            ok = self.error_bound(x[bad], row[bad], r, hidden) <= CERTIFIED * np.abs(H[bad])
+            ok = ((self.error_bound(x[bad], weights, r, hidden) <= CERTIFIED * np.abs(H[bad]))
+                  & (np.abs(step[:, output]) <= CONVERGED * np.abs(H[bad])))  # and the refinement has converged
             bad, r = bad[~ok], r[~ok]
         if bad.size and self.el.n > MPMATH_MAX_MASSES:
             raise RunRefused(f"frequency response: H at {bad.size} of {omega.shape[0]} frequencies (first "
@@ -267,7 +283,21 @@ def mp_modes(el: Elements, mpmath) -> tuple[list, list[list]]:
 
 
 def _mp_modal_damping(el: Elements, mpmath):
-    """C = M Φ diag(2ζⱼωⱼ) Φᵀ M of modal damping at the current precision (:func:`mp_modes`)."""
+    """C = M Φ diag(2ζⱼωⱼ) Φᵀ M of modal damping at the current precision (:func:`mp_modes`), computed
+    once per scene and precision (every frequency the certificate rejects needs it)."""
+    key = (mpmath.mp.dps, el.masses.tobytes(), el.spring_ends.tobytes(), el.stiffness.tobytes(),
+           np.asarray(el.modal_zeta).tobytes())
+    if key not in _MODAL_C:
+        if len(_MODAL_C) > 16:
+            _MODAL_C.clear()
+        _MODAL_C[key] = _mp_modal_damping_at(el, mpmath)
+    return _MODAL_C[key].copy()
+
+
+_MODAL_C: dict = {}
+
+
+def _mp_modal_damping_at(el: Elements, mpmath):
     n = el.n
     lam, shapes = mp_modes(el, mpmath)
     m = [_mp(v, mpmath) for v in el.masses.tolist()]
@@ -313,21 +343,46 @@ def _mp_solve(el: Elements, omega: float, i: int, o: int, dps: int) -> complex:
         return complex(X[o])
 
 
+def mp_start_digits(el: Elements, omega: float) -> int:
+    """Digits the elimination starts at for ``Z(ω)``: 30 beyond the decades between its largest and
+    smallest element terms (springs k, dashpots ω c, masses ω² m; Rayleigh and modal damping
+    through k, m and ω), so that the smallest term survives being added to the largest — a
+    contrast of 1e36 needs more than the 30 digits a well-scaled Z does (mpmath's elimination
+    calls a pivot below ε·‖Z‖ singular)."""
+    terms = [np.abs(el.stiffness), omega * np.abs(el.damping), omega * omega * np.abs(el.masses)]
+    if el.rayleigh is not None:
+        a, b = (abs(float(v)) for v in el.rayleigh)
+        terms += [omega * a * np.abs(el.masses), omega * b * np.abs(el.stiffness)]
+    with np.errstate(all="ignore"):
+        v = np.concatenate([np.asarray(t, dtype=float).reshape(-1) for t in terms])
+    v = v[np.isfinite(v) & (v > 0)]
+    decades = math.log10(float(v.max())) - math.log10(float(v.min())) if v.size else 0.0
+    return int(min(MP_MAX_DPS, 30 + math.ceil(decades)))
+
+
+def _mp_settled(el: Elements, omega: float, input: int, output: int) -> complex:
+    """H at one ω, doubling the digits from :func:`mp_start_digits` until two agree to :data:`MP_AGREE`
+    (a pivot mpmath calls singular at some precision is retried at the next)."""
+    dps, prev = mp_start_digits(el, omega), None
+    while True:
+        try:
+            cur = _mp_solve(el, omega, input, output, dps)
+        except ZeroDivisionError:  # a pivot below ε·‖Z‖ at this precision
+            cur = None
+        if cur is not None and prev is not None and abs(cur - prev) <= MP_AGREE * abs(cur):
+            return cur
+        if dps >= MP_MAX_DPS:
+            raise RunRefused(f"frequency response at ω = {omega:.6g} rad/s: H did not settle within {MP_MAX_DPS} "
+                             "digits (ω on an undamped resonance, or a contrast past 1e900)", quantity="frf")
+        prev, dps = cur, min(2 * dps, MP_MAX_DPS)
+
+
 def mp_receptance(el: Elements, omega: np.ndarray, input: int, output: int) -> np.ndarray:
     """H at each ω by Gaussian elimination in mpmath on Z assembled exactly from the elements,
-    doubling the precision from 30 digits until two results agree to :data:`MP_AGREE`."""
+    doubling the precision from :func:`mp_start_digits` until two results agree to :data:`MP_AGREE`."""
     out = np.empty(len(omega), dtype=complex)
     for j, w in enumerate(np.asarray(omega, dtype=float).tolist()):  # frequencies that failed the certificate
-        dps, prev = 30, None
-        while True:
-            cur = _mp_solve(el, w, input, output, dps)
-            if prev is not None and abs(cur - prev) <= MP_AGREE * abs(cur):
-                break
-            if dps >= MP_MAX_DPS:
-                raise RunRefused(f"frequency response at ω = {w:.6g} rad/s: H did not settle within {MP_MAX_DPS} "
-                                 "digits", quantity="frf")
-            prev, dps = cur, 2 * dps
-        out[j] = cur
+        out[j] = _mp_settled(el, w, input, output)
     return out
 
 

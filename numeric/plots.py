@@ -262,20 +262,36 @@ def finish(ax, xlabel: str, ylabel: str, title: str) -> None:
 
 
 def bode(omega: np.ndarray, magnitude: np.ndarray, phase: np.ndarray, title: str, *,
-         peaks: tuple = (), infinite: tuple = (), hidden: tuple = ()):
+         peaks: tuple = (), infinite: tuple = (), hidden: tuple = (), empty: str | None = None):
     """Bode plot of a receptance: |H| log-log and phase in degrees against ω [rad/s].
 
     omega, magnitude, phase : ndarray, shape (W,)
-    peaks : (ω, |H|) pairs of damped resonance peaks (marked)
+    peaks : (ω, |H|) pairs of local maxima of |H| (marked)
     infinite : ω_j of undamped resonances (|H| = ∞ there; vertical lines)
     hidden : ω_j of modes with a node at the input or output (no resonance in this H; thin lines)
+    empty : a note drawn instead of the curves (H ≡ 0: no logarithmic axis has anything to show)
     """
     fig, (ax, axp) = new_figure(2, 1, figsize=(9, 6.5), sharex=True)
-    ax.loglog(omega, magnitude, lw=1.3, color="C0", label="|H(iω)|")
+    positive = magnitude > 0
+    if empty is not None or not np.any(positive):
+        notes = (empty or "H ≡ 0 on this range", "phase undefined (H ≡ 0)")
+        for a, text in zip((ax, axp), notes):
+            a.set_xscale("log")
+            a.set_xlim(float(omega[0]), float(omega[-1]) if omega[-1] > omega[0] else float(omega[0]) * 10)
+            a.set_yticks([])
+            a.text(0.5, 0.5, text, transform=a.transAxes, ha="center", va="center", fontsize=11, color="0.3")
+        ax.set_ylabel("|H| = |X_out / F_in| [m/N]")
+        axp.set_ylabel("phase ∠H [deg] (undefined)")
+        axp.set_xlabel("angular frequency ω [rad/s]")
+        ax.set_title(title)
+        for a in (ax, axp):
+            a.grid(alpha=0.3, which="both", axis="x")
+        return fig
+    ax.loglog(omega[positive], magnitude[positive], lw=1.3, color="C0", label="|H(iω)|")
     axp.semilogx(omega, phase, lw=1.3, color="C0", label="∠H(iω)")
     if peaks:
         w, h = np.asarray(peaks, dtype=float).T
-        ax.plot(w, h, "v", color="C3", ms=7, label="resonance peak (exact max of |H|)")
+        ax.plot(w, h, "v", color="C3", ms=7, label="local maximum of |H| (exact)")
         for wk, hk in zip(w, h):
             ax.annotate(f"{wk:.4g} rad/s", (wk, hk), textcoords="offset points", xytext=(4, 6), fontsize=8)
     for k, w in enumerate(infinite):

@@ -30,9 +30,14 @@ class FrequencyResponse:
     H : ndarray, shape (W,), complex
         ``X_out / F_in`` [m/N].
     resonances : list of springchain.numeric.frf.Resonance
+        Each damped one with the local maximum of |H| attributed to it (or None: none near it).
     transfer : springchain.derive.transfer.TransferFunction or None
         ``H(s)`` as a ratio of polynomials (``[masses]`` scenes of at most 6 masses).
     notes : list of str
+    connected : bool
+        False when input and output are on pieces no spring or dashpot joins (H ≡ 0).
+    extra_peaks : list of (float, float)
+        Local maxima (ω, |H|) of |H| attributed to no single resonance.
     """
 
     scene: Scene
@@ -43,6 +48,10 @@ class FrequencyResponse:
     resonances: list = field(default_factory=list, repr=False)
     transfer: object = field(default=None, repr=False)
     notes: list = field(default_factory=list, repr=False)
+    #: False when no spring or dashpot joins input and output: H ≡ 0.
+    connected: bool = True
+    #: Local maxima ``(ω, |H|)`` attributed to no resonance.
+    extra_peaks: list = field(default_factory=list, repr=False)
 
     @property
     def magnitude(self):
@@ -64,6 +73,8 @@ class FrequencyResponse:
                 "omega": self.omega.tolist(), "magnitude": self.magnitude.tolist(), "phase": self.phase.tolist(),
                 "units": {"omega": "rad/s", "magnitude": "m/N", "phase": "deg"},
                 "resonances": [r.as_json() for r in self.resonances if r.participates],
+                "connected": self.connected,
+                "other_peaks": [{"omega": w, "magnitude": h} for w, h in self.extra_peaks],
                 "transfer_function": None if self.transfer is None else self.transfer.as_json(),
                 "notes": list(self.notes)}
 
@@ -72,22 +83,22 @@ class FrequencyResponse:
         w = self.omega
         lines = [f"frequency response of {self.scene.name!r}: H = X_{self.output} / F_{self.input} "
                  f"(receptance, m/N), {w.shape[0]} frequencies from {w[0]:.6g} to {w[-1]:.6g} rad/s"]
+        if not self.connected:
+            lines.append(f"no transfer: input {self.input} and output {self.output} are not connected (no chain of "
+                         "springs or dashpots joins their pieces): H ≡ 0 at every ω, no resonance")
         seen = [r for r in self.resonances if r.participates]
         if seen:
-            lines.append("resonances in range (undamped ω_n, damping ratio ζ, damped ω_d; exact peak of |H|):")
+            lines.append("resonances in range (undamped ω_n, damping ratio ζ, damped ω_d; the local maximum of |H| "
+                         "near each, exact):")
         for r in seen:
-            line = f"  ω_n = {r.omega_n:.8g} rad/s   ζ = {r.zeta:.4g}   ω_d = {r.omega_d:.8g} rad/s"
-            if math.isnan(r.zeta):
-                line = f"  ω_n = {r.omega_n:.8g} rad/s (undamped; damped [chain]: ζ not computed, grid refined here)"
-            elif r.undamped:
-                line += "   |H| = ∞ at ω_n (undamped; the grid stops 1e-4 short on each side)"
-            elif r.peak_omega is not None:
-                line += f"   peak |H| = {r.peak_magnitude:.6e} m/N at ω = {r.peak_omega:.8g} rad/s"
-            lines.append(line)
+            lines.append(_resonance_line(r))
         for r in self.resonances:
             if not r.participates:
-                lines.append(f"  ω = {r.omega_n:.8g} rad/s: a mode with a node at the input or output "
-                             "(no resonance in this H)")
+                lines.append(f"  ω = {r.omega_n:.8g} rad/s: a mode with a node at the input or output (no resonance "
+                             "in this H: |H| is finite there)")
+        for wk, hk in self.extra_peaks:
+            lines.append(f"  local maximum |H| = {hk:.6e} m/N at ω = {wk:.8g} rad/s (no listed damped resonance's own "
+                         "peak)")
         if self.transfer is not None:
             lines += ["transfer function (adj(M s² + C s + K)[out, in] / det(M s² + C s + K), cancelled):",
                       self.transfer.text().rstrip("\n"), "LaTeX:", self.transfer.latex().rstrip("\n")]
@@ -99,12 +110,14 @@ class FrequencyResponse:
         from .numeric import plots
 
         peaks = tuple((r.peak_omega, r.peak_magnitude) for r in self.resonances
-                      if r.participates and r.peak_omega is not None)
-        infinite = tuple(r.omega_n for r in self.resonances if r.participates and r.undamped)
+                      if r.participates and r.peak_omega is not None) + tuple(self.extra_peaks)
+        infinite = tuple(r.omega_n for r in self.resonances if r.singular)
         hidden = tuple(r.omega_n for r in self.resonances if not r.participates)
+        empty = None if self.connected else (f"H ≡ 0: input {self.input} and output {self.output} are not "
+                                             "connected (no transfer)")
         return plots.bode(self.omega, self.magnitude, self.phase,
                           f"{self.scene.name}: receptance X_{self.output} / F_{self.input}",
-                          peaks=peaks, infinite=infinite[:200], hidden=hidden[:200])
+                          peaks=tuple(sorted(peaks)), infinite=infinite[:200], hidden=hidden[:200], empty=empty)
 
     def save(self, out: str | Path = DEFAULT_OUT) -> Path:
         """Write the Bode figure as ``OUT/<scene>-frf-<input>-<output>.png``; returns its path."""
@@ -138,6 +151,28 @@ class FrequencyResponse:
         from ._display import frf_bundle
 
         return frf_bundle(self)
+
+
+def _resonance_line(r) -> str:
+    """One row of the resonance table (a participating resonance)."""
+    if math.isnan(r.zeta):
+        return (f"  ω_n = {r.omega_n:.8g} rad/s (damped [chain]: ζ not computed, as `modes`; grid refined here)"
+                + ("" if r.peak_omega is None else f"   local maximum |H| = {r.peak_magnitude:.6e} m/N at "
+                   f"ω = {r.peak_omega:.8g} rad/s"))
+    line = f"  ω_n = {r.omega_n:.8g} rad/s   ζ = {r.zeta:.4g}   ω_d = {r.omega_d:.8g} rad/s"
+    if r.multiplicity > 1:
+        line += f" ({r.multiplicity} modes: a repeated frequency)"
+    if r.undamped:
+        return line + "   |H| = ∞ at ω_n (undamped; the grid stops 1e-4 short on each side)"
+    if r.narrow:
+        return line + ("   peak narrower than float64 resolves in ω (relative width 2ζ): not located; the grid "
+                       "stops 1e-4 short on each side")
+    if r.peak_omega is None:
+        return line + "   no local maximum of |H| near it (masked by a neighbouring mode, or damped out)"
+    line += f"   peak |H| = {r.peak_magnitude:.6e} m/N at ω = {r.peak_omega:.8g} rad/s"
+    if r.shifted:
+        line += f" ({100 * r.shift:+.3g} % from ω_d: shifted by the neighbouring modes)"
+    return line
 
 
 def mass_index(scene: Scene, value, what: str) -> int:
@@ -210,13 +245,21 @@ def frf(scene: str | Path | Scene, input, output, omega_min: float | None = None
     if isinstance(points, bool) or not isinstance(points, int) or not 2 <= points <= MAX_POINTS:
         raise RunRefused(f"points {points!r}: accepted: a whole number 2 ... {MAX_POINTS}", quantity="points")
     system, _ = _system(sc)
-    model, modes = None, None
+    model, modes, zeta_note = None, None, None
     if sc.chain is None and system.damped:  # the resonance table from the damped modes `modes` prints
         from .derive.damping_report import damped_modes
         from .derive.model import Model
 
+        from .derive.accurate import NotAccurate
+
         model = Model(sc)
-        modes = [(r.omega_n, r.zeta, r.omega_d) for r in damped_modes(model, None).rows]
+        try:
+            modes = [(r.omega_n, r.zeta, r.omega_d) for r in damped_modes(model, None).rows]
+        except NotAccurate:  # ζ unsettled in extended precision: the table from the float64 state matrix
+            zeta_note = ("damping ratios did not settle in extended precision (as `modes` says): the resonance "
+                         "table's ζ and ω_d are from the float64 modal state matrix (H itself is certified)")
+    elif sc.chain is not None and system.damped:
+        modes = _chain_modes(sc, system)
     response = frequency_response(system, i, o, lo, hi, points, modes)
     notes = []
     if not system.linear:
@@ -233,8 +276,39 @@ def frf(scene: str | Path | Scene, input, output, omega_min: float | None = None
             tf = transfer_function(model or Model(sc), i, o)
             if tf is None:
                 notes.append("no closed-form transfer function: its determinant is past the symbolic work cap")
+    if sc.chain is not None and system.damped and any(math.isnan(r.zeta) for r in response.resonances):
+        from .numeric.chain_damped import DENSE_MAX
+
+        notes.append(f"damping ratios not computed (as `modes`): dashpots on a chain of {sc.chain.n} masses (the "
+                     f"dense modal state matrix is used up to {DENSE_MAX} masses, or ζ below what it resolves)")
+    notes += [zeta_note] if zeta_note else []
+    notes += list(response.notes)
     name = lambda k: str(k) if sc.chain is not None else sc.mass_names[k]  # noqa: E731
-    return FrequencyResponse(sc, name(i), name(o), response.omega, response.H, response.resonances, tf, notes)
+    return FrequencyResponse(sc, name(i), name(o), response.omega, response.H, response.resonances, tf, notes,
+                             response.connected, list(response.extra_peaks))
+
+
+def _chain_modes(sc: Scene, system) -> list | None:
+    """``(ω_n, ζ, ω_d)`` of a damped ``[chain]``'s modes by the route ``springchain modes`` takes: with
+    dashpots, :func:`numeric.chain_damped.damped_rows` (at most ``DENSE_MAX`` masses; longer: ζ NaN,
+    not computed); Rayleigh damping alone, ζ_j = α/(2ω_j) + βω_j/2 at the undamped ω_j (the
+    :data:`numeric.frf.MAX_REFINED` lowest)."""
+    from .numeric.chain_damped import DENSE_MAX, damped_rows
+    from .numeric.elements import Elements
+    from .numeric.frf import MAX_REFINED, undamped_omegas
+
+    if sc.chain_dampers:
+        if sc.chain.n > DENSE_MAX:
+            return None
+        el = Elements.from_system(system)
+        return damped_rows(el.masses, el.spring_ends, el.stiffness, el.damper_ends, el.damping)
+    alpha, beta = (float(v) for v in system.module.rayleigh_coefficients(**system.params))
+    rows = []
+    for w in undamped_omegas(system, MAX_REFINED).tolist():
+        if w > 0 and len(rows) < MAX_REFINED:
+            z = alpha / (2 * w) + beta * w / 2
+            rows.append((w, z, w * math.sqrt((1 - z) * (1 + z)) if z < 1 else 0.0))
+    return rows
 
 
 __all__ = ["FrequencyResponse", "frf", "mass_index"]
