@@ -7,24 +7,38 @@ assembled spring by spring from the exact symbolic derivatives. The equilibrium 
 
 1. **Exactly at x = 0** when every G_i(0) simplifies to 0 (V'(0) = 0 and no constant loads, or
    tensions that balance): then x_eq = 0 and K = Σ V_s''(0) b bᵀ are closed forms.
-2. **Otherwise by Newton** from x = 0 at the scene's parameter values: float64 Newton with a
-   Levenberg–Marquardt safeguard on U, then iterative refinement in mpmath (the residual G at 40,
-   80, … digits with the parameters as exact rationals, the correction from the float64 Hessian)
-   until two precisions agree to 1e-18 relative: correct to float64 even where float64 alone could
-   not settle it. Each free piece (no spring to a wall) keeps its centre of mass at the rest
-   position (its rigid translation is otherwise undetermined).
+2. **Otherwise the equilibrium reached by applying the loads gradually from rest**: the
+   out-of-balance force at rest ``G(0)`` (the loads and the springs' pre-stress) is applied as
+   ``λ G(0)``, λ from 0 to 1, following ``G(x) = (1 − λ) G(0)`` from x = 0 by predictor–corrector
+   continuation in float64 (tangent ``dx/dλ = −K⁻¹ G(0)``, Newton correctors that must contract,
+   the load step halved otherwise; one step when the problem allows it). Each spring's extension
+   stays inside the open interval around d = 0 where its potential is defined (Lennard-Jones
+   ``d > −r0``, ``log(1 + d/c)``: ``d > −c``, ...: :func:`domain`), so no step crosses a
+   singularity onto another branch. K must stay positive definite along the path (Cholesky): a
+   stable branch. Then iterative refinement in mpmath (the residual G at 40, 80, … digits with the
+   parameters as exact rationals, the correction from the float64 Hessian, or from the Hessian in
+   mpmath where that does not contract) until two precisions agree to 1e-18 relative per
+   coordinate: correct to float64 even where float64 alone could not settle it.
+   Where x = 0 itself is not stable (K(0) not positive definite) the path cannot start; a descent of
+   U from x = 0 (Newton with a Levenberg–Marquardt safeguard) looks for a minimum instead.
+   Each free piece (no spring to a wall) keeps its centre of mass at the rest position (its rigid
+   translation is otherwise undetermined).
 
 Refused in one line (a :class:`SceneError` naming the spring's key): V, V' or V'' not finite at
 the equilibrium (a singularity or a kink), V'' ≤ 0 there (not a stable spring; the stiffness and the
 extension are named), a free piece under a net constant load (it accelerates: no equilibrium), or
-no equilibrium found from the rest configuration.
+no stable equilibrium on the loading path (it ends where K becomes singular — a spring past its
+largest tension — or runs off to infinity; the fraction of the loads reached is named).
 """
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass
+
 import mpmath
 import numpy as np
+import scipy.linalg
 import sympy as sp
 
 from .accurate import exact_values
@@ -34,10 +48,20 @@ from .potential import SpringLaw
 
 #: Relative agreement of two successive precisions accepted as converged.
 AGREE = 1e-18
-#: Float64 Newton iterations before giving up.
+#: Float64 Newton iterations of the descent (a scene whose rest configuration is not stable) before giving up.
 MAX_NEWTON = 200
 #: Largest working precision tried (digits).
 MAX_DPS = 640
+#: Load steps of the continuation (accepted or halved) before giving up, and the smallest load step (fraction of the loads).
+MAX_PATH = 2000
+MIN_STEP = 1e-10
+#: Newton corrector: iterations, the step (relative to the size of x) that converges, and the float64
+#: floor below which a step that no longer contracts is accepted (rounding, not divergence).
+MAX_CORRECT = 12
+CORRECT_TOL = 1e-13
+CORRECT_NOISE = 1e-7
+#: Newton iterations per precision of the mpmath refinement.
+MAX_REFINE = 60
 
 
 @dataclass(frozen=True)
@@ -164,85 +188,259 @@ def check_law(file: str, law: SpringLaw, d_value, subs: dict, *, closed_form: sp
     return sp.Float(mpmath.nstr(stiff, 25), 17)
 
 
+def domain(law: SpringLaw, subs: dict) -> tuple[float, float]:
+    """The open interval ``(lo, hi)`` of extensions around d = 0 on which V is defined and continuous
+    at the scene's values: a pole (Lennard-Jones at ``d = −r0``), a logarithm's or a root's zero
+    bound it. ``(−inf, inf)`` for polynomials and entire functions, or where SymPy cannot tell (then
+    the finiteness checks along the path guard it).
+
+    Parameters
+    ----------
+    law : SpringLaw
+    subs : dict
+        Parameter symbols (and ``i``) to exact values.
+    """
+    energy = law.energy.subs(subs)
+    if not law.given or not any(isinstance(p, sp.log) or (isinstance(p, sp.Pow) and not
+                                                            (p.exp.is_Integer and p.exp >= 0))
+                                for p in sp.preorder_traversal(energy)):
+        return -np.inf, np.inf
+    return _domain(energy, law.d)
+
+
+@functools.lru_cache(maxsize=256)
+def _domain(energy: sp.Expr, d: sp.Symbol) -> tuple[float, float]:
+    from sympy.calculus.util import continuous_domain
+
+    try:
+        where = continuous_domain(energy, d, sp.S.Reals)
+    except Exception:  # noqa: BLE001 - SymPy's set solver: anything it cannot decide leaves the line open
+        return -np.inf, np.inf
+    parts = where.args if isinstance(where, sp.Union) else (where,)
+    for part in parts:
+        if isinstance(part, sp.Interval) and part.inf < 0 < part.sup:
+            return float(part.inf), float(part.sup)
+    return -np.inf, np.inf
+
+
 class _Problem:
     """The gradient and Hessian of U at the scene's values, in float64 and in mpmath."""
 
     def __init__(self, n: int, springs, loads, subs: dict, pieces):
         self.n = n
         self.springs = springs  # (a, b, law)
-        self.pieces = pieces
         syms = list(subs)
         self.values = [subs[s] for s in syms]
         self.f64 = [(a, b, sp.lambdify([law.d] + syms, law.energy, "numpy"),
                      sp.lambdify([law.d] + syms, law.force, "numpy"),
                      sp.lambdify([law.d] + syms, law.stiffness, "numpy")) for a, b, law in springs]
         self.fmp = [(a, b, mp_function(law.force, (law.d, *syms))) for a, b, law in springs]
+        self.smp = [(a, b, mp_function(law.stiffness, (law.d, *syms))) for a, b, law in springs]
         self.loads = list(loads)
         self.load_f = np.array([float(v) for v in self.loads])
         self.fvals = [float(v) for v in self.values]
+        ends = np.array([(a, b) for a, b, _ in springs], dtype=np.intp).reshape(-1, 2)
+        self.a, self.b = ends[:, 0], ends[:, 1]
+        bounds = np.array([domain(law, subs) for _, _, law in springs]).reshape(-1, 2)
+        self.lo, self.hi = bounds[:, 0], bounds[:, 1]
         # rigid translations of free pieces: w = masses on the piece (centre of mass stays)
         self.w = np.zeros((len(pieces), n))
         for r, (piece, masses) in enumerate(pieces):
             for i, m in zip(piece, masses):
                 self.w[r, i] = m
 
-    def _d(self, a, b, x):
-        return (x[b] if b >= 0 else 0.0) - (x[a] if a >= 0 else 0.0)
+    def extensions(self, x) -> np.ndarray:
+        """d = x_b − x_a of every spring (a wall end 0), shape (S,)."""
+        xe = np.append(np.asarray(x, dtype=float), 0.0)  # index −1 = wall
+        return xe[self.b] - xe[self.a]
+
+    def inside(self, x) -> bool:
+        """Every extension strictly inside its potential's domain, and x finite."""
+        d = self.extensions(x)
+        return bool(np.all(np.isfinite(d)) and np.all(d > self.lo) and np.all(d < self.hi))
 
     def energy(self, x) -> float:
         e = -float(self.load_f @ x)
         with np.errstate(all="ignore"):
-            for a, b, V, _, _ in self.f64:
-                e += float(V(self._d(a, b, x), *self.fvals))
+            for (_, _, V, _, _), d in zip(self.f64, self.extensions(x)):
+                e += float(V(d, *self.fvals))
         return e
+
+    def tensions(self, x) -> np.ndarray:
+        with np.errstate(all="ignore"):
+            return np.array([float(F(d, *self.fvals)) for (_, _, _, F, _), d in zip(self.f64, self.extensions(x))])
 
     def gradient(self, x) -> np.ndarray:
         g = -self.load_f.copy()
-        with np.errstate(all="ignore"):
-            for a, b, _, F, _ in self.f64:
-                t = float(F(self._d(a, b, x), *self.fvals))
-                if a >= 0:
-                    g[a] -= t
-                if b >= 0:
-                    g[b] += t
+        for a, b, t in zip(self.a, self.b, self.tensions(x)):
+            if a >= 0:
+                g[a] -= t
+            if b >= 0:
+                g[b] += t
         return g
 
     def hessian(self, x) -> np.ndarray:
         H = np.zeros((self.n, self.n))
         with np.errstate(all="ignore"):
-            for a, b, _, _, S in self.f64:
-                k = float(S(self._d(a, b, x), *self.fvals))
-                for i, si in ((a, -1.0), (b, 1.0)):
-                    for j, sj in ((a, -1.0), (b, 1.0)):
-                        if i >= 0 and j >= 0:
-                            H[i, j] += si * sj * k
+            for (a, b, _, _, S), d in zip(self.f64, self.extensions(x)):
+                _add(H, a, b, float(S(d, *self.fvals)))
         return H
 
     def augmented(self, H) -> np.ndarray:
         """H + Σ w wᵀ over free pieces: nonsingular, and its solution keeps each centre of mass."""
         return H + self.w.T @ self.w
 
+    def _mp_ext(self, x, a, b):
+        return (x[b] if b >= 0 else 0) - (x[a] if a >= 0 else 0)
+
     def gradient_mp(self, x, dps: int):
         with mpmath.workdps(dps):
             vals = [_mpv(r, dps) for r in self.values]
             g = [-_mpv(v, dps) for v in self.loads]
             for a, b, F in self.fmp:
-                d = (x[b] if b >= 0 else 0) - (x[a] if a >= 0 else 0)
-                t = F(d, *vals)
+                t = F(self._mp_ext(x, a, b), *vals)
                 if a >= 0:
                     g[a] -= t
                 if b >= 0:
                     g[b] += t
             return g
 
+    def hessian_mp(self, x, dps: int):
+        """The augmented Hessian in mpmath, an ``mpmath.matrix`` (n, n)."""
+        with mpmath.workdps(dps):
+            vals = [_mpv(r, dps) for r in self.values]
+            H = mpmath.matrix(self.n, self.n)
+            for a, b, S in self.smp:
+                _add(H, a, b, S(self._mp_ext(x, a, b), *vals))
+            for row in self.w:  # a loop over free pieces
+                idx = np.flatnonzero(row)
+                for i in idx:
+                    for j in idx:
+                        H[int(i), int(j)] += mpmath.mpf(float(row[i])) * mpmath.mpf(float(row[j]))
+            return H
 
-def newton(problem: _Problem) -> tuple[list, str] | None:
-    """x_eq in mpmath (correct to float64), or None if Newton does not converge."""
+
+def _add(H, a: int, b: int, k) -> None:
+    """``H += k b bᵀ`` for the spring between a and b (a wall end −1 left out)."""
+    for i, si in ((a, -1), (b, 1)):
+        for j, sj in ((a, -1), (b, 1)):
+            if i >= 0 and j >= 0:
+                H[i, j] += si * sj * k
+
+
+def _cholesky(H: np.ndarray):
+    """The Cholesky factor of a symmetric H, or None when H is not (numerically) positive definite."""
+    if not np.all(np.isfinite(H)):
+        return None
+    try:
+        return scipy.linalg.cho_factor(H)
+    except (np.linalg.LinAlgError, ValueError):
+        return None
+
+
+@dataclass(frozen=True)
+class _PathEnd:
+    """Where the loading path stopped short of the full loads: ``reached`` of them, and why."""
+
+    reached: float
+    why: str
+
+    @property
+    def fraction(self) -> str:
+        """``reached`` as text (``1 − 2.3e-09`` close to 1)."""
+        return f"{self.reached:.6g}" if self.reached < 0.999 else f"1 - {1.0 - self.reached:.2g}"
+
+
+def _stopped(problem: _Problem, x: np.ndarray, lam: float) -> _PathEnd:
+    """Why the path ends at x: K's smallest eigenvalue there relative to K's largest at rest, and |x|."""
+    size = float(np.max(np.abs(x), initial=0.0))
+    with np.errstate(all="ignore"):
+        H = problem.augmented(problem.hessian(x))
+        H0 = problem.augmented(problem.hessian(np.zeros(problem.n)))
+        fine = np.all(np.isfinite(H)) and np.all(np.isfinite(H0))
+        ratio = float(np.linalg.eigvalsh(H)[0] / np.linalg.eigvalsh(H0)[-1]) if fine else float("nan")
+    return _PathEnd(lam, f"there |x| = {size:.3g} and K's smallest eigenvalue is {ratio:.2g} of K's largest at rest: "
+                         "beyond, the springs cannot hold the load")
+
+
+def _correct(problem: _Problem, x: np.ndarray, shift: np.ndarray, scale: float) -> np.ndarray | None:
+    """Newton on ``G(x) = shift`` from the predictor ``x``; None unless it contracts and stays in the domain.
+
+    Converged at a step below ``CORRECT_TOL·scale``, or where the steps stop contracting below
+    ``CORRECT_NOISE·scale`` (float64's floor; the mpmath refinement finishes the last point).
+    """
+    prev = np.inf
+    for _ in range(MAX_CORRECT):
+        g = problem.gradient(x) - shift
+        if not np.all(np.isfinite(g)):
+            return None
+        with np.errstate(all="ignore"):
+            try:
+                dx = np.linalg.solve(problem.augmented(problem.hessian(x)), g)
+            except np.linalg.LinAlgError:
+                return None
+        size = float(np.max(np.abs(dx), initial=0.0))
+        if not np.isfinite(size):
+            return None
+        if size > 0.5 * prev:
+            return x if prev <= CORRECT_NOISE * scale else None
+        cand = x - dx
+        if not problem.inside(cand):
+            return None
+        x, prev = cand, size
+        if size <= CORRECT_TOL * scale:
+            return x
+    return x if prev <= CORRECT_NOISE * scale else None
+
+
+def path(problem: _Problem) -> tuple[np.ndarray, int] | _PathEnd | None:
+    """The stable equilibrium reached by applying ``G(0)`` gradually from rest (module docstring, 2).
+
+    Returns
+    -------
+    (x, steps)
+        The float64 equilibrium at the full loads and the number of load steps taken;
+    _PathEnd
+        where the path ends short of them (K singular, or x running off);
+    None
+        when x = 0 itself is not stable (K(0) not positive definite): no path starts.
+    """
+    x = np.zeros(problem.n)
+    r0 = problem.gradient(x)
+    if not np.all(np.isfinite(r0)):
+        return _PathEnd(0.0, "the forces at rest are not finite")  # guarded by _at_rest_finite
+    lam, h, steps, tangent = 0.0, 1.0, 0, None
+    for _ in range(MAX_PATH):  # load steps tried, accepted or halved
+        if lam >= 1.0:
+            return x, steps
+        if tangent is None:
+            factor = _cholesky(problem.augmented(problem.hessian(x)))
+            if factor is None:
+                return None if lam == 0.0 else _stopped(problem, x, lam)
+            tangent = -scipy.linalg.cho_solve(factor, r0)
+        target = min(1.0, lam + h)
+        pred = x + (target - lam) * tangent
+        scale = max(float(np.max(np.abs(pred))), float(np.max(np.abs(pred - x))), 1e-300)
+        nxt = _correct(problem, pred, (1.0 - target) * r0, scale) if problem.inside(pred) else None
+        if nxt is None:
+            h *= 0.5
+            if h < MIN_STEP:
+                return _stopped(problem, x, lam)
+            continue
+        x, lam, steps, tangent = nxt, target, steps + 1, None
+        h = min(1.0, 2.0 * h)
+    return _PathEnd(lam, f"{MAX_PATH} load steps did not reach the full loads")
+
+
+def descent(problem: _Problem) -> np.ndarray | None:
+    """A minimum of U by Newton from x = 0 with a Levenberg–Marquardt safeguard (for a scene whose rest
+    configuration is not stable); None if it finds none."""
     n = problem.n
     x = np.zeros(n)
     mu = 0.0
     e = problem.energy(x)
-    for it in range(MAX_NEWTON):
+    last = np.inf
+    for _ in range(MAX_NEWTON):
         g = problem.gradient(x)
         if not np.all(np.isfinite(g)):
             return None
@@ -250,51 +448,87 @@ def newton(problem: _Problem) -> tuple[list, str] | None:
         scale = max(np.max(np.abs(np.diag(H))), 1e-300)
         step = None
         for _ in range(60):
-            try:
-                cand = x - np.linalg.solve(H + mu * scale * np.eye(n), g)
-            except np.linalg.LinAlgError:
-                mu = max(mu * 10, 1e-8)
-                continue
-            ec = problem.energy(cand)
+            with np.errstate(all="ignore"):
+                try:
+                    cand = x - np.linalg.solve(H + mu * scale * np.eye(n), g)
+                except np.linalg.LinAlgError:
+                    mu = max(mu * 10, 1e-8)
+                    continue
+            ec = problem.energy(cand) if problem.inside(cand) else np.nan
             if np.isfinite(ec) and ec <= e + 1e-12 * abs(e):
                 step = cand
                 break
             mu = max(mu * 10, 1e-8)
         if step is None:
             return None
-        moved = np.max(np.abs(step - x))
+        moved = float(np.max(np.abs(step - x)))
         x, e = step, problem.energy(step)
         mu = mu / 10 if mu > 1e-12 else 0.0
-        if moved <= 1e-15 * max(np.max(np.abs(x)), 1e-300) or moved == 0.0:
-            break
-    else:
-        return None
-    # iterative refinement in extended precision: residual in mpmath, correction by the float64 Hessian
-    H = problem.augmented(problem.hessian(x))
+        size = max(float(np.max(np.abs(x))), 1e-300)
+        if moved <= CORRECT_TOL * size or (mu == 0.0 and moved > 0.5 * last and last <= CORRECT_NOISE * size):
+            return x if _cholesky(problem.augmented(problem.hessian(x))) is not None else None
+        last = moved if mu == 0.0 else np.inf
+    return None
+
+
+def refine(problem: _Problem, x: np.ndarray) -> tuple[list, int] | None:
+    """x_eq in mpmath, correct to float64, from a float64 approximation: Newton with the residual at
+    40, 80, … digits until two precisions agree to :data:`AGREE` per coordinate (relative, or
+    absolutely below 1e-40 of the largest). The correction is solved with the float64 Hessian while
+    that contracts, else with the Hessian in mpmath. Returns ``(x, digits)`` or None."""
     try:
-        lu = np.linalg.inv(H)
-    except np.linalg.LinAlgError:
-        return None
+        lu = scipy.linalg.lu_factor(problem.augmented(problem.hessian(x)))
+        if not np.all(np.isfinite(lu[0])):
+            lu = None
+    except (np.linalg.LinAlgError, ValueError):
+        lu = None
     prev = None
     dps = 40
     xs = [mpmath.mpf(float(v)) for v in x]
     while dps <= MAX_DPS:
         with mpmath.workdps(dps):
             xs = [mpmath.mpf(v) for v in xs]
-            for _ in range(200):
+            mp_hessian = lu is None
+            last = None
+            for _ in range(MAX_REFINE):
                 g = problem.gradient_mp(xs, dps)
-                corr = lu @ np.array([float(v) for v in g])
-                xs = [xi - mpmath.mpf(float(c)) for xi, c in zip(xs, corr)]
-                size = max([abs(v) for v in xs] + [mpmath.mpf(10) ** (-300)])
-                if max(abs(float(c)) for c in corr) <= float(size) * 10.0 ** (-dps + 8):
+                gmax = max(abs(v) for v in g)
+                if gmax == 0:
                     break
+                if mp_hessian:
+                    corr = mpmath.lu_solve(problem.hessian_mp(xs, dps), mpmath.matrix(g))
+                    corr = [corr[i] for i in range(problem.n)]
+                else:
+                    c = scipy.linalg.lu_solve(lu, np.array([float(v / gmax) for v in g]))
+                    corr = [gmax * mpmath.mpf(float(ci)) for ci in c]
+                cmax = max(abs(v) for v in corr)
+                if not mpmath.isfinite(cmax):
+                    return None
+                if last is not None and cmax > last / 4:  # not contracting
+                    if mp_hessian:
+                        return None
+                    mp_hessian, last = True, None
+                    continue
+                xs = [xi - ci for xi, ci in zip(xs, corr)]
+                last = cmax
+                size = max([abs(v) for v in xs] + [mpmath.mpf(10) ** (-300)])
+                if cmax <= size * mpmath.mpf(10) ** (-dps + 8):
+                    break
+            else:
+                return None
             cur = [float(v) for v in xs]
-            if prev is not None and all(abs(p - c) <= AGREE * max(max(abs(v) for v in cur), 1e-300)
-                                        for p, c in zip(prev, cur)):
-                return xs, f"Newton from x = 0 (float64), refined in mpmath to {dps} digits"
+            top = max(max(abs(v) for v in cur), 1e-300)
+            if prev is not None and all(abs(p - c) <= max(AGREE * abs(c), 1e-40 * top) for p, c in zip(prev, cur)):
+                return xs, dps
             prev = cur
         dps *= 2
     return None
+
+
+def _stable(pieces) -> str:
+    """What the accepted equilibrium's checks (:func:`check_law` on every spring) establish."""
+    return ("stable: every V''(d) > 0 there, so K is positive definite"
+            + (" apart from the free pieces' rigid translations" if pieces else ""))
 
 
 def solve(file: str, n: int, springs, loads, params: dict, values: dict, pieces, *,
@@ -338,16 +572,35 @@ def solve(file: str, n: int, springs, loads, params: dict, values: dict, pieces,
         stiff = tuple(check_law(file, law, sp.Integer(0), subs, closed_form=sp.factor(law.stiffness.subs(law.d, 0)))
                       for _, _, law in springs)
         return Equilibrium(tuple(sp.Integer(0) for _ in range(n)), ext, stiff, True,
-                           "x = 0: every spring at rest balances (V'(0) = 0 or balanced tensions)")
+                           "x = 0: every spring at rest balances (V'(0) = 0 or balanced tensions); "
+                           + _stable(pieces))
     problem = _Problem(n, springs, [ld.subs(subs) for ld in loads], subs,
                        [(piece, [float(m.subs(subs)) for m in masses]) for piece, masses in pieces])
-    found = newton(problem)
+    where = springs[0][2].where if springs else None
+    found = path(problem)
+    if isinstance(found, _PathEnd):
+        raise SceneError(file, where, f"no static equilibrium found: applying the constant loads and pre-stress "
+                         f"gradually from rest, a stable equilibrium exists only up to {found.fraction} of them "
+                         f"({found.why}); accepted: springs and loads with a stable equilibrium (V''(d) > 0 there)")
     if found is None:
-        raise SceneError(file, springs[0][2].where if springs else None,
-                         "no static equilibrium found: Newton from the rest configuration x = 0 (with a "
-                         "Levenberg-Marquardt safeguard) did not converge; accepted: springs and loads "
-                         "with a stable equilibrium (V''(d) > 0 there)")
-    xs, how = found
+        x = descent(problem)
+        if x is None:
+            raise SceneError(file, where, "no static equilibrium found: the rest configuration x = 0 is not stable "
+                             "(K = the Hessian of U is not positive definite there) and a descent of U from it (Newton "
+                             "with a Levenberg-Marquardt safeguard) found no minimum; accepted: springs and loads "
+                             "with a stable equilibrium (V''(d) > 0 there)")
+        how = "descent of U from x = 0 (x = 0 is not stable; Newton with a Levenberg-Marquardt safeguard, float64)"
+    else:
+        x, steps = found
+        how = (f"the loads applied gradually from rest ({steps} load step{'s' if steps != 1 else ''}, "
+               "float64 Newton correctors)")
+    refined = refine(problem, x)
+    if refined is None:
+        raise SceneError(file, where, "no static equilibrium found: the float64 equilibrium does not refine in "
+                         f"extended precision (up to {MAX_DPS} digits); accepted: springs and loads with a stable "
+                         "equilibrium (V''(d) > 0 there)")
+    xs, dps = refined
+    how += f", refined in mpmath to {dps} digits; " + _stable(pieces)
     xv = tuple(sp.Float(mpmath.nstr(v, 25), 17) for v in xs)
     ext, stiff = [], []
     for a, b, law in springs:

@@ -112,6 +112,14 @@ class System:
         """``(left, right)`` of a ``[chain]``; None otherwise."""
         return (self.provided.left, self.provided.right) if self.chain else None
 
+    def potential_equilibrium(self) -> np.ndarray | None:
+        """The static equilibrium x_eq of a scene with spring potentials (the module's ``equilibrium()``),
+        shape (N,); None without potentials."""
+        if not self.potential:
+            return None
+        mod, p = self.module, self.params
+        return np.asarray(mod.equilibrium(**p, n=self.n) if self.chain else mod.equilibrium(**p), dtype=float)
+
     def has(self, name: str) -> bool:
         """Whether the module defines the contract function ``name``."""
         return self.provided.has(name)

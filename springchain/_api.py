@@ -614,6 +614,7 @@ def simulate(scene: str | Path | Scene, methods: list[str] | None = None, dt: fl
         registry.method(name, options)  # before any derivation
     with phase("loading the generated module (deriving it if not cached)", enabled=progress):
         system, origin = _system(sc)
+    _check_motion(sc, "simulate", system)
     names, notes = methods, []
     if not methods:  # a default Verlet that would be unstable at this dt gives way to the exact method
         names, notes = sim.unstable_defaults(system, sim.default_methods(system), dt)
@@ -644,14 +645,24 @@ def simulate(scene: str | Path | Scene, methods: list[str] | None = None, dt: fl
 
 
 # -- plan and bench ---------------------------------------------------------------------------------
-def _check_motion(sc: Scene, what: str) -> None:
-    """Refuse a run whose answer is known: no ``[initial]`` and nothing driving the scene."""
+def _check_motion(sc: Scene, what: str, system=None) -> None:
+    """Refuse a run whose answer is known: no ``[initial]`` (it starts at rest at x = 0), nothing driving
+    the scene, and x = 0 its equilibrium. With spring potentials x = 0 need not be the equilibrium (a
+    pre-stressed spring, V'(0) ≠ 0, out of balance): such a scene moves, and is decided once its
+    equilibrium is known (``system``; called without it before the derivation, with it after)."""
     from .numeric.errors import RunRefused
 
-    if not sc.initial_given and not sc.loaded:
-        raise RunRefused(f"{sc.file}: initial: missing; {what} of {sc.name!r} would start at rest with nothing "
-                         "driving it (its motion is zero); accepted: a table [initial] with x = [...] and/or "
-                         "v = [...] (modes and derive do not need one)", quantity="initial")
+    if sc.initial_given or sc.loaded:
+        return
+    if sc.has_potential:
+        if system is None:
+            return
+        x_eq = system.potential_equilibrium()
+        if x_eq is not None and bool((x_eq != 0.0).any()):
+            return  # released at rest away from its equilibrium: it oscillates about x_eq
+    raise RunRefused(f"{sc.file}: initial: missing; {what} of {sc.name!r} would start at rest at its equilibrium "
+                     "x = 0 with nothing driving it (its motion is zero); accepted: a table [initial] with "
+                     "x = [...] and/or v = [...] (modes and derive do not need one)", quantity="initial")
 
 
 def _horizon(sc: Scene, t_end: float | None) -> float:
@@ -686,6 +697,7 @@ def plan(scene: str | Path | Scene, tol: float, t_end: float | None = None, *, a
     sc = load(scene)
     _check_motion(sc, "plan")
     system, _ = _system(sc)
+    _check_motion(sc, "plan", system)
     from .numeric.plan_pilot import PilotPlanner, needs_pilot, tight_reference_applies
 
     with single_threaded_blas():
@@ -722,6 +734,7 @@ def bench(scene: str | Path | Scene = "seed", t_end: float | None = None, *, qui
     sc = load(scene)
     _check_motion(sc, "bench")
     system, _ = _system(sc)
+    _check_motion(sc, "bench", system)
     import sympy  # noqa: F401  (imported before timing: the derive time excludes the SymPy import)
 
     t0 = time.perf_counter()

@@ -1,0 +1,217 @@
+"""Static equilibria of spring potentials over the accepted domain (issue 31), against the extended-precision
+reference of :mod:`equilibrium_reference` (SymPy's own parse of the potentials, mpmath at 50 digits,
+the loads applied gradually from rest, Newton at every load step, Cholesky for stability).
+
+Regressions of the issue: Lennard-Jones springs under gravity or a constant force were refused ("no
+static equilibrium found": the float64 Newton never met its stopping rule at the rounding floor of the
+LJ gradient), a pre-stressed scene without ``[initial]`` was told "its motion is zero" although it
+starts away from its equilibrium, and ``rsa`` on a potential scene said "linearisation about x = 0".
+
+Then a hypothesis search: 1–5 masses hanging from a wall or between two walls, springs of every
+potential family the README names (FPUT-α/β, Toda, Morse, Lennard-Jones, exp, log, cosh forms,
+pre-stressed, linear), gravity or constant forces, values log-uniform across many decades. Property:
+the reported x_eq, stiffnesses and ω² within tolerance of the reference, or a one-line refusal where
+the reference has no stable equilibrium — never a traceback, never a wrong number. The normal run
+draws a bounded seeded sample; the ``slow`` variant many more (``SPRINGCHAIN_SLOW_BUDGET``).
+"""
+
+from __future__ import annotations
+
+import json
+import re
+
+import mpmath
+import numpy as np
+import pytest
+from hypothesis import HealthCheck, example, given, settings
+from hypothesis import strategies as st
+
+from equilibrium_reference import reference
+from helpers import SLOW_BUDGET as BUDGET
+from helpers import run_cli
+
+#: x_eq is correctly rounded (refined in mpmath): a few ulps of each coordinate, or of the largest where
+#: a coordinate is much smaller than the others.
+X_RTOL = 4e-16
+X_FLOOR = 1e-30
+#: ω² from an mpmath eigensolver on K rounded to 17 digits: 1e-13 relative, as the modes tests.
+W_RTOL = 1e-13
+#: Progress notes a derivation slower than a second prints on a loaded machine (not part of the error).
+PROGRESS = re.compile(r"^springchain: (deriving|loading|reading|compiling)")
+
+LJ = "eps*((r0/(r0 + d))**12 - 2*(r0/(r0 + d))**6)"
+MORSE = "D*(1 - exp(-w*d))**2"
+
+
+def hanging(name: str, params: dict, potentials: list[str], *, masses: list[str] | None = None,
+            gravity: str | None = None, forces: dict | None = None, right_wall: bool = False,
+            extra: str = "") -> str:
+    """A chain of len(potentials) − right_wall masses hung from a wall (and tied to a second one)."""
+    n = len(potentials) - int(right_wall)
+    masses = masses or ["m"] * n
+    ends = ["wall"] + [f"p{i}" for i in range(n)] + (["wall"] if right_wall else [])
+    lines = [f'name = "{name}"', "[parameters]", *[f"{k} = {float(v)!r}" for k, v in params.items()], "[masses]",
+             *[f'p{i} = "{m}"' for i, m in enumerate(masses)]]
+    for s, pot in enumerate(potentials):
+        lines += ["[[springs]]", f'between = ["{ends[s]}", "{ends[s + 1]}"]', f'potential = "{pot}"']
+    if gravity is not None:
+        lines += ["[gravity]", f'g = "{gravity}"']
+    for on, f in (forces or {}).items():
+        lines += ["[[forces]]", f'on = "p{on}"', f'f = "{f}"']
+    return "\n".join(lines) + "\n" + extra
+
+
+def _modes_json(path, capsys):
+    status, out, err = run_cli(["modes", path, "--json"], capsys)
+    return status, out, err
+
+
+def _one_line(status, err: str, *parts) -> str:
+    assert status == 2, err
+    lines = [ln for ln in err.splitlines() if not PROGRESS.match(ln)]
+    assert len(lines) == 1 and lines[0].startswith("springchain: error: "), err
+    assert "Traceback" not in err
+    for p in parts:
+        assert p in lines[0], (p, lines[0])
+    return lines[0]
+
+
+def check_against_reference(data: dict, ref) -> float:
+    """x_eq, each spring's V''(d) and ω² of ``modes --json`` against the reference; returns the worst
+    error relative to its bound (≤ 1 passes)."""
+    eq = data["equilibrium"]
+    x = np.array(eq["x_value"])
+    xr = [float(v) for v in ref.x]
+    top = max(max(abs(v) for v in xr), X_FLOOR)
+    worst = 0.0
+    for xi, ri in zip(x, ref.x):
+        err = abs(mpmath.mpf(float(xi)) - ri)
+        worst = max(worst, float(err / max(X_RTOL * abs(ri), X_RTOL * 1e-3 * top, mpmath.mpf(X_FLOOR))))
+    for s, kr in zip(eq["springs"], ref.stiffness):
+        worst = max(worst, float(abs(mpmath.mpf(s["stiffness_value"]) - kr) / (1e-15 * abs(kr))))
+    w2 = sorted(m["omega2_value"] for m in data["modes"])
+    for wi, wr in zip(w2, ref.omega2):
+        worst = max(worst, float(abs(mpmath.mpf(wi) - wr) / (W_RTOL * abs(wr))))
+    assert "stable" in eq["how"], eq["how"]
+    return worst
+
+
+# -- issue 31: Lennard-Jones under a constant load ------------------------------------------------------------
+LJ_PARAMS = {"eps": 0.05, "r0": 1.12, "m": 0.3, "g": 0.1}
+
+
+@pytest.mark.parametrize("load", ["gravity", "force"])
+@pytest.mark.parametrize("family", ["lennard-jones", "morse"])
+def test_two_atoms_hanging_under_a_constant_load(load, family, tmp_path, capsys):
+    params = dict(LJ_PARAMS) if family == "lennard-jones" else {"D": 0.2, "w": 1.3, "m": 0.3, "g": 0.1}
+    pot = LJ if family == "lennard-jones" else MORSE
+    text = (hanging("atoms", params, [pot, pot], gravity="g") if load == "gravity"
+            else hanging("atoms", params, [pot, pot], forces={0: "m*g", 1: "m*g"}))
+    path = tmp_path / "atoms.toml"
+    path.write_text(text)
+    status, out, err = _modes_json(path, capsys)
+    assert status == 0, err
+    data = json.loads(out)
+    ref = reference(text)
+    assert ref.stable and ref.margin > 0.1
+    assert check_against_reference(data, ref) <= 1.0
+    if family == "lennard-jones":  # the issue's numbers
+        assert np.allclose(data["equilibrium"]["x_value"], [0.026770, 0.038421], rtol=0, atol=5e-7)
+        assert np.allclose(sorted(m["omega2_value"] for m in data["modes"]), [2.3211, 18.6456], rtol=0, atol=5e-5)
+
+
+def test_lennard_jones_beyond_its_largest_force_is_refused_naming_the_fraction(tmp_path, capsys):
+    text = hanging("atoms", {**LJ_PARAMS, "g": 10.0}, [LJ, LJ], gravity="g")
+    path = tmp_path / "atoms.toml"
+    path.write_text(text)
+    ref = reference(text)
+    assert not ref.stable and 0.01 < ref.reached < 0.03
+    for command in (["modes"], ["derive", "--out", tmp_path / "gen"]):
+        status, _, err = run_cli([command[0], path, *command[1:]], capsys)
+        line = _one_line(status, err, str(path), "springs[0].potential", "no static equilibrium found",
+                         "a stable equilibrium exists only up to")
+        reached = float(re.search(r"only up to ([0-9.e+-]+) of them", line).group(1))
+        assert abs(reached - float(ref.reached)) <= 1e-5 * float(ref.reached)
+
+
+# every potential family of the README, hung under gravity (three masses, the middle one twice as heavy)
+FAMILIES = {
+    "fput-alpha": ("k*d**2/2 + alpha*d**3/3", {"k": 2.0, "alpha": 0.7}),
+    "fput-alpha-softening": ("k*d**2/2 + alpha*d**3/3", {"k": 2.0, "alpha": -0.7}),
+    "fput-beta": ("k*d**2/2 + beta*d**4/4", {"k": 2.0, "beta": 0.5}),
+    "toda": ("a/b*exp(-b*d) + a*d", {"a": 3.0, "b": 0.8}),
+    "morse": (MORSE, {"D": 3.0, "w": 0.7}),
+    "lennard-jones": (LJ, {"eps": 2.0, "r0": 1.12}),
+    "exp": ("c*(exp(q*d) - q*d)", {"c": 1.5, "q": 0.9}),
+    "log": ("c*(d - r*log(1 + d/r))", {"c": 4.0, "r": 0.5}),
+    "fene": ("-c*r**2*log(1 - (d/r)**2)/2", {"c": 3.0, "r": 0.6}),
+    "cosh": ("c*cosh(q*d)", {"c": 2.0, "q": 1.1}),
+    "pre-stressed": ("k*d**2/2 + T*d + d**4", {"k": 2.0, "T": 0.25}),
+}
+
+
+@pytest.mark.parametrize("family", sorted(FAMILIES))
+@pytest.mark.parametrize("layout", ["hanging", "between-walls"])
+def test_every_potential_family_under_gravity(family, layout, tmp_path, capsys):
+    pot, params = FAMILIES[family]
+    params = {**params, "m": 0.4, "g": 0.6}
+    text = hanging(family.replace("-", "_"), params, [pot] * (3 + (layout == "between-walls")), masses=["m", "2*m", "m"],
+                   gravity="g", right_wall=layout == "between-walls")
+    path = tmp_path / "fam.toml"
+    path.write_text(text)
+    ref = reference(text)
+    assert ref.stable and ref.margin > 1e-3, (ref.reached, ref.margin)
+    status, out, err = _modes_json(path, capsys)
+    assert status == 0, err
+    assert check_against_reference(json.loads(out), ref) <= 1.0
+
+
+# -- issue 31: a pre-stressed scene starts away from its equilibrium ------------------------------------------
+PRE = hanging("pre", {"k": 2.0, "T": 0.5, "m": 1.0}, ["k*d**2/2 + T*d + d**4", "k*d**2/2 + T*d"],
+              extra="[simulation]\ndt = 0.001\nsteps = 200\n")
+
+
+def test_prestressed_scene_without_initial_moves(tmp_path):
+    """Released at rest at x = 0, which is not its equilibrium: x(t) = a0 t²/2 + O(t⁴) with
+    a0 = −∇U(0)/m from the potentials' V'(0) (here −T + T = 0 on p0 and −T on p1)."""
+    import springchain
+
+    path = tmp_path / "pre.toml"
+    path.write_text(PRE)
+    ref = reference(PRE)
+    assert ref.stable and max(abs(float(v)) for v in ref.x) > 0.2
+    run = springchain.simulate(path, methods=["verlet"], progress=False)
+    t, x = np.asarray(run.t), np.asarray(run.x["verlet"])
+    a0 = np.array([0.0, -0.5])  # −∇U(0)/m: the tensions at rest, T on both sides of p0, T pulling p1 back
+    early = t <= 0.02
+    # Taylor: x = a0 t²/2 + (jerk terms vanish at rest) + O(t⁴); Verlet's error O(dt² t²)
+    assert np.allclose(x[early], 0.5 * a0[None, :] * t[early, None] ** 2, rtol=0, atol=1e-7)
+    assert np.max(np.abs(x[-1])) > 1e-3
+
+
+def test_balanced_prestress_without_initial_is_still_refused(tmp_path, capsys):
+    """Between two walls with the same pre-stress on both springs x = 0 is the equilibrium: nothing moves."""
+    text = hanging("balanced", {"k": 2.0, "T": 0.5, "m": 1.0}, ["k*d**2/2 + T*d + d**4", "k*d**2/2 + T*d + d**4"],
+                   right_wall=True)
+    path = tmp_path / "balanced.toml"
+    path.write_text(text)
+    ref = reference(text)
+    assert all(v == 0 for v in ref.x)
+    status, out, err = run_cli(["simulate", path, "--method", "verlet"], capsys)
+    _one_line(status, err, "initial: missing", "its motion is zero")
+
+
+# -- issue 31: rsa says what it linearises about ----------------------------------------------------------------
+def test_rsa_of_a_potential_scene_names_its_equilibrium(tmp_path, capsys):
+    path = tmp_path / "pre.toml"
+    path.write_text(PRE)
+    spec = tmp_path / "flat.csv"
+    spec.write_text("T,Sa\n0.01,1.0\n10,1.0\n")
+    status, out, err = run_cli(["rsa", path, "--spectrum", spec, "--json"], capsys)
+    assert status == 0, err
+    notes = json.loads(out)["notes"]
+    ref = reference(PRE)
+    [note] = [n for n in notes if "potential" in n]
+    assert "x = 0" not in note and "static equilibrium" in note
+    shown = [float(v) for v in re.search(r"x_eq = \(([^)]*)\)", note).group(1).split(",")]
+    assert np.allclose(shown, [float(v) for v in ref.x], rtol=1e-9, atol=0)
