@@ -309,10 +309,13 @@ class Simulation:
         return path
 
     def _spring_series(self, method: str):
-        """(drift, spring force, base shear) of ``method``'s trajectory (:func:`numeric.storeys.spring_series`)."""
-        from .numeric.storeys import spring_series
+        """(drift, spring force, base shear) of ``method``'s trajectory (:func:`numeric.storeys.series`: the
+        exact method's by the load path where the springs form a tree with the ground)."""
+        from .numeric.run import registry
+        from .numeric.storeys import series
 
-        return spring_series(_system(self.scene)[0], self.x[method])
+        exact = (self.scene.x0, self.scene.v0, self.t) if method == registry.EXACT else None
+        return series(_system(self.scene)[0], self.x[method], exact)[:3]
 
     def drifts(self, method: str):
         """Drift ``x_b − x_a`` of every spring ``between = [a, b]`` (a wall is 0), ndarray, shape (S, springs) [m]."""
@@ -476,15 +479,22 @@ def _streamed(sc: Scene, system, names, dt, steps, record_every, out, figures, o
             npz, tuple(Path(p) for p in summary["figures"]))
 
 
-def _spring_arrays(system, x: dict) -> dict:
+def _spring_arrays(system, x: dict, exact: tuple | None = None) -> tuple[dict, list[str]]:
     """NPZ arrays ``drift_<method>``, ``spring_force_<method>`` (S × springs) and ``base_shear_<method>``
-    (S,) of every method's frames ``x[method]`` (S, N) (:func:`numeric.storeys.spring_series`)."""
-    from .numeric.storeys import spring_series
+    (S,) of every method's frames ``x[method]`` (S, N) (:func:`numeric.storeys.series`; ``exact = (x0, v0,
+    t)``: the exact method's by the load path), and the notes of those whose float64 rounding of drifts
+    formed from positions exceeds :data:`numeric.storeys.FORCE_ROUNDING` of the largest force."""
+    from .numeric.run import registry
+    from .numeric.storeys import rounding_note, series
 
-    out = {}
+    out, notes = {}, []
     for m, xm in x.items():
-        out[f"drift_{m}"], out[f"spring_force_{m}"], out[f"base_shear_{m}"] = spring_series(system, xm)
-    return out
+        drift, force, base, bound = series(system, xm, exact if m == registry.EXACT else None)
+        out[f"drift_{m}"], out[f"spring_force_{m}"], out[f"base_shear_{m}"] = drift, force, base
+        note = rounding_note(m, bound)
+        if note is not None:
+            notes.append(note)
+    return out, notes
 
 
 def _notes_array(notes: list[str]) -> dict:
@@ -510,11 +520,13 @@ def _kept(sc: Scene, system, names, dt, steps, record_every, options, out, figur
     notes = list(notes) + diverged
     t = next(iter(runs.values())).t
     x, v = {m: r.x for m, r in runs.items()}, {m: r.v for m, r in runs.items()}
+    spring_notes = []
     with quiet_floats(bool(diverged)):  # a run that left the finite numbers is said once, in its note
         extra = absolute_npz_arrays(system, t, x, v)
         if springs:
-            extra.update(_spring_arrays(system, x))
-        extra.update(_notes_array(notes))
+            arrays, spring_notes = _spring_arrays(system, x, (sc.x0, sc.v0, t))
+            extra.update(arrays)
+        extra.update(_notes_array(notes + spring_notes))
         npz, figs = None, ()
         if out is not None:
             from .numeric.npz import save_npz
@@ -531,6 +543,7 @@ def _kept(sc: Scene, system, names, dt, steps, record_every, options, out, figur
                     figs = tuple(write_figures(out, sc.name, sc.mass_names, system, runs))
         summary = compare(system, runs)
     summary["diverged"] = diverged
+    summary["spring_notes"] = spring_notes
     return summary, t, x, v, extra, npz, figs
 
 
@@ -624,18 +637,20 @@ def simulate(scene: str | Path | Scene, methods: list[str] | None = None, dt: fl
     if system.chain:
         summary, t, x, v, extra, npz, figs = _streamed(sc, system, names, dt, steps, record_every, out, figures,
                                                        options)
-        if springs or limits or summary["diverged"]:  # from the frames read back; the NPZ rewritten with them
+        if springs:  # from the frames read back
+            arrays, summary["spring_notes"] = _spring_arrays(system, x)
+            extra.update(arrays)
+        if springs or limits or summary["diverged"]:  # the NPZ rewritten with them
             from .numeric.npz import save_npz
 
-            extra.update(_spring_arrays(system, x) if springs else {})
-            extra.update(_notes_array(limits + summary["diverged"]))
+            extra.update(_notes_array(limits + summary["diverged"] + summary.get("spring_notes", [])))
             save_npz(npz, t, x, v, extra)
     else:
         summary, t, x, v, extra, npz, figs = _kept(sc, system, names, dt, steps, record_every, options, out, figures,
                                                    springs, limits)
     if modal_energy:
         summary["modal_energy"], figs = _modal_energies(sc, system, t, x, v, extra, npz, figs, figures, progress)
-    notes = notes + limits + summary.pop("diverged", [])
+    notes = notes + limits + summary.pop("diverged", []) + summary.pop("spring_notes", [])
     summary.update({"scene": sc.name, "module": origin, "dt": dt, "steps": steps, "t_end": steps * dt,
                     "npz": None if npz is None else str(npz), "figures": [str(p) for p in figs],
                     "methods_that_apply": sim.applicable(system),
