@@ -42,6 +42,7 @@ import scipy.linalg
 import sympy as sp
 
 from .accurate import exact_values
+from .equilibrium_tree import Ended, solve_tree, tree
 from .errors import SceneError
 from .mp_eval import mp_function
 from .potential import SpringLaw
@@ -52,16 +53,34 @@ AGREE = 1e-18
 MAX_NEWTON = 200
 #: Largest working precision tried (digits).
 MAX_DPS = 640
-#: Load steps of the continuation (accepted or halved) before giving up, and the smallest load step (fraction of the loads).
-MAX_PATH = 2000
+#: Load steps of the continuation (accepted or halved) before giving up, and the smallest load step:
+#: MIN_STEP of the loads reached (the end of a path found to that relative accuracy), or FIRST_STEP of
+#: the full loads for the first step (a spring so soft that its linear range holds less is still followed).
+MAX_PATH = 4000
 MIN_STEP = 1e-10
-#: Newton corrector: iterations, the step (relative to the size of x) that converges, and the float64
-#: floor below which a step that no longer contracts is accepted (rounding, not divergence).
-MAX_CORRECT = 12
+FIRST_STEP = 1e-30
+#: Newton corrector: iterations, the contraction each step must show (a larger step diverges or jumps
+#: branches), the step (relative to the size of x) that converges, and the residual (relative to the force
+#: scale) below which a step that no longer contracts is float64's floor, accepted.
+MAX_CORRECT = 20
+CONTRACTION = 0.75
 CORRECT_TOL = 1e-13
-CORRECT_NOISE = 1e-7
+RESIDUAL_NOISE = 1e-10
+#: A step below CORRECT_TOL converges only with the residual below this of the forces at play (or float64's
+#: floor, :meth:`_Problem.floor`, at FLOAT_DIGITS).
+RESIDUAL_SETTLED = 1e-6
+FLOAT_DIGITS = 16
+#: The descent's stopping rule: a step below CORRECT_TOL of x, or one that no longer contracts below this.
+DESCENT_NOISE = 1e-7
 #: Newton iterations per precision of the mpmath refinement.
 MAX_REFINE = 60
+#: Digits of the corrector's residual where float64's does not contract, beyond log10 of the spread of the
+#: springs' stiffnesses (K's condition), and at most.
+CORRECT_DPS = 30
+MAX_CORRECT_DPS = 330
+#: Condition number of K above which the continuation solves with K in mpmath (float64 would lose a
+#: soft spring beside a stiff one, or the residual's noise would swamp the step).
+ILL_CONDITIONED = 1e10
 
 
 @dataclass(frozen=True)
@@ -229,6 +248,8 @@ class _Problem:
     def __init__(self, n: int, springs, loads, subs: dict, pieces):
         self.n = n
         self.springs = springs  # (a, b, law)
+        #: How many corrector solves needed the residual in mpmath (for the report).
+        self.mp_corrections = 0
         syms = list(subs)
         self.values = [subs[s] for s in syms]
         self.f64 = [(a, b, sp.lambdify([law.d] + syms, law.energy, "numpy"),
@@ -241,6 +262,9 @@ class _Problem:
         self.fvals = [float(v) for v in self.values]
         ends = np.array([(a, b) for a, b, _ in springs], dtype=np.intp).reshape(-1, 2)
         self.a, self.b = ends[:, 0], ends[:, 1]
+        #: V'(0) of every spring (float64 and, per precision, mpmath): the path's residual is taken from them.
+        self.rest = self.tensions(np.zeros(n))
+        self._rest_mp: dict = {}
         bounds = np.array([domain(law, subs) for _, _, law in springs]).reshape(-1, 2)
         self.lo, self.hi = bounds[:, 0], bounds[:, 1]
         # rigid translations of free pieces: w = masses on the piece (centre of mass stays)
@@ -270,13 +294,86 @@ class _Problem:
         with np.errstate(all="ignore"):
             return np.array([float(F(d, *self.fvals)) for (_, _, _, F, _), d in zip(self.f64, self.extensions(x))])
 
+    def digits(self, x) -> int:
+        """Working digits for K's solves at x: :data:`CORRECT_DPS` beyond log10 of the spread of the springs'
+        stiffnesses there (K's condition number, up to the factors of the topology)."""
+        with np.errstate(all="ignore"):
+            k = np.abs([float(S(d, *self.fvals)) for (_, _, _, _, S), d in zip(self.f64, self.extensions(x))])
+        k = k[np.isfinite(k) & (k > 0)]
+        spread = float(np.log10(np.max(k)) - np.log10(np.min(k))) if k.size else 0.0
+        return int(min(MAX_CORRECT_DPS, CORRECT_DPS + max(0.0, spread)))
+
+    def finite(self, x) -> bool:
+        """The float64 tensions at x finite (no argument of an exponential beyond float range: mpmath is only
+        asked where float64 could still be)."""
+        return bool(np.all(np.isfinite(self.tensions(x))))
+
+    def floor(self, x, applied, digits: float) -> float:
+        """The residual a ``digits``-digit evaluation at x cannot get below: the forces at play
+        (:meth:`force_scale`) to ``10^(4 − digits)``, or the rounding of the extensions formed from the
+        positions, ``Σ |V''(d)|·(|x_a| + |x_b|)`` (an extension much smaller than x carries ε·|x|), to
+        ``10^(3 − digits)``."""
+        xe = np.append(np.abs(np.asarray(x, dtype=float)), 0.0)
+        with np.errstate(all="ignore"):
+            k = np.abs([float(S(d, *self.fvals)) for (_, _, _, _, S), d in zip(self.f64, self.extensions(x))])
+            spread = float(np.max(k * (xe[self.a] + xe[self.b]), initial=0.0))
+        spread = spread if np.isfinite(spread) else 0.0
+        return max(10.0 ** (4 - digits) * self.force_scale(x, applied), 10.0 ** (3 - digits) * spread)
+
+    def force_scale(self, x, applied) -> float:
+        """The size of the forces at play at x (for residuals at their floor): the springs' tensions beyond
+        their rest ones, and the applied part of the loads and pre-stress ``applied`` (N,)."""
+        with np.errstate(all="ignore"):
+            top = max(float(np.max(np.abs(self.tensions(x) - self.rest), initial=0.0)),
+                      float(np.max(np.abs(np.asarray(applied, dtype=float)), initial=0.0)))
+        return top if np.isfinite(top) and top > 0 else 1e-300
+
+    def _spread(self, t, g) -> np.ndarray:
+        """``Σ_s t_s b_s`` into g (N,): +t on the second end, −t on the first."""
+        with np.errstate(all="ignore"):
+            for a, b, ts in zip(self.a, self.b, t):
+                if a >= 0:
+                    g[a] -= ts
+                if b >= 0:
+                    g[b] += ts
+        return g
+
+    def residual(self, x, lam: float, r0: np.ndarray) -> np.ndarray:
+        """``G(x) − (1 − λ) G(0) = Σ_s (V'(d_s) − V'(0)) b_s + λ G(0)``: the loading path's equation, with
+        the springs' tensions beyond their rest ones (no rounding of G(0) against itself, so a load step
+        of 1e-20 of the loads is resolved as well as the full loads)."""
+        with np.errstate(all="ignore"):
+            return self._spread(self.tensions(x) - self.rest, lam * r0)
+
+    def residual_mp(self, x, lam: float, r0: np.ndarray, dps: int) -> list:
+        """:meth:`residual` in mpmath at ``dps`` digits (λ and G(0) as the float64 numbers they are)."""
+        with mpmath.workdps(dps):
+            vals = [_mpv(r, dps) for r in self.values]
+            g = [mpmath.mpf(float(lam)) * mpmath.mpf(float(v)) for v in r0]
+            for (a, b, F), t0 in zip(self.fmp, self.rest_mp(dps)):
+                t = F(self._mp_ext(x, a, b), *vals) - t0
+                if a >= 0:
+                    g[a] -= t
+                if b >= 0:
+                    g[b] += t
+            return g
+
+    def rest_mp(self, dps: int) -> list:
+        """V'(0) of every spring in mpmath (cached per precision)."""
+        if dps not in self._rest_mp:
+            with mpmath.workdps(dps):
+                vals = [_mpv(r, dps) for r in self.values]
+                self._rest_mp[dps] = [F(mpmath.mpf(0), *vals) for _, _, F in self.fmp]
+        return self._rest_mp[dps]
+
     def gradient(self, x) -> np.ndarray:
         g = -self.load_f.copy()
-        for a, b, t in zip(self.a, self.b, self.tensions(x)):
-            if a >= 0:
-                g[a] -= t
-            if b >= 0:
-                g[b] += t
+        with np.errstate(all="ignore"):
+            for a, b, t in zip(self.a, self.b, self.tensions(x)):
+                if a >= 0:
+                    g[a] -= t
+                if b >= 0:
+                    g[b] += t
         return g
 
     def hessian(self, x) -> np.ndarray:
@@ -363,17 +460,24 @@ def _stopped(problem: _Problem, x: np.ndarray, lam: float) -> _PathEnd:
                          "beyond, the springs cannot hold the load")
 
 
-def _correct(problem: _Problem, x: np.ndarray, shift: np.ndarray, scale: float) -> np.ndarray | None:
-    """Newton on ``G(x) = shift`` from the predictor ``x``; None unless it contracts and stays in the domain.
+def _correct(problem: _Problem, x: np.ndarray, lam: float, r0: np.ndarray, scale: float) -> np.ndarray | None:
+    """Newton on the loading path's equation at λ (:meth:`_Problem.residual`) from the predictor ``x``; None
+    unless it contracts (each step at most :data:`CONTRACTION` of the last) and stays in the domain.
 
-    Converged at a step below ``CORRECT_TOL·scale``, or where the steps stop contracting below
-    ``CORRECT_NOISE·scale`` (float64's floor; the mpmath refinement finishes the last point).
+    Float64 first: converged at a step below ``CORRECT_TOL·scale``, or where the residual reaches float64's
+    floor (``RESIDUAL_NOISE`` of the forces at play). Otherwise the residual in mpmath (:func:`_correct_mp`):
+    a stiff spring's tension formed from float64 positions carries ε·k·|x| of noise, which a soft spring in
+    series turns into a displacement error as large as x itself.
     """
+    start = x
     prev = np.inf
     for _ in range(MAX_CORRECT):
-        g = problem.gradient(x) - shift
+        g = problem.residual(x, lam, r0)
         if not np.all(np.isfinite(g)):
             return None
+        if prev < np.inf and float(np.max(np.abs(g))) <= max(RESIDUAL_NOISE * problem.force_scale(x, lam * r0),
+                                                             problem.floor(x, lam * r0, FLOAT_DIGITS)):
+            return x
         with np.errstate(all="ignore"):
             try:
                 dx = np.linalg.solve(problem.augmented(problem.hessian(x)), g)
@@ -382,15 +486,114 @@ def _correct(problem: _Problem, x: np.ndarray, shift: np.ndarray, scale: float) 
         size = float(np.max(np.abs(dx), initial=0.0))
         if not np.isfinite(size):
             return None
-        if size > 0.5 * prev:
-            return x if prev <= CORRECT_NOISE * scale else None
+        if size > CONTRACTION * prev:
+            break
         cand = x - dx
         if not problem.inside(cand):
             return None
         x, prev = cand, size
-        if size <= CORRECT_TOL * scale:
+        if size <= CORRECT_TOL * scale and _settled(problem.residual(x, lam, r0), max(
+                RESIDUAL_SETTLED * problem.force_scale(x, lam * r0), problem.floor(x, lam * r0, FLOAT_DIGITS))):
             return x
-    return x if prev <= CORRECT_NOISE * scale else None
+    return _correct_mp(problem, start, lam, r0, scale)
+
+
+def _settled(g, bound) -> bool:
+    """The residual g below ``bound``: a step that is small next to a large x says nothing where a tension is
+    exponential in the extension."""
+    return bool(max(abs(v) for v in g) <= bound)
+
+
+def _correct_mp(problem: _Problem, x: np.ndarray, lam: float, r0: np.ndarray, scale: float, *,
+                float_hessian: bool = True) -> np.ndarray | None:
+    """The corrector with the residual at :meth:`_Problem.digits` digits, the step from the float64 Hessian
+    (``float_hessian``) or, where that does not contract or K is ill-conditioned beyond float64, from the
+    Hessian in mpmath. Converged at a step below ``CORRECT_TOL·scale``, or where the steps stop contracting
+    with the residual below ``10^(8 − digits)`` of the forces at play."""
+    dps = problem.digits(x)
+    problem.mp_corrections += 1
+    if not problem.finite(x):
+        return None
+    with mpmath.workdps(dps):
+        xs = [mpmath.mpf(float(v)) for v in x]
+        lu = _lu(problem, x) if float_hessian else None
+        floor = problem.floor(x, lam * r0, dps)
+        last = None
+        for _ in range(2 * MAX_CORRECT):
+            g = problem.residual_mp(xs, lam, r0, dps)
+            corr = _solve_mp(problem, lu, xs, g, dps)
+            if corr is None:
+                return None
+            cmax = max(abs(c) for c in corr)
+            if not mpmath.isfinite(cmax):
+                return None
+            if last is not None and cmax > CONTRACTION * last:
+                if max(abs(v) for v in g) <= floor:
+                    return np.array([float(v) for v in xs])
+                if lu is None:
+                    return None
+                lu, last = None, None  # float64's Hessian does not contract: mpmath's
+                continue
+            xs = [xi - ci for xi, ci in zip(xs, corr)]
+            out = np.array([float(v) for v in xs])
+            if not (problem.inside(out) and problem.finite(out)):
+                return None
+            last = cmax
+            if cmax <= CORRECT_TOL * scale and _settled(problem.residual_mp(xs, lam, r0, dps),
+                                                        problem.floor(out, lam * r0, dps - 8)):
+                return out
+    return None
+
+
+def _tangent(problem: _Problem, x: np.ndarray, r0: np.ndarray) -> tuple[np.ndarray, bool] | None:
+    """``dx/dλ = −K⁻¹ G(0)`` at x and whether K is too ill-conditioned for float64 (then it comes from the
+    Hessian in mpmath, as the corrector's steps will); None where K is not positive definite.
+
+    Float64 K loses a soft spring beside a stiff one (1e-10 + 1e6 rounds to 1e6): its condition number
+    above :data:`ILL_CONDITIONED`, or a failed float64 Cholesky, sends the solve to mpmath."""
+    H = problem.augmented(problem.hessian(x))
+    factor = _cholesky(H)
+    if factor is not None and np.all(np.isfinite(H)):
+        with np.errstate(all="ignore"):
+            cond = float(np.linalg.cond(H))
+        if cond <= ILL_CONDITIONED:
+            return -scipy.linalg.cho_solve(factor, r0), False
+    dps = problem.digits(x)
+    with mpmath.workdps(dps):
+        Hm = problem.hessian_mp([mpmath.mpf(float(v)) for v in x], dps)
+        try:
+            L = mpmath.cholesky(Hm)
+        except (ValueError, ZeroDivisionError):
+            return None
+        t = mpmath.cholesky_solve(Hm, mpmath.matrix([mpmath.mpf(float(v)) for v in r0])) if L is not None else None
+        return np.array([-float(t[i]) for i in range(problem.n)]), True
+
+
+def _lu(problem: _Problem, x: np.ndarray):
+    """LU factors of the float64 augmented Hessian at x, or None where it is singular or not finite."""
+    with np.errstate(all="ignore"):
+        try:
+            lu = scipy.linalg.lu_factor(problem.augmented(problem.hessian(np.asarray(x, dtype=float))),
+                                        check_finite=True)
+        except (np.linalg.LinAlgError, ValueError):
+            return None
+    return lu if np.all(np.isfinite(lu[0])) and np.all(np.diag(lu[0]) != 0) else None
+
+
+def _solve_mp(problem: _Problem, lu, xs: list, g: list, dps: int) -> list | None:
+    """The Newton correction ``H⁻¹ g`` for the mpmath residual g: by the float64 LU factors ``lu`` (g scaled
+    to avoid underflow), or by the mpmath Hessian at xs when ``lu`` is None."""
+    gmax = max(abs(v) for v in g)
+    if gmax == 0:
+        return [mpmath.mpf(0)] * len(g)
+    if lu is None:
+        try:
+            c = mpmath.lu_solve(problem.hessian_mp(xs, dps), mpmath.matrix(g))
+        except (ZeroDivisionError, ValueError):
+            return None
+        return [c[i] for i in range(problem.n)]
+    c = scipy.linalg.lu_solve(lu, np.array([float(v / gmax) for v in g]))
+    return [gmax * mpmath.mpf(float(ci)) for ci in c]
 
 
 def path(problem: _Problem) -> tuple[np.ndarray, int] | _PathEnd | None:
@@ -409,25 +612,26 @@ def path(problem: _Problem) -> tuple[np.ndarray, int] | _PathEnd | None:
     r0 = problem.gradient(x)
     if not np.all(np.isfinite(r0)):
         return _PathEnd(0.0, "the forces at rest are not finite")  # guarded by _at_rest_finite
-    lam, h, steps, tangent = 0.0, 1.0, 0, None
+    found = _tangent(problem, x, r0)
+    if found is None:
+        return None
+    tangent, ill = found
+    lam, h, steps = 0.0, 1.0, 0
     for _ in range(MAX_PATH):  # load steps tried, accepted or halved
         if lam >= 1.0:
             return x, steps
-        if tangent is None:
-            factor = _cholesky(problem.augmented(problem.hessian(x)))
-            if factor is None:
-                return None if lam == 0.0 else _stopped(problem, x, lam)
-            tangent = -scipy.linalg.cho_solve(factor, r0)
         target = min(1.0, lam + h)
         pred = x + (target - lam) * tangent
         scale = max(float(np.max(np.abs(pred))), float(np.max(np.abs(pred - x))), 1e-300)
-        nxt = _correct(problem, pred, (1.0 - target) * r0, scale) if problem.inside(pred) else None
-        if nxt is None:
+        corrector = functools.partial(_correct_mp, float_hessian=False) if ill else _correct
+        nxt = corrector(problem, pred, target, r0, scale) if problem.inside(pred) else None
+        ahead = None if nxt is None else _tangent(problem, nxt, r0)  # K positive definite there: the stable branch
+        if ahead is None:
             h *= 0.5
-            if h < MIN_STEP:
+            if h < MIN_STEP * lam or h < FIRST_STEP:
                 return _stopped(problem, x, lam)
             continue
-        x, lam, steps, tangent = nxt, target, steps + 1, None
+        x, lam, steps, (tangent, ill) = nxt, target, steps + 1, ahead
         h = min(1.0, 2.0 * h)
     return _PathEnd(lam, f"{MAX_PATH} load steps did not reach the full loads")
 
@@ -465,7 +669,7 @@ def descent(problem: _Problem) -> np.ndarray | None:
         x, e = step, problem.energy(step)
         mu = mu / 10 if mu > 1e-12 else 0.0
         size = max(float(np.max(np.abs(x))), 1e-300)
-        if moved <= CORRECT_TOL * size or (mu == 0.0 and moved > 0.5 * last and last <= CORRECT_NOISE * size):
+        if moved <= CORRECT_TOL * size or (mu == 0.0 and moved > 0.5 * last and last <= DESCENT_NOISE * size):
             return x if _cholesky(problem.augmented(problem.hessian(x))) is not None else None
         last = moved if mu == 0.0 else np.inf
     return None
@@ -476,38 +680,28 @@ def refine(problem: _Problem, x: np.ndarray) -> tuple[list, int] | None:
     40, 80, … digits until two precisions agree to :data:`AGREE` per coordinate (relative, or
     absolutely below 1e-40 of the largest). The correction is solved with the float64 Hessian while
     that contracts, else with the Hessian in mpmath. Returns ``(x, digits)`` or None."""
-    try:
-        lu = scipy.linalg.lu_factor(problem.augmented(problem.hessian(x)))
-        if not np.all(np.isfinite(lu[0])):
-            lu = None
-    except (np.linalg.LinAlgError, ValueError):
-        lu = None
+    lu = _lu(problem, x)
     prev = None
     dps = 40
     xs = [mpmath.mpf(float(v)) for v in x]
     while dps <= MAX_DPS:
         with mpmath.workdps(dps):
             xs = [mpmath.mpf(v) for v in xs]
-            mp_hessian = lu is None
             last = None
             for _ in range(MAX_REFINE):
                 g = problem.gradient_mp(xs, dps)
-                gmax = max(abs(v) for v in g)
-                if gmax == 0:
-                    break
-                if mp_hessian:
-                    corr = mpmath.lu_solve(problem.hessian_mp(xs, dps), mpmath.matrix(g))
-                    corr = [corr[i] for i in range(problem.n)]
-                else:
-                    c = scipy.linalg.lu_solve(lu, np.array([float(v / gmax) for v in g]))
-                    corr = [gmax * mpmath.mpf(float(ci)) for ci in c]
+                corr = _solve_mp(problem, lu, xs, g, dps)
+                if corr is None:
+                    return None
                 cmax = max(abs(v) for v in corr)
+                if cmax == 0:
+                    break
                 if not mpmath.isfinite(cmax):
                     return None
                 if last is not None and cmax > last / 4:  # not contracting
-                    if mp_hessian:
+                    if lu is None:
                         return None
-                    mp_hessian, last = True, None
+                    lu, last = None, None
                     continue
                 xs = [xi - ci for xi, ci in zip(xs, corr)]
                 last = cmax
@@ -577,11 +771,16 @@ def solve(file: str, n: int, springs, loads, params: dict, values: dict, pieces,
     problem = _Problem(n, springs, [ld.subs(subs) for ld in loads], subs,
                        [(piece, [float(m.subs(subs)) for m in masses]) for piece, masses in pieces])
     where = springs[0][2].where if springs else None
+    shape = tree(n, [(a, b) for a, b, _ in springs])
+    if shape is not None and all(float(S(0.0, *problem.fvals)) > 0 for _, _, _, _, S in problem.f64):
+        return _on_tree(file, problem, shape, springs, loads, subs, pieces, where)
     found = path(problem)
     if isinstance(found, _PathEnd):
+        reach = (f"a stable equilibrium exists only up to {found.fraction} of them" if found.reached > 0 else
+                 f"no stable equilibrium exists even at {FIRST_STEP:.0e} of them")
         raise SceneError(file, where, f"no static equilibrium found: applying the constant loads and pre-stress "
-                         f"gradually from rest, a stable equilibrium exists only up to {found.fraction} of them "
-                         f"({found.why}); accepted: springs and loads with a stable equilibrium (V''(d) > 0 there)")
+                         f"gradually from rest, {reach} ({found.why}); accepted: springs and loads with a stable "
+                         "equilibrium (V''(d) > 0 there)")
     if found is None:
         x = descent(problem)
         if x is None:
@@ -592,23 +791,56 @@ def solve(file: str, n: int, springs, loads, params: dict, values: dict, pieces,
         how = "descent of U from x = 0 (x = 0 is not stable; Newton with a Levenberg-Marquardt safeguard, float64)"
     else:
         x, steps = found
-        how = (f"the loads applied gradually from rest ({steps} load step{'s' if steps != 1 else ''}, "
-               "float64 Newton correctors)")
+        how = (f"the loads applied gradually from rest ({steps} load step{'s' if steps != 1 else ''}, Newton "
+               + ("correctors with the residual in mpmath where K is ill-conditioned for float64)"
+                  if problem.mp_corrections else "correctors in float64)"))
     refined = refine(problem, x)
     if refined is None:
-        raise SceneError(file, where, "no static equilibrium found: the float64 equilibrium does not refine in "
-                         f"extended precision (up to {MAX_DPS} digits); accepted: springs and loads with a stable "
-                         "equilibrium (V''(d) > 0 there)")
+        raise SceneError(file, where, "no static equilibrium found: applying the constant loads and pre-stress "
+                         f"gradually from rest reaches them only to float64's rounding (at |x| = "
+                         f"{float(np.max(np.abs(x), initial=0.0)):.3g}), and no equilibrium refines there in "
+                         f"extended precision (up to {MAX_DPS} digits): the springs hold the loads at most in the "
+                         "limit; accepted: springs and loads with a stable equilibrium (V''(d) > 0 there)")
     xs, dps = refined
     how += f", refined in mpmath to {dps} digits; " + _stable(pieces)
-    xv = tuple(sp.Float(mpmath.nstr(v, 25), 17) for v in xs)
-    ext, stiff = [], []
-    for a, b, law in springs:
-        with mpmath.workdps(40):
-            dv = (xs[b] if b >= 0 else 0) - (xs[a] if a >= 0 else 0)
-        stiff.append(check_law(file, law, dv, subs))
-        ext.append(sp.Float(mpmath.nstr(dv, 25), 17))
-    return Equilibrium(xv, tuple(ext), tuple(stiff), False, how)
+    with mpmath.workdps(dps):
+        ext = [(xs[b] if b >= 0 else 0) - (xs[a] if a >= 0 else 0) for a, b, _ in springs]
+    return _result(file, springs, subs, xs, ext, how)
+
+
+def _result(file: str, springs, subs: dict, xs: list, ext: list, how: str) -> Equilibrium:
+    """The :class:`Equilibrium` of mpmath positions and extensions, each spring checked (:func:`check_law`)."""
+    stiff = tuple(check_law(file, law, dv, subs) for (_, _, law), dv in zip(springs, ext))
+    return Equilibrium(tuple(sp.Float(mpmath.nstr(v, 25), 17) for v in xs),
+                       tuple(sp.Float(mpmath.nstr(dv, 25), 17) for dv in ext), stiff, False, how)
+
+
+def _on_tree(file: str, problem: _Problem, shape, springs, loads, subs: dict, pieces, where) -> Equilibrium:
+    """The equilibrium of springs that form a tree with the ground, spring by spring (:mod:`derive.equilibrium_tree`)."""
+    masses = [sp.Integer(0)] * problem.n  # only the free pieces' are needed (their centres of mass)
+    for piece, ms in pieces:
+        for i, m in zip(piece, ms):
+            masses[i] = sp.sympify(m).subs(subs)
+    exact_loads = [sp.sympify(ld).subs(subs) for ld in loads]
+    found = solve_tree(shape, problem.n, [(F, S) for (_, _, F), (_, _, S) in zip(problem.fmp, problem.smp)],
+                       lambda dps: [_mpv(r, dps) for r in problem.values],
+                       lambda dps: [_mpv(v, dps) for v in exact_loads],
+                       lambda dps: [_mpv(m, dps) for m in masses],
+                       list(zip(problem.lo, problem.hi)))
+    if isinstance(found, Ended):
+        law = springs[found.spring][2]
+        reach = (f"a stable equilibrium exists only up to {_PathEnd(found.reached, '').fraction} of them"
+                 if found.reached > 0 else f"no stable equilibrium exists even at {FIRST_STEP:.0e} of them")
+        raise SceneError(file, law.where, f"no static equilibrium found: applying the constant loads and pre-stress "
+                         f"gradually from rest, {reach} (the springs form a tree with the ground, so each one's "
+                         f"tension is fixed by the loads beyond it: this spring's tension V'(d) stops growing "
+                         f"towards its share at d = {mpmath.nstr(found.d, 6)}); accepted: springs and loads with a "
+                         "stable equilibrium (V''(d) > 0 there)")
+    xs, ext, steps, dps = found
+    how = (f"statically determinate (the springs form a tree with the ground): each spring's tension from the "
+           f"loads beyond it, its extension from V'(d) = that tension followed from rest ({steps} load "
+           f"step{'s' if steps != 1 else ''} at most, mpmath, {dps} digits); " + _stable(pieces))
+    return _result(file, springs, subs, xs, ext, how)
 
 
 __all__ = ["Equilibrium", "solve", "check_law", "SpringLaw"]

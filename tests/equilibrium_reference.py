@@ -29,8 +29,12 @@ import sympy as sp
 from sympy.parsing.sympy_parser import parse_expr
 
 DPS = 50
-#: Smallest load step before the path is declared ended.
-MIN_STEP = mpmath.mpf(2) ** -40
+#: Displacements beyond which the path is taken to run off to infinity.
+HUGE = mpmath.mpf(10) ** 120
+#: Smallest load step, relative to the loads reached (or to FIRST of them for the first step), before the
+#: path is declared ended.
+MIN_STEP = mpmath.mpf(2) ** -50
+FIRST = mpmath.mpf(2) ** -110
 
 
 def exact(value) -> sp.Rational:
@@ -88,7 +92,9 @@ class Reference:
     extensions: list | None = None
     stiffness: list | None = None
     omega2: list | None = None
-    #: min over the springs of V''(d_s) / max V''(d_s) at x (the stability margin), or the fold's 1 − λ.
+    #: How clearly the case is decided: for an equilibrium, min over the springs of |V''(d_s)| over that
+    #: spring's stiffness scale (0 when the path ends within BEYOND past the full loads); for an ended
+    #: path, the fraction of the loads it misses (0 within BEYOND).
     margin: float = 0.0
 
     @property
@@ -129,6 +135,10 @@ class _Funcs:
         return H
 
     def finite(self, x) -> bool:
+        """V and V'' finite at x, and x within HUGE (beyond, a path is taken to run off: mpmath's exp of
+        such arguments would exhaust GMP)."""
+        if _norm(x) > HUGE:
+            return False
         for V, S, dv in zip(self.V, self.S, self.ext(x)):
             for f in (V, S):
                 try:
@@ -138,6 +148,12 @@ class _Funcs:
                 if isinstance(v, mpmath.mpc) or not mpmath.isfinite(v):
                     return False
         return True
+
+
+def _sign_margin(f: _Funcs, j: int, dv, k):
+    """How clearly V''(d) = k has its sign: |k| over the spring's stiffness scale max(|V''(0)|, |k|, |V'(d)/d|)."""
+    scale = max(abs(f.S[j](mpmath.mpf(0))), abs(k), abs(f.F[j](dv) / dv) if dv != 0 else mpmath.mpf(0))
+    return abs(k) / scale if scale > 0 else mpmath.mpf(0)
 
 
 def _pd(H) -> bool:
@@ -153,7 +169,8 @@ def _norm(v):
 
 
 def _newton(f: _Funcs, x, shift, span):
-    """Newton on grad(x) = shift from x; the root, or None unless it contracts and stays finite."""
+    """Newton on grad(x) = shift from x; the root, or None unless it contracts and stays finite (a step that
+    no longer contracts is the working precision's floor once it is below 10^(-DPS/2) of x)."""
     last = None
     for _ in range(60):
         if not f.finite(x):
@@ -163,11 +180,12 @@ def _newton(f: _Funcs, x, shift, span):
         except (ZeroDivisionError, ValueError):
             return None
         size = _norm(dx)
+        scale = max(_norm(x), span, mpmath.mpf(10) ** -300)
         if last is not None and size > last / 2:
-            return None
+            return x if last <= mpmath.mpf(10) ** (-DPS // 2) * scale else None
         x = x - dx
         last = size
-        if size <= mpmath.mpf(10) ** (-DPS + 6) * max(_norm(x), span, mpmath.mpf(10) ** -300):
+        if size <= mpmath.mpf(10) ** (-DPS + 6) * scale:
             return x if f.finite(x) else None
     return None
 
@@ -185,7 +203,7 @@ def _follow(f: _Funcs, x, r0, lam, end):
         nxt = _newton(f, pred, (1 - target) * r0, span) if f.finite(pred) else None
         if nxt is None or _norm(nxt - pred) > span / 2 or not _pd(f.hess(nxt)):
             h /= 2
-            if h < MIN_STEP * (end - lam + MIN_STEP):
+            if h < MIN_STEP * max(lam, FIRST):
                 return x, lam
             continue
         x, lam = nxt, target
@@ -214,6 +232,18 @@ def reference(text: str) -> Reference:
         if lam < 1:
             return Reference(lam, margin=float(1 - lam) if 1 - lam > BEYOND else 0.0)
         _, beyond = _follow(f, x, r0, lam, 1 + BEYOND)
+    # K's condition number sets the digits the answer needs: polish x and take the spectrum at enough of them
+    with mpmath.workdps(DPS):
+        stiff = [abs(S(dv)) for S, dv in zip(f.S, f.ext(x))]
+        spread = max(stiff) / max(min([k for k in stiff if k > 0] or [mpmath.mpf(1)]), mpmath.mpf(10) ** -300)
+    hi = min(DPS + 2 * int(mpmath.log10(max(spread, 1))) + 20, 400)
+    with mpmath.workdps(hi):
+        x = mpmath.matrix([mpmath.mpf(v) for v in x])
+        for _ in range(40):  # Newton at the full loads, at hi digits
+            dx = mpmath.lu_solve(f.hess(x), f.grad(x))
+            x = x - dx
+            if _norm(dx) <= mpmath.mpf(10) ** (-hi + 10) * max(_norm(x), mpmath.mpf(10) ** -300):
+                break
         ext = f.ext(x)
         stiff = [S(dv) for S, dv in zip(f.S, ext)]
         m = [mpmath.mpf(sp.Rational(v).p) / sp.Rational(v).q for v in sc.masses]
@@ -223,8 +253,8 @@ def reference(text: str) -> Reference:
             for j in range(sc.n):
                 D[i, j] = H[i, j] / mpmath.sqrt(m[i] * m[j])
         ev = mpmath.eigsy(D, eigvals_only=True)
-        top = max(abs(k) for k in stiff)
-        margin = float(abs(min(stiff)) / top) if top > 0 and beyond >= 1 + BEYOND else 0.0
+        margin = min(float(_sign_margin(f, j, dv, k)) for j, (dv, k) in enumerate(zip(ext, stiff)))
+        margin = margin if beyond >= 1 + BEYOND else 0.0
         return Reference(mpmath.mpf(1), [x[i] for i in range(sc.n)], ext, stiff,
                          sorted(ev[i] for i in range(sc.n)), margin)
 
