@@ -498,6 +498,15 @@ def _correct(problem: _Problem, x: np.ndarray, lam: float, r0: np.ndarray, scale
     return _correct_mp(problem, start, lam, r0, scale)
 
 
+def _noise(problem: _Problem, xs: list, lam: float, r0: np.ndarray, dps: int):
+    """How far the residual as evaluated at ``dps`` digits is from its value: the difference to an evaluation
+    20 digits finer (a tension written as a difference, a·(1 − exp(−b d)), loses a·10^-digits)."""
+    coarse = problem.residual_mp(xs, lam, r0, dps)
+    fine = problem.residual_mp(xs, lam, r0, dps + 20)
+    with mpmath.workdps(dps + 20):
+        return max(abs(a - b) for a, b in zip(coarse, fine))
+
+
 def _settled(g, bound) -> bool:
     """The residual g below ``bound``: a step that is small next to a large x says nothing where a tension is
     exponential in the extension."""
@@ -528,7 +537,7 @@ def _correct_mp(problem: _Problem, x: np.ndarray, lam: float, r0: np.ndarray, sc
             if not mpmath.isfinite(cmax):
                 return None
             if last is not None and cmax > CONTRACTION * last:
-                if max(abs(v) for v in g) <= floor:
+                if max(abs(v) for v in g) <= max(floor, 100 * _noise(problem, xs, lam, r0, dps)):
                     return np.array([float(v) for v in xs])
                 if lu is None:
                     return None

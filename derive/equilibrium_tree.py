@@ -109,7 +109,7 @@ def _newton(V1, V2, d, target, lo, hi, scale):
     and the residual ends below 10^(12 − digits) of ``scale`` (the forces at play: a step that is small
     next to a huge d says nothing where V' is exponential there)."""
     last = None
-    floor = mpmath.mpf(10) ** (12 - mpmath.mp.dps) * scale
+    unit = mpmath.mpf(10) ** -mpmath.mp.dps
     for _ in range(60):
         try:
             f, k = V1(d) - target, V2(d)
@@ -117,22 +117,37 @@ def _newton(V1, V2, d, target, lo, hi, scale):
             return None
         if not (_real(f) and _real(k)) or k == 0:
             return None
+        # the residual's floor: the forces to 10^(12 - digits), or the rounding of d itself (near a pole, or
+        # a stiff spring at a large extension) through V''
+        floor = unit * max(10 ** 12 * scale, 10 ** 3 * abs(k) * abs(d))
         step = f / k
         size = abs(step)
         if last is not None and size > CONTRACTION * last:
-            return d if abs(f) <= floor else None
+            return d if abs(f) <= floor or abs(f) <= 100 * _noise(V1, d) else None
         d = d - step
         if not lo < d < hi or abs(d) > HUGE:
             return None
         last = size
         if size <= mpmath.mpf(10) ** (6 - mpmath.mp.dps) * max(abs(d), mpmath.mpf(10) ** -300):
             try:
-                done = abs(V1(d) - target) <= floor
+                f = V1(d) - target
             except (ZeroDivisionError, ValueError, OverflowError):
                 return None
-            if done:
+            if abs(f) <= floor or abs(f) <= 100 * _noise(V1, d):
                 return d
     return None
+
+
+def _noise(V1, d):
+    """How far V'(d) as evaluated is from its value: the difference to an evaluation 20 digits finer (a
+    tension written as a difference, a·(1 − exp(−b d)) at d = 1e-19, loses a·10^-digits to cancellation)."""
+    try:
+        coarse = V1(d)
+        with mpmath.workdps(mpmath.mp.dps + 20):
+            fine = V1(d)
+    except (ZeroDivisionError, ValueError, OverflowError):
+        return mpmath.mpf(0)
+    return abs(coarse - fine) if _real(coarse) and _real(fine) else mpmath.mpf(0)
 
 
 def _real(v) -> bool:
