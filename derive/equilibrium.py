@@ -9,9 +9,16 @@ assembled spring by spring from the exact symbolic derivatives. The equilibrium 
    tensions that balance): then x_eq = 0 and K = Σ V_s''(0) b bᵀ are closed forms.
 2. **Otherwise the equilibrium reached by applying the loads gradually from rest**: the
    out-of-balance force at rest ``G(0)`` (the loads and the springs' pre-stress) is applied as
-   ``λ G(0)``, λ from 0 to 1, following ``G(x) = (1 − λ) G(0)`` from x = 0 by predictor–corrector
-   continuation in float64 (tangent ``dx/dλ = −K⁻¹ G(0)``, Newton correctors that must contract,
-   the load step halved otherwise; one step when the problem allows it). Each spring's extension
+   ``λ G(0)``, λ from 0 to 1, following ``G(x) = (1 − λ) G(0)`` from x = 0. Where the springs form a
+   tree with the ground (a chain or a tree hung from one wall, free pieces) this path splits into one
+   scalar path per spring, its tension fixed by the loads beyond it, solved in mpmath
+   (:mod:`derive.equilibrium_tree`). Otherwise by predictor–corrector continuation (tangent
+   ``dx/dλ = −K⁻¹ G(0)``, Newton correctors that must contract, the load step halved otherwise; one
+   step when the problem allows it), the residual formed as ``Σ_s (V_s'(d_s) − V_s'(0)) b_s + λ G(0)``,
+   in float64, or with the residual and K in mpmath (30 digits beyond log10 of the spread of the
+   springs' stiffnesses) where K is too ill-conditioned for float64 or float64 does not contract; a
+   residual counts as converged at its floor (the forces at play, the rounding of the extensions
+   formed from x, the evaluation's own noise measured 20 digits finer). Each spring's extension
    stays inside the open interval around d = 0 where its potential is defined (Lennard-Jones
    ``d > −r0``, ``log(1 + d/c)``: ``d > −c``, ...: :func:`domain`), so no step crosses a
    singularity onto another branch. K must stay positive definite along the path (Cholesky): a
@@ -248,8 +255,10 @@ class _Problem:
     def __init__(self, n: int, springs, loads, subs: dict, pieces):
         self.n = n
         self.springs = springs  # (a, b, law)
-        #: How many corrector solves needed the residual in mpmath (for the report).
+        #: How many corrector solves needed the residual in mpmath (for the report), and whether one failed
+        #: only because float64 could not hold its positions (an extension below float64's resolution of x).
         self.mp_corrections = 0
+        self.float64_limited = False
         syms = list(subs)
         self.values = [subs[s] for s in syms]
         self.f64 = [(a, b, sp.lambdify([law.d] + syms, law.energy, "numpy"),
@@ -462,7 +471,8 @@ def _stopped(problem: _Problem, x: np.ndarray, lam: float) -> _PathEnd:
 
 def _correct(problem: _Problem, x: np.ndarray, lam: float, r0: np.ndarray, scale: float) -> np.ndarray | None:
     """Newton on the loading path's equation at λ (:meth:`_Problem.residual`) from the predictor ``x``; None
-    unless it contracts (each step at most :data:`CONTRACTION` of the last) and stays in the domain.
+    unless it contracts (each step, or else each residual, at most :data:`CONTRACTION` of the last) and stays
+    in the domain.
 
     Float64 first: converged at a step below ``CORRECT_TOL·scale``, or where the residual reaches float64's
     floor (``RESIDUAL_NOISE`` of the forces at play). Otherwise the residual in mpmath (:func:`_correct_mp`):
@@ -470,11 +480,12 @@ def _correct(problem: _Problem, x: np.ndarray, lam: float, r0: np.ndarray, scale
     series turns into a displacement error as large as x itself.
     """
     start = x
-    prev = np.inf
+    prev, prev_g = np.inf, np.inf
     for _ in range(MAX_CORRECT):
         g = problem.residual(x, lam, r0)
         if not np.all(np.isfinite(g)):
             return None
+        gmax = float(np.max(np.abs(g)))
         if prev < np.inf and float(np.max(np.abs(g))) <= max(RESIDUAL_NOISE * problem.force_scale(x, lam * r0),
                                                              problem.floor(x, lam * r0, FLOAT_DIGITS)):
             return x
@@ -486,16 +497,25 @@ def _correct(problem: _Problem, x: np.ndarray, lam: float, r0: np.ndarray, scale
         size = float(np.max(np.abs(dx), initial=0.0))
         if not np.isfinite(size):
             return None
-        if size > CONTRACTION * prev:
+        if size > CONTRACTION * prev and gmax > CONTRACTION * prev_g:
             break
         cand = x - dx
         if not problem.inside(cand):
             return None
-        x, prev = cand, size
+        x, prev, prev_g = cand, size, gmax
         if size <= CORRECT_TOL * scale and _settled(problem.residual(x, lam, r0), max(
                 RESIDUAL_SETTLED * problem.force_scale(x, lam * r0), problem.floor(x, lam * r0, FLOAT_DIGITS))):
             return x
     return _correct_mp(problem, start, lam, r0, scale)
+
+
+def _inside_mp(problem: _Problem, xs: list) -> bool:
+    """Every extension of the mpmath positions xs inside its potential's domain."""
+    for a, b, lo, hi in zip(problem.a, problem.b, problem.lo, problem.hi):
+        d = (xs[b] if b >= 0 else 0) - (xs[a] if a >= 0 else 0)
+        if not lo < d < hi:
+            return False
+    return True
 
 
 def _noise(problem: _Problem, xs: list, lam: float, r0: np.ndarray, dps: int):
@@ -527,27 +547,30 @@ def _correct_mp(problem: _Problem, x: np.ndarray, lam: float, r0: np.ndarray, sc
         xs = [mpmath.mpf(float(v)) for v in x]
         lu = _lu(problem, x) if float_hessian else None
         floor = problem.floor(x, lam * r0, dps)
-        last = None
+        last, last_g = None, None
         for _ in range(2 * MAX_CORRECT):
             g = problem.residual_mp(xs, lam, r0, dps)
             corr = _solve_mp(problem, lu, xs, g, dps)
             if corr is None:
                 return None
-            cmax = max(abs(c) for c in corr)
+            cmax, gmax = max(abs(c) for c in corr), max(abs(v) for v in g)
             if not mpmath.isfinite(cmax):
                 return None
-            if last is not None and cmax > CONTRACTION * last:
+            if last is not None and cmax > CONTRACTION * last and gmax > CONTRACTION * last_g:
                 if max(abs(v) for v in g) <= max(floor, 100 * _noise(problem, xs, lam, r0, dps)):
                     return np.array([float(v) for v in xs])
                 if lu is None:
                     return None
-                lu, last = None, None  # float64's Hessian does not contract: mpmath's
+                lu, last, last_g = None, None, None  # float64's Hessian does not contract: mpmath's
                 continue
             xs = [xi - ci for xi, ci in zip(xs, corr)]
             out = np.array([float(v) for v in xs])
             if not (problem.inside(out) and problem.finite(out)):
+                # converging in mpmath, but float64's rounding of x leaves the domain or the finite tensions:
+                # an extension below float64's resolution of x
+                problem.float64_limited |= last is not None and _inside_mp(problem, xs)
                 return None
-            last = cmax
+            last, last_g = cmax, gmax
             if cmax <= CORRECT_TOL * scale and _settled(problem.residual_mp(xs, lam, r0, dps),
                                                         problem.floor(out, lam * r0, dps - 8)):
                 return out
@@ -787,9 +810,11 @@ def solve(file: str, n: int, springs, loads, params: dict, values: dict, pieces,
     if isinstance(found, _PathEnd):
         reach = (f"a stable equilibrium exists only up to {found.fraction} of them" if found.reached > 0 else
                  f"no stable equilibrium exists even at {FIRST_STEP:.0e} of them")
+        limit = ("; float64 cannot hold the positions beyond: an extension falls below its resolution of x"
+                 if problem.float64_limited else "")
         raise SceneError(file, where, f"no static equilibrium found: applying the constant loads and pre-stress "
-                         f"gradually from rest, {reach} ({found.why}); accepted: springs and loads with a stable "
-                         "equilibrium (V''(d) > 0 there)")
+                         f"gradually from rest, {reach} ({found.why}{limit}); accepted: springs and loads with a "
+                         "stable equilibrium (V''(d) > 0 there)")
     if found is None:
         x = descent(problem)
         if x is None:

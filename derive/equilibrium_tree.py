@@ -105,10 +105,11 @@ def tree(n: int, ends: list[tuple[int, int]]) -> Tree | None:
 
 
 def _newton(V1, V2, d, target, lo, hi, scale):
-    """Newton on V'(d) = target from d; the root, or None unless each step contracts, d stays inside (lo, hi)
+    """Newton on V'(d) = target from d; the root, or None unless each step (or else each residual) contracts,
+    d stays inside (lo, hi)
     and the residual ends below 10^(12 − digits) of ``scale`` (the forces at play: a step that is small
     next to a huge d says nothing where V' is exponential there)."""
-    last = None
+    last, last_f = None, None
     unit = mpmath.mpf(10) ** -mpmath.mp.dps
     for _ in range(60):
         try:
@@ -122,12 +123,12 @@ def _newton(V1, V2, d, target, lo, hi, scale):
         floor = unit * max(10 ** 12 * scale, 10 ** 3 * abs(k) * abs(d))
         step = f / k
         size = abs(step)
-        if last is not None and size > CONTRACTION * last:
+        if last is not None and size > CONTRACTION * last and abs(f) > CONTRACTION * last_f:
             return d if abs(f) <= floor or abs(f) <= 100 * _noise(V1, d) else None
         d = d - step
         if not lo < d < hi or abs(d) > HUGE:
             return None
-        last = size
+        last, last_f = size, abs(f)
         if size <= mpmath.mpf(10) ** (6 - mpmath.mp.dps) * max(abs(d), mpmath.mpf(10) ** -300):
             try:
                 f = V1(d) - target
