@@ -322,7 +322,9 @@ class Simulation:
         return self._spring_series(method)[0]
 
     def spring_forces(self, method: str):
-        """Tension ``k·d + k3·d³`` (d the drift) of every spring: storey shears, shape (S, springs) [N]."""
+        """Tension ``k·d + k3·d³`` (``V'(d)`` for a spring potential; d the drift) of every spring: storey
+        shears, shape (S, springs) [N]. The exact method's come from the load path where positions would
+        round them (:mod:`numeric.storeys`)."""
         return self._spring_series(method)[1]
 
     def base_shear(self, method: str):

@@ -336,3 +336,24 @@ def test_generated_equilibria_against_the_reference(text, tmp_path, capsys):
 @with_found_examples
 def test_generated_equilibria_against_the_reference_wide(text, tmp_path, capsys):
     event(check_scene(text, tmp_path, capsys))
+
+
+def test_prestressed_free_piece_keeps_its_centre_of_mass(tmp_path, capsys):
+    """A free piece (no wall) with pre-stressed springs: each extension solves V'(d) = 0 (no load beyond
+    any spring), the centre of mass stays at 0. Reference: SymPy's nsolve on each V' at 40 digits."""
+    text = ('name = "freep"\n[parameters]\nk = 2.0\nT = 0.5\n[masses]\na = "1"\nb = "3"\nc = "1"\n'
+            '[[springs]]\nbetween = ["a", "b"]\npotential = "k*d**2/2 + T*d + d**4"\n'
+            '[[springs]]\nbetween = ["b", "c"]\npotential = "k*(d - 1)**2/2 + d**4/4"\n')
+    path = tmp_path / "freep.toml"
+    path.write_text(text)
+    status, out, err = _modes_json(path, capsys)
+    assert status == 0, err
+    import sympy as sp
+
+    d = sp.Symbol("d")
+    r1 = sp.nsolve(sp.diff(d**2 + d / 2 + d**4, d), d, -0.2, prec=40)
+    r2 = sp.nsolve(sp.diff((d - 1) ** 2 + d**4 / 4, d), d, 0.7, prec=40)
+    xa = -(3 * r1 + (r1 + r2)) / 5  # masses 1, 3, 1: centre of mass at 0
+    ref = [xa, xa + r1, xa + r1 + r2]
+    x = json.loads(out)["equilibrium"]["x_value"]
+    assert all(abs(float(xi) - float(ri)) <= 4e-16 * abs(float(ri)) for xi, ri in zip(x, ref)), (x, ref)
