@@ -51,6 +51,9 @@ RESIDUAL_SETTLED = 1e-6
 FLOAT_DIGITS = 16
 #: The descent's stopping rule: a step below CORRECT_TOL of x, or one that no longer contracts below this.
 DESCENT_NOISE = 1e-7
+#: A corrector's point further from its predictor than this many times the predictor's step is refused (a jump
+#: to another branch, or a step too long for the path's curvature: the load step is halved).
+BRANCH = 1.0
 #: Newton iterations per precision of the mpmath refinement.
 MAX_REFINE = 60
 #: Digits of the corrector's residual where float64's does not contract, beyond log10 of the spread of the
@@ -515,6 +518,8 @@ def path(problem: _Problem) -> tuple[np.ndarray, int] | _PathEnd | None:
         scale = max(float(np.max(np.abs(pred))), float(np.max(np.abs(pred - x))), 1e-300)
         corrector = functools.partial(_correct_mp, float_hessian=False) if ill else _correct
         nxt = corrector(problem, pred, target, r0, scale) if problem.inside(pred) else None
+        if nxt is not None and float(np.max(np.abs(nxt - pred))) > BRANCH * float(np.max(np.abs(pred - x))):
+            nxt = None  # the corrector went further than the step predicted: another branch, or too long a step
         ahead = None if nxt is None else _tangent(problem, nxt, r0)  # K positive definite there: the stable branch
         if ahead is None:
             h *= 0.5
