@@ -113,7 +113,8 @@ def _at_rest_finite(file: str, law: SpringLaw, subs: dict) -> None:
                                  "(e.g. r = r0 + d for a pair at distance r)")
 
 
-def check_law(file: str, law: SpringLaw, d_value, subs: dict, *, closed_form: sp.Expr | None = None) -> sp.Expr:
+def check_law(file: str, law: SpringLaw, d_value, subs: dict, *, closed_form: sp.Expr | None = None,
+              dps: int = 40) -> sp.Expr:
     """V, V', V'' finite at ``d_value`` and V'' > 0 there; returns V''(d_value) (closed form or Float).
 
     Parameters
@@ -124,8 +125,10 @@ def check_law(file: str, law: SpringLaw, d_value, subs: dict, *, closed_form: sp
         Parameter symbols (and ``i`` in a chain) to exact values.
     closed_form : sympy.Expr, optional
         V''(d_eq) as a closed form (x_eq = 0), returned after the checks.
+    dps : int
+        Working digits (at least 40; those ``d_value`` was settled at).
     """
-    dps = 40
+    dps = max(40, dps)
     with mpmath.workdps(dps):
         dv = _mpv(d_value, dps)
         if any(e.has(sp.DiracDelta, sp.Heaviside, sp.sign) for e in (law.force, law.stiffness)):
@@ -243,12 +246,13 @@ def solve(file: str, n: int, springs, loads, params: dict, values: dict, pieces,
     how += f", refined in mpmath to {dps} digits; " + _stable(pieces)
     with mpmath.workdps(dps):
         ext = [(xs[b] if b >= 0 else 0) - (xs[a] if a >= 0 else 0) for a, b, _ in springs]
-    return _result(file, springs, subs, xs, ext, how)
+    return _result(file, springs, subs, xs, ext, how, dps)
 
 
-def _result(file: str, springs, subs: dict, xs: list, ext: list, how: str) -> Equilibrium:
-    """The :class:`Equilibrium` of mpmath positions and extensions, each spring checked (:func:`check_law`)."""
-    stiff = tuple(check_law(file, law, dv, subs) for (_, _, law), dv in zip(springs, ext))
+def _result(file: str, springs, subs: dict, xs: list, ext: list, how: str, dps: int) -> Equilibrium:
+    """The :class:`Equilibrium` of mpmath positions and extensions, each spring checked (:func:`check_law`) at
+    ``dps`` digits (those the extensions were settled at: V'' near a pole rests on the distance to it)."""
+    stiff = tuple(check_law(file, law, dv, subs, dps=dps) for (_, _, law), dv in zip(springs, ext))
     return Equilibrium(tuple(sp.Float(mpmath.nstr(v, 25), 17) for v in xs),
                        tuple(sp.Float(mpmath.nstr(dv, 25), 17) for dv in ext), stiff, False, how)
 
@@ -265,6 +269,10 @@ def _on_tree(file: str, problem: _Problem, shape, springs, loads, subs: dict, pi
                        lambda dps: [_mpv(v, dps) for v in exact_loads],
                        lambda dps: [_mpv(m, dps) for m in masses],
                        list(zip(problem.lo, problem.hi)))
+    if isinstance(found, Ended) and found.spring == -2:
+        raise SceneError(file, where, "no static equilibrium found: the springs' extensions do not settle in extended "
+                         "precision (two precisions disagree up to 1600 digits); accepted: springs and loads with a "
+                         "stable equilibrium (V''(d) > 0 there)")
     if isinstance(found, Ended):
         law = springs[found.spring][2]
         reach = (f"a stable equilibrium exists only up to {_PathEnd(found.reached, '').fraction} of them"
@@ -278,7 +286,7 @@ def _on_tree(file: str, problem: _Problem, shape, springs, loads, subs: dict, pi
     how = (f"statically determinate (the springs form a tree with the ground): each spring's tension from the "
            f"loads beyond it, its extension from V'(d) = that tension followed from rest ({steps} load "
            f"step{'s' if steps != 1 else ''} at most, mpmath, {dps} digits); " + _stable(pieces))
-    return _result(file, springs, subs, xs, ext, how)
+    return _result(file, springs, subs, xs, ext, how, dps)
 
 
 __all__ = ["Equilibrium", "solve", "check_law", "SpringLaw"]

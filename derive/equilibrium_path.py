@@ -51,9 +51,15 @@ RESIDUAL_SETTLED = 1e-6
 FLOAT_DIGITS = 16
 #: The descent's stopping rule: a step below CORRECT_TOL of x, or one that no longer contracts below this.
 DESCENT_NOISE = 1e-7
-#: A corrector's point further from its predictor than this many times the predictor's step is refused (a jump
-#: to another branch, or a step too long for the path's curvature: the load step is halved).
-BRANCH = 1.0
+#: A step may lower K's smallest eigenvalue to this fraction of its value at most, and K must be positive definite
+#: at three points between (else the load step is halved): a fold (K singular) is approached and found, not
+#: stepped over onto another stable branch (a snap-through over an energy barrier).
+FOLD_GUARD = 0.25
+#: A corrector's point whose extensions differ from the predictor's by more than this many times their predicted
+#: change (or BRANCH_SHARE of the largest predicted change) is refused (a jump to another branch, or a step too
+#: long for the path's curvature: the load step is halved).
+BRANCH = 0.5
+BRANCH_SHARE = 1e-3
 #: Newton iterations per precision of the mpmath refinement.
 MAX_REFINE = 60
 #: Digits of the corrector's residual where float64's does not contract, beyond log10 of the spread of the
@@ -272,6 +278,12 @@ class _Problem:
                     g[b] += t
             return g
 
+    def stiffness_mp(self, x, dps: int) -> list:
+        """V''(d) of every spring at the mpmath positions x, as floats (evaluated at ``dps`` digits)."""
+        with mpmath.workdps(dps):
+            vals = [_mpv(r, dps) for r in self.values]
+            return [float(S(self._mp_ext(x, a, b), *vals)) for a, b, S in self.smp]
+
     def hessian_mp(self, x, dps: int):
         """The augmented Hessian in mpmath, an ``mpmath.matrix`` (n, n)."""
         with mpmath.workdps(dps):
@@ -462,6 +474,47 @@ def _tangent(problem: _Problem, x: np.ndarray, r0: np.ndarray) -> tuple[np.ndarr
         return np.array([-float(t[i]) for i in range(problem.n)]), True
 
 
+def _smallest(problem: _Problem, x: np.ndarray, ill: bool) -> float:
+    """K's smallest eigenvalue at x (the augmented K: free pieces' rigid translations lifted): float64's, or
+    mpmath's at :meth:`_Problem.digits` where K is ill-conditioned for float64."""
+    if not ill:
+        with np.errstate(all="ignore"):
+            return float(np.linalg.eigvalsh(problem.augmented(problem.hessian(x)))[0])
+    dps = problem.digits(x)
+    with mpmath.workdps(dps):
+        ev = mpmath.eigsy(problem.hessian_mp([mpmath.mpf(float(v)) for v in x], dps), eigvals_only=True)
+        return float(min(ev[i] for i in range(problem.n)))
+
+
+def _predicted(problem: _Problem, x: np.ndarray, pred: np.ndarray, nxt: np.ndarray) -> bool:
+    """The corrector's point agrees with the predictor spring by spring: each extension's correction at most
+    :data:`BRANCH` of its predicted change (or of :data:`BRANCH_SHARE` of the largest one, or of float64's
+    rounding of the extension). A spring whose change is small beside the others' — a light mass hanging on a
+    soft spring beside a heavy chain moving a lot — is checked on its own scale: its snap to another branch
+    would be lost in the norm of x."""
+    d0, dp, dn = problem.extensions(x), problem.extensions(pred), problem.extensions(nxt)
+    step = np.abs(dp - d0)
+    xe = np.append(np.abs(np.asarray(nxt, dtype=float)), 0.0)
+    noise = 64 * np.finfo(float).eps * (xe[problem.a] + xe[problem.b])
+    allowed = BRANCH * np.maximum(step, BRANCH_SHARE * float(np.max(step, initial=0.0))) + noise
+    return bool(np.all(np.abs(dn - dp) <= allowed))
+
+
+def _positive(problem: _Problem, x: np.ndarray, ill: bool) -> bool:
+    """K positive definite at x (Cholesky in float64, or in mpmath where K is ill-conditioned for it)."""
+    if not problem.inside(x):
+        return False
+    if not ill:
+        return _cholesky(problem.augmented(problem.hessian(x))) is not None
+    dps = problem.digits(x)
+    with mpmath.workdps(dps):
+        try:
+            mpmath.cholesky(problem.hessian_mp([mpmath.mpf(float(v)) for v in x], dps))
+        except (ValueError, ZeroDivisionError):
+            return False
+    return True
+
+
 def _lu(problem: _Problem, x: np.ndarray):
     """LU factors of the float64 augmented Hessian at x, or None where it is singular or not finite."""
     with np.errstate(all="ignore"):
@@ -509,6 +562,7 @@ def path(problem: _Problem) -> tuple[np.ndarray, int] | _PathEnd | None:
     if found is None:
         return None
     tangent, ill = found
+    softest = _smallest(problem, x, ill)
     lam, h, steps = 0.0, 1.0, 0
     for _ in range(MAX_PATH):  # load steps tried, accepted or halved
         if lam >= 1.0:
@@ -518,15 +572,19 @@ def path(problem: _Problem) -> tuple[np.ndarray, int] | _PathEnd | None:
         scale = max(float(np.max(np.abs(pred))), float(np.max(np.abs(pred - x))), 1e-300)
         corrector = functools.partial(_correct_mp, float_hessian=False) if ill else _correct
         nxt = corrector(problem, pred, target, r0, scale) if problem.inside(pred) else None
-        if nxt is not None and float(np.max(np.abs(nxt - pred))) > BRANCH * float(np.max(np.abs(pred - x))):
+        if nxt is not None and not _predicted(problem, x, pred, nxt):
             nxt = None  # the corrector went further than the step predicted: another branch, or too long a step
         ahead = None if nxt is None else _tangent(problem, nxt, r0)  # K positive definite there: the stable branch
+        if ahead is not None:  # K's smallest eigenvalue may fall by FOLD_GUARD per step, and K stays positive
+            now = _smallest(problem, nxt, ahead[1])  # definite between: a fold is approached, not jumped over
+            between = all(_positive(problem, x + c * (nxt - x), ahead[1] or ill) for c in (0.25, 0.5, 0.75))
+            ahead = ahead if now >= FOLD_GUARD * softest and between else None
         if ahead is None:
             h *= 0.5
             if h < MIN_STEP * lam or h < FIRST_STEP:
                 return _stopped(problem, x, lam)
             continue
-        x, lam, steps, (tangent, ill) = nxt, target, steps + 1, ahead
+        x, lam, steps, (tangent, ill), softest = nxt, target, steps + 1, ahead, now
         h = min(1.0, 2.0 * h)
     return _PathEnd(lam, f"{MAX_PATH} load steps did not reach the full loads")
 
@@ -573,10 +631,11 @@ def descent(problem: _Problem) -> np.ndarray | None:
 def refine(problem: _Problem, x: np.ndarray) -> tuple[list, int] | None:
     """x_eq in mpmath, correct to float64, from a float64 approximation: Newton with the residual at
     40, 80, … digits until two precisions agree to :data:`AGREE` per coordinate (relative, or
-    absolutely below 1e-40 of the largest). The correction is solved with the float64 Hessian while
+    absolutely below 1e-40 of the largest) and per spring stiffness V''(d). The correction is solved with
+    the float64 Hessian while
     that contracts, else with the Hessian in mpmath. Returns ``(x, digits)`` or None."""
     lu = _lu(problem, x)
-    prev = None
+    prev, prev_stiff = None, None
     dps = 40
     xs = [mpmath.mpf(float(v)) for v in x]
     while dps <= MAX_DPS:
@@ -607,9 +666,11 @@ def refine(problem: _Problem, x: np.ndarray) -> tuple[list, int] | None:
                 return None
             cur = [float(v) for v in xs]
             top = max(max(abs(v) for v in cur), 1e-300)
-            if prev is not None and all(abs(p - c) <= max(AGREE * abs(c), 1e-40 * top) for p, c in zip(prev, cur)):
+            stiff = problem.stiffness_mp(xs, dps)  # near a pole V'' rests on the few digits of the distance to it
+            if prev is not None and all(abs(p - c) <= max(AGREE * abs(c), 1e-40 * top) for p, c in zip(prev, cur)) \
+                    and all(abs(p - c) <= AGREE * abs(c) for p, c in zip(prev_stiff, stiff)):
                 return xs, dps
-            prev = cur
+            prev, prev_stiff = cur, stiff
         dps *= 2
     return None
 

@@ -21,8 +21,13 @@ from dataclasses import dataclass
 
 import mpmath
 
-#: Digits of the scalar paths; the result is polished at twice as many and must agree.
+#: Digits of the scalar paths; the result is polished by Newton at twice as many, and twice again, until two
+#: precisions agree to AGREE in every extension and every V''(d) (near a pole, V'' rests on the few digits of
+#: the distance to it), up to MAX_DPS.
 DPS = 50
+MAX_DPS = 1600
+AGREE = mpmath.mpf(10) ** -20
+MAX_POLISH = 40
 #: Load steps per spring before giving up; the smallest step relative to the load reached (or, first, of
 #: the full load); the contraction each Newton step must show.
 MAX_STEPS = 4000
@@ -218,38 +223,58 @@ def solve_tree(t: Tree, n: int, laws, values, loads, masses, bounds) -> tuple[li
     (x, d, steps, digits)
         Positions and extensions (mpf), load steps (the largest over the springs), digits they agree to;
     Ended
-        the first spring whose path ends short of its tension (the smallest fraction reached).
+        the first spring whose path ends short of its tension (the smallest fraction reached); ``spring``
+        −2 when the extensions do not settle within MAX_DPS digits.
     """
-    out = None
-    for dps in (DPS, 2 * DPS):
+    with mpmath.workdps(DPS):
+        ext, worst, steps = [], None, 0
+        vals, load = values(DPS), loads(DPS)
+        for s, ((mass_set, sign), (F, S), (lo, hi)) in enumerate(zip(t.beyond, laws, bounds)):
+            tension = sign * mpmath.fsum(load[i] for i in mass_set)
+            found = extension(lambda d, F=F: F(d, *vals), lambda d, S=S: S(d, *vals), tension, lo, hi)
+            if isinstance(found, Ended):
+                if worst is None or found.reached < worst.reached:
+                    worst = Ended(s, found.reached, found.d, found.stiffness)
+                continue
+            ext.append(found[0])
+            steps = max(steps, found[1])
+        if worst is not None:
+            return worst
+        stiff = [S(d, *vals) for (_, S), d in zip(laws, ext)]
+    dps = DPS
+    while True:  # polish each extension by Newton at twice the digits until two precisions agree
+        if dps >= MAX_DPS:
+            return Ended(-2, 1.0, None, None)
+        dps *= 2
         with mpmath.workdps(dps):
-            ext, worst, steps = [], None, 0
-            vals, load, mass = values(dps), loads(dps), masses(dps)
-            for s, ((mass_set, sign), (F, S), (lo, hi)) in enumerate(zip(t.beyond, laws, bounds)):
+            vals, load = values(dps), loads(dps)
+            new_ext, new_stiff = [], []
+            for (mass_set, sign), (F, S), d in zip(t.beyond, laws, ext):
                 tension = sign * mpmath.fsum(load[i] for i in mass_set)
-                found = extension(lambda d, F=F: F(d, *vals), lambda d, S=S: S(d, *vals), tension, lo, hi)
-                if isinstance(found, Ended):
-                    if worst is None or found.reached < worst.reached:
-                        worst = Ended(s, found.reached, found.d, found.stiffness)
-                    continue
-                ext.append(found[0])
-                steps = max(steps, found[1])
-            if worst is not None:
-                return worst
-            x = [mpmath.mpf(0)] * n
-            for i in t.order:  # placement: each mass from its parent (roots of free pieces at 0)
-                if i in t.parent:
-                    s, up, sign = t.parent[i]
-                    x[i] = (x[up] if up < n else 0) + sign * ext[s]
-            for piece in t.roots:
-                centre = mpmath.fsum(mass[i] * x[i] for i in piece) / mpmath.fsum(mass[i] for i in piece)
-                for i in piece:
-                    x[i] -= centre
-            if out is not None and all(abs(a - b) <= mpmath.mpf(10) ** -(DPS - 10) * max(abs(b), mpmath.mpf(10) ** -300)
-                                       for a, b in zip(out[1], ext)):
-                return x, ext, steps, dps
-            out = (x, ext)
-    return Ended(0, 0.0, None, None) if out is None else (out[0], out[1], steps, DPS)
+                d = mpmath.mpf(d)
+                for _ in range(MAX_POLISH):
+                    step = (F(d, *vals) - tension) / S(d, *vals)
+                    d -= step
+                    if abs(step) <= mpmath.mpf(10) ** (10 - dps) * max(abs(d), mpmath.mpf(10) ** -300):
+                        break
+                new_ext.append(d)
+                new_stiff.append(S(d, *vals))
+            agree = all(abs(a - b) <= AGREE * abs(b) or a == b for a, b in zip(ext + stiff, new_ext + new_stiff))
+            ext, stiff = new_ext, new_stiff
+            if agree:
+                break
+    with mpmath.workdps(dps):
+        mass = masses(dps)
+        x = [mpmath.mpf(0)] * n
+        for i in t.order:  # placement: each mass from its parent (roots of free pieces at 0)
+            if i in t.parent:
+                s, up, sign = t.parent[i]
+                x[i] = (x[up] if up < n else 0) + sign * ext[s]
+        for piece in t.roots:
+            centre = mpmath.fsum(mass[i] * x[i] for i in piece) / mpmath.fsum(mass[i] for i in piece)
+            for i in piece:
+                x[i] -= centre
+    return x, ext, steps, dps
 
 
 __all__ = ["Tree", "Ended", "tree", "extension", "solve_tree"]

@@ -190,23 +190,51 @@ def _newton(f: _Funcs, x, shift, span):
     return None
 
 
+def _softest(H):
+    """The smallest eigenvalue of H, or None where H is not positive definite."""
+    if not _pd(H):
+        return None
+    ev = mpmath.eigsy(H, eigvals_only=True)
+    return min(ev[i] for i in range(H.rows))
+
+
+def _along(f: _Funcs, x, pred, nxt) -> bool:
+    """Newton's point within half the predicted change of every spring's extension (or of 1e-3 of the largest
+    predicted change): a light mass's snap is not lost beside a heavy chain's large motion."""
+    d0, dp, dn = f.ext(x), f.ext(pred), f.ext(nxt)
+    step = [abs(a - b) for a, b in zip(dp, d0)]
+    top = max(step + [mpmath.mpf(0)])
+    floor = mpmath.mpf(10) ** (8 - mpmath.mp.dps) * max(_norm(nxt), mpmath.mpf(10) ** -300)
+    return all(abs(c - b) <= max(s, top / 1000) / 2 + floor for b, c, s in zip(dp, dn, step))
+
+
 def _follow(f: _Funcs, x, r0, lam, end):
-    """Follow ∇U(x) = (1 − λ) r0 from (x, lam) to λ = end; returns (x, λ reached)."""
+    """Follow ∇U(x) = (1 − λ) r0 from (x, lam) to λ = end; returns (x, λ reached).
+
+    A step is taken when Newton contracts from the tangent's prediction and lands within half the predicted
+    change of every extension (:func:`_along`), the Hessian positive definite there with its smallest eigenvalue at least a quarter of the
+    last one's and positive definite at three points between (a fold is approached, not stepped over onto
+    another stable branch); else the step halves."""
     h = end - lam
+    soft = _softest(f.hess(x))
+    if soft is None:
+        return x, lam
     while lam < end:
-        if not _pd(f.hess(x)):
-            return x, lam
         tangent = -mpmath.lu_solve(f.hess(x), r0)
         target = min(end, lam + h)
         pred = x + (target - lam) * tangent
         span = _norm(pred - x)
         nxt = _newton(f, pred, (1 - target) * r0, span) if f.finite(pred) else None
-        if nxt is None or _norm(nxt - pred) > span / 2 or not _pd(f.hess(nxt)):
+        now = None if nxt is None or not _along(f, x, pred, nxt) else _softest(f.hess(nxt))
+        if now is not None and not all(f.finite(x + c * (nxt - x)) and _pd(f.hess(x + c * (nxt - x)))
+                                       for c in (mpmath.mpf(1) / 4, mpmath.mpf(1) / 2, mpmath.mpf(3) / 4)):
+            now = None  # K indefinite between the two points: a snap over a barrier to another branch
+        if now is None or now < soft / 4:
             h /= 2
             if h < MIN_STEP * max(lam, FIRST):
                 return x, lam
             continue
-        x, lam = nxt, target
+        x, lam, soft = nxt, target, now
         h = min(end - lam, 2 * h) if lam < end else h
     return x, lam
 
