@@ -60,6 +60,8 @@ FOLD_GUARD = 0.25
 #: long for the path's curvature: the load step is halved).
 BRANCH = 0.5
 BRANCH_SHARE = 1e-3
+#: ... beyond the corrector's own noise, this fraction of the displacements at the spring's ends.
+BRANCH_NOISE = 1e-12
 #: Newton iterations per precision of the mpmath refinement.
 MAX_REFINE = 60
 #: Digits of the corrector's residual where float64's does not contract, beyond log10 of the spread of the
@@ -194,7 +196,11 @@ class _Problem:
             k = np.abs([float(S(d, *self.fvals)) for (_, _, _, _, S), d in zip(self.f64, self.extensions(x))])
             spread = float(np.max(k * (xe[self.a] + xe[self.b]), initial=0.0))
         spread = spread if np.isfinite(spread) else 0.0
-        return max(10.0 ** (4 - digits) * self.force_scale(x, applied), 10.0 ** (3 - digits) * spread)
+        floor = max(10.0 ** (4 - digits) * self.force_scale(x, applied), 10.0 ** (3 - digits) * spread)
+        # never above RESIDUAL_SETTLED of the applied loads: a point that needs more (a huge V'' next to a
+        # pole) cannot justify itself by its own rounding; the corrector goes to more digits instead
+        cap = RESIDUAL_SETTLED * float(np.max(np.abs(np.asarray(applied, dtype=float)), initial=0.0))
+        return min(floor, cap) if cap > 0 else floor
 
     def force_scale(self, x, applied) -> float:
         """The size of the forces at play at x (for residuals at their floor): the springs' tensions beyond
@@ -488,14 +494,14 @@ def _smallest(problem: _Problem, x: np.ndarray, ill: bool) -> float:
 
 def _predicted(problem: _Problem, x: np.ndarray, pred: np.ndarray, nxt: np.ndarray) -> bool:
     """The corrector's point agrees with the predictor spring by spring: each extension's correction at most
-    :data:`BRANCH` of its predicted change (or of :data:`BRANCH_SHARE` of the largest one, or of float64's
-    rounding of the extension). A spring whose change is small beside the others' — a light mass hanging on a
+    :data:`BRANCH` of its predicted change (or of :data:`BRANCH_SHARE` of the largest one), beyond
+    :data:`BRANCH_NOISE` of the displacements at its ends (a float64 corrector's noise near a pole). A spring whose change is small beside the others' — a light mass hanging on a
     soft spring beside a heavy chain moving a lot — is checked on its own scale: its snap to another branch
     would be lost in the norm of x."""
     d0, dp, dn = problem.extensions(x), problem.extensions(pred), problem.extensions(nxt)
     step = np.abs(dp - d0)
     xe = np.append(np.abs(np.asarray(nxt, dtype=float)), 0.0)
-    noise = 64 * np.finfo(float).eps * (xe[problem.a] + xe[problem.b])
+    noise = BRANCH_NOISE * (xe[problem.a] + xe[problem.b])  # what float64 correctors leave (near a pole: more)
     allowed = BRANCH * np.maximum(step, BRANCH_SHARE * float(np.max(step, initial=0.0))) + noise
     return bool(np.all(np.abs(dn - dp) <= allowed))
 
