@@ -214,13 +214,18 @@ def solve(file: str, n: int, springs, loads, params: dict, values: dict, pieces,
     if shape is not None and all(float(S(0.0, *problem.fvals)) > 0 for _, _, _, _, S in problem.f64):
         return _on_tree(file, problem, shape, springs, loads, subs, pieces, where)
     found = path(problem)
+    if isinstance(found, _PathEnd) and problem.float64_limited:
+        raise SceneError(file, where, f"no static equilibrium found in float64: applying the constant loads and "
+                         f"pre-stress gradually from rest was followed up to {found.fraction} of them; beyond, float64 "
+                         "cannot follow it (the path turns within float64's resolution of the loads, or an extension, "
+                         "e.g. the distance to a potential's pole, falls below its resolution of x); accepted: springs "
+                         "and loads whose equilibrium float64 can hold, or springs forming a tree with the ground "
+                         "(solved spring by spring in extended precision)")
     if isinstance(found, _PathEnd):
         reach = (f"a stable equilibrium exists only up to {found.fraction} of them" if found.reached > 0 else
                  f"no stable equilibrium exists even at {FIRST_STEP:.0e} of them")
-        limit = ("; float64 cannot hold the positions beyond: an extension falls below its resolution of x"
-                 if problem.float64_limited else "")
         raise SceneError(file, where, f"no static equilibrium found: applying the constant loads and pre-stress "
-                         f"gradually from rest, {reach} ({found.why}{limit}); accepted: springs and loads with a "
+                         f"gradually from rest, {reach} ({found.why}); accepted: springs and loads with a "
                          "stable equilibrium (V''(d) > 0 there)")
     if found is None:
         x = descent(problem)

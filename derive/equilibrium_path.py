@@ -37,7 +37,7 @@ MAX_DPS = 640
 #: the full loads for the first step (a spring so soft that its linear range holds less is still followed).
 MAX_PATH = 4000
 MIN_STEP = 1e-10
-FIRST_STEP = 1e-30
+FIRST_STEP = 1e-60
 #: Newton corrector: iterations, the contraction each step must show (a larger step diverges or jumps
 #: branches), the step (relative to the size of x) that converges, and the residual (relative to the force
 #: scale) below which a step that no longer contracts is float64's floor, accepted.
@@ -135,6 +135,13 @@ class _Problem:
                      sp.lambdify([law.d] + syms, law.stiffness, "numpy")) for a, b, law in springs]
         self.fmp = [(a, b, mp_function(law.force, (law.d, *syms))) for a, b, law in springs]
         self.smp = [(a, b, mp_function(law.stiffness, (law.d, *syms))) for a, b, law in springs]
+        #: The third and fourth derivatives of V at d = 0 of every spring (the reach of the linearisation at
+        #: rest, for the first load step).
+        with mpmath.workdps(30):
+            rest_vals = [_mpv(v, 30) for v in self.values]
+            self.rest_derivatives = [
+                tuple(_float(mp_function(sp.diff(law.stiffness, law.d, k), (law.d, *syms)), rest_vals) for k in (1, 2))
+                for _, _, law in springs]
         self.loads = list(loads)
         self.load_f = np.array([float(v) for v in self.loads])
         self.fvals = [float(v) for v in self.values]
@@ -348,6 +355,60 @@ def _stopped(problem: _Problem, x: np.ndarray, lam: float) -> _PathEnd:
                          "beyond, the springs cannot hold the load")
 
 
+def _beyond(problem: _Problem, x: np.ndarray, lam: float, r0: np.ndarray) -> bool:
+    """Whether the loading path goes on past where float64 stopped: followed in mpmath alone (positions, load
+    fraction, K and residual at :meth:`_Problem.digits` + 20 digits; steps down to 1e-40 of the loads) from
+    (x, λ) to λ·(1 + 1e-6). A genuine fold stops it again; a spring giving way to a much softer one within
+    float64's resolution of λ (a Toda spring saturating at a relative 1e-15 of the loads) does not."""
+    dps = problem.digits(x) + 20
+    with mpmath.workdps(dps):
+        xs = mpmath.matrix([mpmath.mpf(float(v)) for v in x])
+        lam_m, end = mpmath.mpf(lam), mpmath.mpf(lam) * (1 + mpmath.mpf(10) ** -6)
+        g0 = mpmath.matrix([mpmath.mpf(float(v)) for v in r0])
+        h, floor_h = end - lam_m, mpmath.mpf(10) ** -40 * end
+
+        def soft(p):
+            try:
+                mpmath.cholesky(problem.hessian_mp(list(p), dps))
+            except (ValueError, ZeroDivisionError):
+                return None
+            ev = mpmath.eigsy(problem.hessian_mp(list(p), dps), eigvals_only=True)
+            return min(ev[i] for i in range(problem.n))
+
+        now = soft(xs)
+        for _ in range(MAX_PATH):
+            if now is None:
+                return False
+            if lam_m >= end:
+                return True
+            target = min(end, lam_m + h)
+            H = problem.hessian_mp(list(xs), dps)
+            pred = xs - (target - lam_m) * mpmath.lu_solve(H, g0)
+            nxt, last = pred, None
+            for _ in range(2 * MAX_CORRECT):
+                if not _inside_mp(problem, list(nxt)):
+                    nxt = None
+                    break
+                step = mpmath.lu_solve(problem.hessian_mp(list(nxt), dps),
+                                       mpmath.matrix(problem.residual_mp(list(nxt), target, r0, dps)))
+                size = mpmath.norm(step, mpmath.inf)
+                if last is not None and size > CONTRACTION * last:
+                    nxt = None
+                    break
+                nxt, last = nxt - step, size
+                if size <= mpmath.mpf(10) ** (10 - dps) * max(mpmath.norm(nxt, mpmath.inf), mpmath.mpf(10) ** -300):
+                    break
+            after = None if nxt is None or not _inside_mp(problem, list(nxt)) else soft(nxt)
+            if after is None or after < FOLD_GUARD * now:
+                h /= 2
+                if h < floor_h:
+                    return False
+                continue
+            xs, lam_m, now = nxt, target, after
+            h = min(2 * h, end - lam_m) if lam_m < end else h
+    return False
+
+
 def _correct(problem: _Problem, x: np.ndarray, lam: float, r0: np.ndarray, scale: float) -> np.ndarray | None:
     """Newton on the loading path's equation at λ (:meth:`_Problem.residual`) from the predictor ``x``; None
     unless it contracts (each step, or else each residual, at most :data:`CONTRACTION` of the last) and stays
@@ -447,7 +508,7 @@ def _correct_mp(problem: _Problem, x: np.ndarray, lam: float, r0: np.ndarray, sc
             if not (problem.inside(out) and problem.finite(out)):
                 # converging in mpmath, but float64's rounding of x leaves the domain or the finite tensions:
                 # an extension below float64's resolution of x
-                problem.float64_limited |= last is not None and _inside_mp(problem, xs)
+                problem.float64_limited |= _inside_mp(problem, xs)
                 return None
             last, last_g = cmax, gmax
             if cmax <= CORRECT_TOL * scale and _settled(problem.residual_mp(xs, lam, r0, dps),
@@ -480,28 +541,68 @@ def _tangent(problem: _Problem, x: np.ndarray, r0: np.ndarray) -> tuple[np.ndarr
         return np.array([-float(t[i]) for i in range(problem.n)]), True
 
 
-def _smallest(problem: _Problem, x: np.ndarray, ill: bool) -> float:
-    """K's smallest eigenvalue at x (the augmented K: free pieces' rigid translations lifted): float64's, or
-    mpmath's at :meth:`_Problem.digits` where K is ill-conditioned for float64."""
-    if not ill:
-        with np.errstate(all="ignore"):
-            return float(np.linalg.eigvalsh(problem.augmented(problem.hessian(x)))[0])
+def _float(f, values) -> float:
+    """f(0, *values) as a float (0 where it is not a finite real number)."""
+    try:
+        v = f(mpmath.mpf(0), *values)
+    except (ZeroDivisionError, ValueError, OverflowError, TypeError):
+        return 0.0
+    if isinstance(v, mpmath.mpc) or not mpmath.isfinite(v):
+        return 0.0
+    return float(v)
+
+
+def _first_step(problem: _Problem, tangent: np.ndarray) -> float:
+    """The load step over which every spring stays within the reach of its linearisation at rest: the predicted
+    change of its extension at most 0.1 |k2/k3| (or the square root of 0.1 |k2/k4|), k2, k3, k4 the second,
+    third and fourth derivatives of V at d = 0; 1 when that reaches the full loads. (A wall spring with
+    k2 = 1e-9 beside k3 = 7.5e8 is quadratic from d = 1e-18 on: halving blindly from the full loads would
+    take a hundred failed steps.)"""
+    rate = np.abs(problem.extensions(tangent))
+    h = 1.0
+    with np.errstate(all="ignore"):
+        for r, (_, _, _, _, S), (k3, k4) in zip(rate, problem.f64, problem.rest_derivatives):
+            k2 = abs(float(S(0.0, *problem.fvals)))
+            reach = min(0.1 * k2 / abs(k3) if k3 else np.inf, np.sqrt(0.1 * k2 / abs(k4)) if k4 else np.inf)
+            if r > 0 and np.isfinite(reach):
+                h = min(h, reach / r)
+    return max(h, FIRST_STEP) if np.isfinite(h) else 1.0
+
+
+def _smallest(problem: _Problem, x: np.ndarray) -> float:
+    """K's smallest eigenvalue at x (the augmented K: free pieces' rigid translations lifted): float64's where
+    it is resolved (above 1e-8 of the largest), else mpmath's at :meth:`_Problem.digits`."""
+    with np.errstate(all="ignore"):
+        H = problem.augmented(problem.hessian(x))
+        ev = np.linalg.eigvalsh(H) if np.all(np.isfinite(H)) else np.array([np.nan])
+    if np.all(np.isfinite(ev)) and ev[0] > 1e-8 * ev[-1]:
+        return float(ev[0])
     dps = problem.digits(x)
     with mpmath.workdps(dps):
-        ev = mpmath.eigsy(problem.hessian_mp([mpmath.mpf(float(v)) for v in x], dps), eigvals_only=True)
-        return float(min(ev[i] for i in range(problem.n)))
+        mev = mpmath.eigsy(problem.hessian_mp([mpmath.mpf(float(v)) for v in x], dps), eigvals_only=True)
+        return float(min(mev[i] for i in range(problem.n)))
 
 
-def _predicted(problem: _Problem, x: np.ndarray, pred: np.ndarray, nxt: np.ndarray) -> bool:
+def _predicted(problem: _Problem, x: np.ndarray, lam_x: float, pred: np.ndarray, nxt: np.ndarray, lam: float,
+               r0: np.ndarray) -> bool:
     """The corrector's point agrees with the predictor spring by spring: each extension's correction at most
     :data:`BRANCH` of its predicted change (or of :data:`BRANCH_SHARE` of the largest one), beyond
-    :data:`BRANCH_NOISE` of the displacements at its ends (a float64 corrector's noise near a pole). A spring whose change is small beside the others' — a light mass hanging on a
+    :data:`BRANCH_NOISE` of the displacements at its ends (a float64 corrector's noise near a pole) and twice
+    the Newton steps still left at both points (the correctors' accuracy, at the residual's floor). A spring whose change is small beside the others' — a light mass hanging on a
     soft spring beside a heavy chain moving a lot — is checked on its own scale: its snap to another branch
     would be lost in the norm of x."""
     d0, dp, dn = problem.extensions(x), problem.extensions(pred), problem.extensions(nxt)
     step = np.abs(dp - d0)
     xe = np.append(np.abs(np.asarray(nxt, dtype=float)), 0.0)
     noise = BRANCH_NOISE * (xe[problem.a] + xe[problem.b])  # what float64 correctors leave (near a pole: more)
+    for point, at in ((nxt, lam), (x, lam_x)):  # and what the correctors left: one more Newton step at each point
+        with np.errstate(all="ignore"):
+            try:
+                left = np.linalg.solve(problem.augmented(problem.hessian(point)), problem.residual(point, at, r0))
+            except np.linalg.LinAlgError:
+                continue
+        left = np.append(np.nan_to_num(np.abs(left), nan=0.0, posinf=0.0), 0.0)
+        noise = noise + 2.0 * (left[problem.a] + left[problem.b])
     allowed = BRANCH * np.maximum(step, BRANCH_SHARE * float(np.max(step, initial=0.0))) + noise
     return bool(np.all(np.abs(dn - dp) <= allowed))
 
@@ -568,8 +669,8 @@ def path(problem: _Problem) -> tuple[np.ndarray, int] | _PathEnd | None:
     if found is None:
         return None
     tangent, ill = found
-    softest = _smallest(problem, x, ill)
-    lam, h, steps = 0.0, 1.0, 0
+    softest = _smallest(problem, x)
+    lam, h, steps = 0.0, _first_step(problem, tangent), 0
     for _ in range(MAX_PATH):  # load steps tried, accepted or halved
         if lam >= 1.0:
             return x, steps
@@ -578,16 +679,18 @@ def path(problem: _Problem) -> tuple[np.ndarray, int] | _PathEnd | None:
         scale = max(float(np.max(np.abs(pred))), float(np.max(np.abs(pred - x))), 1e-300)
         corrector = functools.partial(_correct_mp, float_hessian=False) if ill else _correct
         nxt = corrector(problem, pred, target, r0, scale) if problem.inside(pred) else None
-        if nxt is not None and not _predicted(problem, x, pred, nxt):
+        if nxt is not None and not _predicted(problem, x, lam, pred, nxt, target, r0):
             nxt = None  # the corrector went further than the step predicted: another branch, or too long a step
         ahead = None if nxt is None else _tangent(problem, nxt, r0)  # K positive definite there: the stable branch
         if ahead is not None:  # K's smallest eigenvalue may fall by FOLD_GUARD per step, and K stays positive
-            now = _smallest(problem, nxt, ahead[1])  # definite between: a fold is approached, not jumped over
+            now = _smallest(problem, nxt)  # definite between: a fold is approached, not jumped over
             between = all(_positive(problem, x + c * (nxt - x), ahead[1] or ill) for c in (0.25, 0.5, 0.75))
             ahead = ahead if now >= FOLD_GUARD * softest and between else None
         if ahead is None:
-            h *= 0.5
+            h = 0.5 * min(h, target - lam)  # (a step clipped at the full loads halves from what it was)
             if h < MIN_STEP * lam or h < FIRST_STEP:
+                if lam > 0 and _beyond(problem, x, lam, r0):  # not a fold: float64 cannot follow this path
+                    problem.float64_limited = True
                 return _stopped(problem, x, lam)
             continue
         x, lam, steps, (tangent, ill), softest = nxt, target, steps + 1, ahead, now
