@@ -193,29 +193,39 @@ class _Problem:
         asked where float64 could still be)."""
         return bool(np.all(np.isfinite(self.tensions(x))))
 
-    def floor(self, x, applied, digits: float) -> float:
-        """The residual a ``digits``-digit evaluation at x cannot get below: the forces at play
-        (:meth:`force_scale`) to ``10^(4 − digits)``, or the rounding of the extensions formed from the
-        positions, ``Σ |V''(d)|·(|x_a| + |x_b|)`` (an extension much smaller than x carries ε·|x|), to
-        ``10^(3 − digits)``."""
+    def floor(self, x, applied, digits: float) -> np.ndarray:
+        """The residual a ``digits``-digit evaluation at x cannot get below, per coordinate (N,): the forces
+        at that mass (:meth:`local_scale`) to ``10^(4 − digits)``, or the rounding of the extensions formed
+        from the positions, ``Σ |V''(d)|·(|x_a| + |x_b|)`` over its springs (an extension much smaller than x
+        carries ε·|x|), to ``10^(3 − digits)``; never above RESIDUAL_SETTLED of the largest applied load (a
+        point next to a pole, where V'' is huge, cannot justify itself by its own rounding: the corrector goes
+        to more digits instead)."""
         xe = np.append(np.abs(np.asarray(x, dtype=float)), 0.0)
         with np.errstate(all="ignore"):
             k = np.abs([float(S(d, *self.fvals)) for (_, _, _, _, S), d in zip(self.f64, self.extensions(x))])
-            spread = float(np.max(k * (xe[self.a] + xe[self.b]), initial=0.0))
-        spread = spread if np.isfinite(spread) else 0.0
-        floor = max(10.0 ** (4 - digits) * self.force_scale(x, applied), 10.0 ** (3 - digits) * spread)
-        # never above RESIDUAL_SETTLED of the applied loads: a point that needs more (a huge V'' next to a
-        # pole) cannot justify itself by its own rounding; the corrector goes to more digits instead
+            spread = self._gather(np.nan_to_num(k * (xe[self.a] + xe[self.b]), nan=0.0, posinf=0.0))
+        floor = np.maximum(10.0 ** (4 - digits) * self.local_scale(x, applied), 10.0 ** (3 - digits) * spread)
         cap = RESIDUAL_SETTLED * float(np.max(np.abs(np.asarray(applied, dtype=float)), initial=0.0))
-        return min(floor, cap) if cap > 0 else floor
+        return np.minimum(floor, cap) if cap > 0 else floor
 
-    def force_scale(self, x, applied) -> float:
-        """The size of the forces at play at x (for residuals at their floor): the springs' tensions beyond
-        their rest ones, and the applied part of the loads and pre-stress ``applied`` (N,)."""
+    def local_scale(self, x, applied) -> np.ndarray:
+        """The forces at play at each mass (N,), for residuals at their floor: the applied part of the loads
+        and pre-stress there, and the tensions (at x and at rest) of its springs. Per mass: a weak spring
+        beside a heavy one is held to its own forces, not to the heavy one's."""
         with np.errstate(all="ignore"):
-            top = max(float(np.max(np.abs(self.tensions(x) - self.rest), initial=0.0)),
-                      float(np.max(np.abs(np.asarray(applied, dtype=float)), initial=0.0)))
-        return top if np.isfinite(top) and top > 0 else 1e-300
+            t = np.nan_to_num(np.abs(self.tensions(x)) + np.abs(self.rest), nan=np.inf)
+            out = np.abs(np.asarray(applied, dtype=float)) + self._gather(t)
+        return np.where(out > 0, out, 1e-300)
+
+    def _gather(self, per_spring) -> np.ndarray:
+        """``Σ`` over the springs at each mass of a non-negative per-spring quantity, shape (N,)."""
+        out = np.zeros(self.n)
+        for a, b, v in zip(self.a, self.b, per_spring):
+            if a >= 0:
+                out[a] += v
+            if b >= 0:
+                out[b] += v
+        return out
 
     def _spread(self, t, g) -> np.ndarray:
         """``Σ_s t_s b_s`` into g (N,): +t on the second end, −t on the first."""
@@ -415,7 +425,7 @@ def _correct(problem: _Problem, x: np.ndarray, lam: float, r0: np.ndarray, scale
     in the domain.
 
     Float64 first: converged at a step below ``CORRECT_TOL·scale``, or where the residual reaches float64's
-    floor (``RESIDUAL_NOISE`` of the forces at play). Otherwise the residual in mpmath (:func:`_correct_mp`):
+    floor (``RESIDUAL_NOISE`` of the forces at each mass). Otherwise the residual in mpmath (:func:`_correct_mp`):
     a stiff spring's tension formed from float64 positions carries ε·k·|x| of noise, which a soft spring in
     series turns into a displacement error as large as x itself.
     """
@@ -426,8 +436,8 @@ def _correct(problem: _Problem, x: np.ndarray, lam: float, r0: np.ndarray, scale
         if not np.all(np.isfinite(g)):
             return None
         gmax = float(np.max(np.abs(g)))
-        if prev < np.inf and float(np.max(np.abs(g))) <= max(RESIDUAL_NOISE * problem.force_scale(x, lam * r0),
-                                                             problem.floor(x, lam * r0, FLOAT_DIGITS)):
+        if prev < np.inf and _settled(g, np.maximum(RESIDUAL_NOISE * problem.local_scale(x, lam * r0),
+                                                    problem.floor(x, lam * r0, FLOAT_DIGITS))):
             return x
         with np.errstate(all="ignore"):
             try:
@@ -443,8 +453,8 @@ def _correct(problem: _Problem, x: np.ndarray, lam: float, r0: np.ndarray, scale
         if not problem.inside(cand):
             return None
         x, prev, prev_g = cand, size, gmax
-        if size <= CORRECT_TOL * scale and _settled(problem.residual(x, lam, r0), max(
-                RESIDUAL_SETTLED * problem.force_scale(x, lam * r0), problem.floor(x, lam * r0, FLOAT_DIGITS))):
+        if size <= CORRECT_TOL * scale and _settled(problem.residual(x, lam, r0), np.maximum(
+                RESIDUAL_SETTLED * problem.local_scale(x, lam * r0), problem.floor(x, lam * r0, FLOAT_DIGITS))):
             return x
     return _correct_mp(problem, start, lam, r0, scale)
 
@@ -464,13 +474,13 @@ def _noise(problem: _Problem, xs: list, lam: float, r0: np.ndarray, dps: int):
     coarse = problem.residual_mp(xs, lam, r0, dps)
     fine = problem.residual_mp(xs, lam, r0, dps + 20)
     with mpmath.workdps(dps + 20):
-        return max(abs(a - b) for a, b in zip(coarse, fine))
+        return np.array([float(abs(a - b)) for a, b in zip(coarse, fine)])
 
 
 def _settled(g, bound) -> bool:
-    """The residual g below ``bound``: a step that is small next to a large x says nothing where a tension is
-    exponential in the extension."""
-    return bool(max(abs(v) for v in g) <= bound)
+    """Every coordinate of the residual g below its ``bound`` (N,): a step that is small next to a large x
+    says nothing where a tension is exponential in the extension."""
+    return all(abs(v) <= bv for v, bv in zip(g, np.broadcast_to(bound, (len(g),))))
 
 
 def _correct_mp(problem: _Problem, x: np.ndarray, lam: float, r0: np.ndarray, scale: float, *,
@@ -497,7 +507,7 @@ def _correct_mp(problem: _Problem, x: np.ndarray, lam: float, r0: np.ndarray, sc
             if not mpmath.isfinite(cmax):
                 return None
             if last is not None and cmax > CONTRACTION * last and gmax > CONTRACTION * last_g:
-                if max(abs(v) for v in g) <= max(floor, 100 * _noise(problem, xs, lam, r0, dps)):
+                if _settled(g, np.maximum(floor, 100 * _noise(problem, xs, lam, r0, dps))):
                     return np.array([float(v) for v in xs])
                 if lu is None:
                     return None

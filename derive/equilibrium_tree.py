@@ -27,6 +27,7 @@ import mpmath
 DPS = 50
 MAX_DPS = 1600
 AGREE = mpmath.mpf(10) ** -20
+FLOOR = mpmath.mpf(10) ** -30
 MAX_POLISH = 40
 #: Load steps per spring before giving up; the smallest step relative to the load reached (or, first, of
 #: the full load); the contraction each Newton step must show.
@@ -259,7 +260,12 @@ def solve_tree(t: Tree, n: int, laws, values, loads, masses, bounds) -> tuple[li
                         break
                 new_ext.append(d)
                 new_stiff.append(S(d, *vals))
-            agree = all(abs(a - b) <= AGREE * abs(b) or a == b for a, b in zip(ext + stiff, new_ext + new_stiff))
+            # relative agreement, or absolute below 1e-30 of the largest of its kind (a spring that carries no
+            # load sits at d = 0 up to the rounding of its V'(0), which differs from one precision to the next)
+            agree = all(abs(a - b) <= AGREE * abs(b) + FLOOR * top
+                        for old_, new_ in ((ext, new_ext), (stiff, new_stiff))
+                        for top in [max([abs(v) for v in new_] + [mpmath.mpf(0)])]
+                        for a, b in zip(old_, new_))
             ext, stiff = new_ext, new_stiff
             if agree:
                 break
