@@ -392,15 +392,21 @@ def _beyond(problem: _Problem, x: np.ndarray, lam: float, r0: np.ndarray) -> boo
             if lam_m >= end:
                 return True
             target = min(end, lam_m + h)
-            H = problem.hessian_mp(list(xs), dps)
-            pred = xs - (target - lam_m) * mpmath.lu_solve(H, g0)
+            try:
+                pred = xs - (target - lam_m) * mpmath.lu_solve(problem.hessian_mp(list(xs), dps), g0)
+            except ZeroDivisionError:  # K singular in mpmath too: a fold
+                return False
             nxt, last = pred, None
             for _ in range(2 * MAX_CORRECT):
                 if not _inside_mp(problem, list(nxt)):
                     nxt = None
                     break
-                step = mpmath.lu_solve(problem.hessian_mp(list(nxt), dps),
-                                       mpmath.matrix(problem.residual_mp(list(nxt), target, r0, dps)))
+                try:
+                    step = mpmath.lu_solve(problem.hessian_mp(list(nxt), dps),
+                                           mpmath.matrix(problem.residual_mp(list(nxt), target, r0, dps)))
+                except ZeroDivisionError:
+                    nxt = None
+                    break
                 size = mpmath.norm(step, mpmath.inf)
                 if last is not None and size > CONTRACTION * last:
                     nxt = None
