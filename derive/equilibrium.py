@@ -7,38 +7,47 @@ assembled spring by spring from the exact symbolic derivatives. The equilibrium 
 
 1. **Exactly at x = 0** when every G_i(0) simplifies to 0 (V'(0) = 0 and no constant loads, or
    tensions that balance): then x_eq = 0 and K = Σ V_s''(0) b bᵀ are closed forms.
-2. **Otherwise by Newton** from x = 0 at the scene's parameter values: float64 Newton with a
-   Levenberg–Marquardt safeguard on U, then iterative refinement in mpmath (the residual G at 40,
-   80, … digits with the parameters as exact rationals, the correction from the float64 Hessian)
-   until two precisions agree to 1e-18 relative: correct to float64 even where float64 alone could
-   not settle it. Each free piece (no spring to a wall) keeps its centre of mass at the rest
-   position (its rigid translation is otherwise undetermined).
+2. **Otherwise the equilibrium reached by applying the loads gradually from rest**: the
+   out-of-balance force at rest ``G(0)`` (the loads and the springs' pre-stress) is applied as
+   ``λ G(0)``, λ from 0 to 1, following ``G(x) = (1 − λ) G(0)`` from x = 0, K positive definite
+   along the way (a stable branch), each extension inside the open interval around d = 0 where its
+   potential is defined (Lennard-Jones ``d > −r0``, ``log(1 + d/c)``: ``d > −c``, ...), so no step
+   crosses a singularity onto another branch:
+
+   * where the springs form a tree with the ground (a chain or a tree hung from one wall, free
+     pieces) the path splits into one scalar path per spring, its tension fixed by the loads beyond
+     it, followed in mpmath (:mod:`derive.equilibrium_tree`); the positions are sums of extensions;
+   * otherwise by continuation in x (:mod:`derive.equilibrium_path`): float64, or the residual and K
+     in mpmath where K is too ill-conditioned for float64, then refined in mpmath until two
+     precisions agree to 1e-18 per coordinate (correct to float64 even where float64 alone could not
+     settle it). Where x = 0 itself is not stable the path cannot start; a descent of U from x = 0
+     (Newton with a Levenberg–Marquardt safeguard) looks for a minimum instead.
+
+   Each free piece (no spring to a wall) keeps its centre of mass at the rest position (its rigid
+   translation is otherwise undetermined). The report says how the equilibrium was found and that it
+   is stable (every V''(d) > 0 there, so K is positive definite).
 
 Refused in one line (a :class:`SceneError` naming the spring's key): V, V' or V'' not finite at
 the equilibrium (a singularity or a kink), V'' ≤ 0 there (not a stable spring; the stiffness and the
 extension are named), a free piece under a net constant load (it accelerates: no equilibrium), or
-no equilibrium found from the rest configuration.
+no stable equilibrium on the loading path (it ends where K becomes singular — a spring past its
+largest tension — or runs off to infinity; the fraction of the loads reached is named).
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
+
 import mpmath
-import numpy as np
 import sympy as sp
 
 from .accurate import exact_values
+from .equilibrium_path import FIRST_STEP, MAX_DPS, _mpv, _PathEnd, _Problem, descent, path, refine
+from .equilibrium_tree import Ended, solve_tree, tree
 from .errors import SceneError
 from .scene_loader import MAX_MAGNITUDE, MIN_MAGNITUDE
 from .mp_eval import mp_function
 from .potential import SpringLaw
-
-#: Relative agreement of two successive precisions accepted as converged.
-AGREE = 1e-18
-#: Float64 Newton iterations before giving up.
-MAX_NEWTON = 200
-#: Largest working precision tried (digits).
-MAX_DPS = 640
 
 
 @dataclass(frozen=True)
@@ -69,23 +78,6 @@ class Equilibrium:
     def at_rest(self) -> bool:
         """Whether x_eq = 0 exactly (the springs' rest configuration)."""
         return self.closed_form and all(v == 0 for v in self.x)
-
-
-def _ext(a: int, b: int, x):
-    """d = x_b − x_a, a wall end (−1) counting 0."""
-    return (x[b] if b >= 0 else 0) - (x[a] if a >= 0 else 0)
-
-
-def _mpv(v, dps: int):
-    """A SymPy number (exact where it is rational) or an mpf as an mpmath value at ``dps`` digits."""
-    if isinstance(v, mpmath.mpf):
-        return v
-    if isinstance(v, (int, sp.Integer)):
-        return mpmath.mpf(int(v))
-    if isinstance(v, sp.Rational):
-        return mpmath.mpf(v.p) / v.q
-    return mpmath.mpf(sp.N(v, dps + 10)._mpf_)
-
 
 def _finite(v) -> bool:
     try:
@@ -122,7 +114,8 @@ def _at_rest_finite(file: str, law: SpringLaw, subs: dict) -> None:
                                  "(e.g. r = r0 + d for a pair at distance r)")
 
 
-def check_law(file: str, law: SpringLaw, d_value, subs: dict, *, closed_form: sp.Expr | None = None) -> sp.Expr:
+def check_law(file: str, law: SpringLaw, d_value, subs: dict, *, closed_form: sp.Expr | None = None,
+              dps: int = 40) -> sp.Expr:
     """V, V', V'' finite at ``d_value`` and V'' > 0 there; returns V''(d_value) (closed form or Float).
 
     Parameters
@@ -133,8 +126,10 @@ def check_law(file: str, law: SpringLaw, d_value, subs: dict, *, closed_form: sp
         Parameter symbols (and ``i`` in a chain) to exact values.
     closed_form : sympy.Expr, optional
         V''(d_eq) as a closed form (x_eq = 0), returned after the checks.
+    dps : int
+        Working digits (at least 40; those ``d_value`` was settled at).
     """
-    dps = 40
+    dps = max(40, dps)
     with mpmath.workdps(dps):
         dv = _mpv(d_value, dps)
         if any(e.has(sp.DiracDelta, sp.Heaviside, sp.sign) for e in (law.force, law.stiffness)):
@@ -169,138 +164,10 @@ def check_law(file: str, law: SpringLaw, d_value, subs: dict, *, closed_form: sp
         return closed_form
     return sp.Float(mpmath.nstr(stiff, 25), 17)
 
-
-class _Problem:
-    """The gradient and Hessian of U at the scene's values, in float64 and in mpmath."""
-
-    def __init__(self, n: int, springs, loads, subs: dict, pieces):
-        self.n = n
-        self.springs = springs  # (a, b, law)
-        self.pieces = pieces
-        syms = list(subs)
-        self.values = [subs[s] for s in syms]
-        self.f64 = [(a, b, sp.lambdify([law.d] + syms, law.energy, "numpy"),
-                     sp.lambdify([law.d] + syms, law.force, "numpy"),
-                     sp.lambdify([law.d] + syms, law.stiffness, "numpy")) for a, b, law in springs]
-        self.fmp = [(a, b, mp_function(law.force, (law.d, *syms))) for a, b, law in springs]
-        self.loads = list(loads)
-        self.load_f = np.array([float(v) for v in self.loads])
-        self.fvals = [float(v) for v in self.values]
-        # rigid translations of free pieces: w = masses on the piece (centre of mass stays)
-        self.w = np.zeros((len(pieces), n))
-        for r, (piece, masses) in enumerate(pieces):
-            for i, m in zip(piece, masses):
-                self.w[r, i] = m
-
-    def _d(self, a, b, x):
-        return (x[b] if b >= 0 else 0.0) - (x[a] if a >= 0 else 0.0)
-
-    def energy(self, x) -> float:
-        e = -float(self.load_f @ x)
-        with np.errstate(all="ignore"):
-            for a, b, V, _, _ in self.f64:
-                e += float(V(self._d(a, b, x), *self.fvals))
-        return e
-
-    def gradient(self, x) -> np.ndarray:
-        g = -self.load_f.copy()
-        with np.errstate(all="ignore"):
-            for a, b, _, F, _ in self.f64:
-                t = float(F(self._d(a, b, x), *self.fvals))
-                if a >= 0:
-                    g[a] -= t
-                if b >= 0:
-                    g[b] += t
-        return g
-
-    def hessian(self, x) -> np.ndarray:
-        H = np.zeros((self.n, self.n))
-        with np.errstate(all="ignore"):
-            for a, b, _, _, S in self.f64:
-                k = float(S(self._d(a, b, x), *self.fvals))
-                for i, si in ((a, -1.0), (b, 1.0)):
-                    for j, sj in ((a, -1.0), (b, 1.0)):
-                        if i >= 0 and j >= 0:
-                            H[i, j] += si * sj * k
-        return H
-
-    def augmented(self, H) -> np.ndarray:
-        """H + Σ w wᵀ over free pieces: nonsingular, and its solution keeps each centre of mass."""
-        return H + self.w.T @ self.w
-
-    def gradient_mp(self, x, dps: int):
-        with mpmath.workdps(dps):
-            vals = [_mpv(r, dps) for r in self.values]
-            g = [-_mpv(v, dps) for v in self.loads]
-            for a, b, F in self.fmp:
-                d = (x[b] if b >= 0 else 0) - (x[a] if a >= 0 else 0)
-                t = F(d, *vals)
-                if a >= 0:
-                    g[a] -= t
-                if b >= 0:
-                    g[b] += t
-            return g
-
-
-def newton(problem: _Problem) -> tuple[list, str] | None:
-    """x_eq in mpmath (correct to float64), or None if Newton does not converge."""
-    n = problem.n
-    x = np.zeros(n)
-    mu = 0.0
-    e = problem.energy(x)
-    for it in range(MAX_NEWTON):
-        g = problem.gradient(x)
-        if not np.all(np.isfinite(g)):
-            return None
-        H = problem.augmented(problem.hessian(x))
-        scale = max(np.max(np.abs(np.diag(H))), 1e-300)
-        step = None
-        for _ in range(60):
-            try:
-                cand = x - np.linalg.solve(H + mu * scale * np.eye(n), g)
-            except np.linalg.LinAlgError:
-                mu = max(mu * 10, 1e-8)
-                continue
-            ec = problem.energy(cand)
-            if np.isfinite(ec) and ec <= e + 1e-12 * abs(e):
-                step = cand
-                break
-            mu = max(mu * 10, 1e-8)
-        if step is None:
-            return None
-        moved = np.max(np.abs(step - x))
-        x, e = step, problem.energy(step)
-        mu = mu / 10 if mu > 1e-12 else 0.0
-        if moved <= 1e-15 * max(np.max(np.abs(x)), 1e-300) or moved == 0.0:
-            break
-    else:
-        return None
-    # iterative refinement in extended precision: residual in mpmath, correction by the float64 Hessian
-    H = problem.augmented(problem.hessian(x))
-    try:
-        lu = np.linalg.inv(H)
-    except np.linalg.LinAlgError:
-        return None
-    prev = None
-    dps = 40
-    xs = [mpmath.mpf(float(v)) for v in x]
-    while dps <= MAX_DPS:
-        with mpmath.workdps(dps):
-            xs = [mpmath.mpf(v) for v in xs]
-            for _ in range(200):
-                g = problem.gradient_mp(xs, dps)
-                corr = lu @ np.array([float(v) for v in g])
-                xs = [xi - mpmath.mpf(float(c)) for xi, c in zip(xs, corr)]
-                size = max([abs(v) for v in xs] + [mpmath.mpf(10) ** (-300)])
-                if max(abs(float(c)) for c in corr) <= float(size) * 10.0 ** (-dps + 8):
-                    break
-            cur = [float(v) for v in xs]
-            if prev is not None and all(abs(p - c) <= AGREE * max(max(abs(v) for v in cur), 1e-300)
-                                        for p, c in zip(prev, cur)):
-                return xs, f"Newton from x = 0 (float64), refined in mpmath to {dps} digits"
-            prev = cur
-        dps *= 2
-    return None
+def _stable(pieces) -> str:
+    """What the accepted equilibrium's checks (:func:`check_law` on every spring) establish."""
+    return ("stable: every V''(d) > 0 there, so K is positive definite"
+            + (" apart from the free pieces' rigid translations" if pieces else ""))
 
 
 def solve(file: str, n: int, springs, loads, params: dict, values: dict, pieces, *,
@@ -344,24 +211,93 @@ def solve(file: str, n: int, springs, loads, params: dict, values: dict, pieces,
         stiff = tuple(check_law(file, law, sp.Integer(0), subs, closed_form=sp.factor(law.stiffness.subs(law.d, 0)))
                       for _, _, law in springs)
         return Equilibrium(tuple(sp.Integer(0) for _ in range(n)), ext, stiff, True,
-                           "x = 0: every spring at rest balances (V'(0) = 0 or balanced tensions)")
+                           "x = 0: every spring at rest balances (V'(0) = 0 or balanced tensions); "
+                           + _stable(pieces))
     problem = _Problem(n, springs, [ld.subs(subs) for ld in loads], subs,
                        [(piece, [float(m.subs(subs)) for m in masses]) for piece, masses in pieces])
-    found = newton(problem)
+    where = springs[0][2].where if springs else None
+    shape = tree(n, [(a, b) for a, b, _ in springs])
+    if shape is not None and all(float(S(0.0, *problem.fvals)) > 0 for _, _, _, _, S in problem.f64):
+        return _on_tree(file, problem, shape, springs, loads, subs, pieces, where)
+    found = path(problem)
+    if isinstance(found, _PathEnd) and problem.float64_limited:
+        raise SceneError(file, where, f"no static equilibrium found in float64: applying the constant loads and "
+                         f"pre-stress gradually from rest was followed up to {found.fraction} of them; beyond, float64 "
+                         "cannot follow it (the path turns within float64's resolution of the loads, or an extension, "
+                         "e.g. the distance to a potential's pole, falls below its resolution of x); accepted: springs "
+                         "and loads whose equilibrium float64 can hold, or springs forming a tree with the ground "
+                         "(solved spring by spring in extended precision)")
+    if isinstance(found, _PathEnd):
+        reach = (f"a stable equilibrium exists only up to {found.fraction} of them" if found.reached > 0 else
+                 f"no stable equilibrium exists even at {FIRST_STEP:.0e} of them")
+        raise SceneError(file, where, f"no static equilibrium found: applying the constant loads and pre-stress "
+                         f"gradually from rest, {reach} ({found.why}); accepted: springs and loads with a "
+                         "stable equilibrium (V''(d) > 0 there)")
     if found is None:
-        raise SceneError(file, springs[0][2].where if springs else None,
-                         "no static equilibrium found: Newton from the rest configuration x = 0 (with a "
-                         "Levenberg-Marquardt safeguard) did not converge; accepted: springs and loads "
-                         "with a stable equilibrium (V''(d) > 0 there)")
-    xs, how = found
-    xv = tuple(sp.Float(mpmath.nstr(v, 25), 17) for v in xs)
-    ext, stiff = [], []
-    for a, b, law in springs:
-        with mpmath.workdps(40):
-            dv = (xs[b] if b >= 0 else 0) - (xs[a] if a >= 0 else 0)
-        stiff.append(check_law(file, law, dv, subs))
-        ext.append(sp.Float(mpmath.nstr(dv, 25), 17))
-    return Equilibrium(xv, tuple(ext), tuple(stiff), False, how)
+        x = descent(problem)
+        if x is None:
+            raise SceneError(file, where, "no static equilibrium found: the rest configuration x = 0 is not stable "
+                             "(K = the Hessian of U is not positive definite there) and a descent of U from it (Newton "
+                             "with a Levenberg-Marquardt safeguard) found no minimum; accepted: springs and loads "
+                             "with a stable equilibrium (V''(d) > 0 there)")
+        how = "descent of U from x = 0 (x = 0 is not stable; Newton with a Levenberg-Marquardt safeguard, float64)"
+    else:
+        x, steps = found
+        how = (f"the loads applied gradually from rest ({steps} load step{'s' if steps != 1 else ''}, Newton "
+               + ("correctors with the residual in mpmath where K is ill-conditioned for float64)"
+                  if problem.mp_corrections else "correctors in float64)"))
+    refined = refine(problem, x)
+    if refined is None:
+        raise SceneError(file, where, "no static equilibrium found: applying the constant loads and pre-stress "
+                         f"gradually from rest reaches them only to float64's rounding (at |x| = "
+                         f"{max(abs(float(v)) for v in x):.3g}), and no equilibrium refines there in "
+                         f"extended precision (up to {MAX_DPS} digits): the springs hold the loads at most in the "
+                         "limit; accepted: springs and loads with a stable equilibrium (V''(d) > 0 there)")
+    xs, dps = refined
+    how += f", refined in mpmath to {dps} digits; " + _stable(pieces)
+    with mpmath.workdps(dps):
+        ext = [(xs[b] if b >= 0 else 0) - (xs[a] if a >= 0 else 0) for a, b, _ in springs]
+    return _result(file, springs, subs, xs, ext, how, dps)
+
+
+def _result(file: str, springs, subs: dict, xs: list, ext: list, how: str, dps: int) -> Equilibrium:
+    """The :class:`Equilibrium` of mpmath positions and extensions, each spring checked (:func:`check_law`) at
+    ``dps`` digits (those the extensions were settled at: V'' near a pole rests on the distance to it)."""
+    stiff = tuple(check_law(file, law, dv, subs, dps=dps) for (_, _, law), dv in zip(springs, ext))
+    return Equilibrium(tuple(sp.Float(mpmath.nstr(v, 25), 17) for v in xs),
+                       tuple(sp.Float(mpmath.nstr(dv, 25), 17) for dv in ext), stiff, False, how)
+
+
+def _on_tree(file: str, problem: _Problem, shape, springs, loads, subs: dict, pieces, where) -> Equilibrium:
+    """The equilibrium of springs that form a tree with the ground, spring by spring (:mod:`derive.equilibrium_tree`)."""
+    masses = [sp.Integer(0)] * problem.n  # only the free pieces' are needed (their centres of mass)
+    for piece, ms in pieces:
+        for i, m in zip(piece, ms):
+            masses[i] = sp.sympify(m).subs(subs)
+    exact_loads = [sp.sympify(ld).subs(subs) for ld in loads]
+    found = solve_tree(shape, problem.n, [(F, S) for (_, _, F), (_, _, S) in zip(problem.fmp, problem.smp)],
+                       lambda dps: [_mpv(r, dps) for r in problem.values],
+                       lambda dps: [_mpv(v, dps) for v in exact_loads],
+                       lambda dps: [_mpv(m, dps) for m in masses],
+                       list(zip(problem.lo, problem.hi)))
+    if isinstance(found, Ended) and found.spring == -2:
+        raise SceneError(file, where, "no static equilibrium found: the springs' extensions do not settle in extended "
+                         "precision (two precisions disagree up to 1600 digits); accepted: springs and loads with a "
+                         "stable equilibrium (V''(d) > 0 there)")
+    if isinstance(found, Ended):
+        law = springs[found.spring][2]
+        reach = (f"a stable equilibrium exists only up to {_PathEnd(found.reached, '').fraction} of them"
+                 if found.reached > 0 else f"no stable equilibrium exists even at {FIRST_STEP:.0e} of them")
+        raise SceneError(file, law.where, f"no static equilibrium found: applying the constant loads and pre-stress "
+                         f"gradually from rest, {reach} (the springs form a tree with the ground, so each one's "
+                         f"tension is fixed by the loads beyond it: this spring's tension V'(d) stops growing "
+                         f"towards its share at d = {mpmath.nstr(found.d, 6)}); accepted: springs and loads with a "
+                         "stable equilibrium (V''(d) > 0 there)")
+    xs, ext, steps, dps = found
+    how = (f"statically determinate (the springs form a tree with the ground): each spring's tension from the "
+           f"loads beyond it, its extension from V'(d) = that tension followed from rest ({steps} load "
+           f"step{'s' if steps != 1 else ''} at most, mpmath, {dps} digits); " + _stable(pieces))
+    return _result(file, springs, subs, xs, ext, how, dps)
 
 
 __all__ = ["Equilibrium", "solve", "check_law", "SpringLaw"]

@@ -137,8 +137,9 @@ def mode_records(model: Model, modes: ModeSet) -> list[dict]:
 
 
 def equilibrium_json(model: Model) -> dict | None:
-    """``{"x", "x_value", "closed_form", "how", "springs": [{"key", "extension", "stiffness", ...}]}``
-    for a scene with potentials, else None. Strings are SymPy's ``sstr`` (numbers for a numeric one)."""
+    """``{"x", "x_value", "closed_form", "how", "stable", "springs": [{"key", "extension", "stiffness", ...}]}``
+    for a scene with potentials, else None. Strings are SymPy's ``sstr`` (numbers for a numeric one);
+    ``stable`` is always true: an equilibrium that is not stable (some V''(d) ≤ 0) is refused."""
     eq = model.equilibrium
     if eq is None:
         return None
@@ -148,7 +149,7 @@ def equilibrium_json(model: Model) -> dict | None:
                         "extension": sstr(d), "extension_value": _num(d, model),
                         "stiffness": sstr(k), "stiffness_value": value(k, _values(model), nonzero=True)})
     return {"x": [sstr(v) for v in eq.x], "x_value": [_num(v, model) for v in eq.x],
-            "closed_form": eq.closed_form, "how": eq.how, "springs": springs}
+            "closed_form": eq.closed_form, "how": eq.how, "stable": True, "springs": springs}
 
 
 def equilibrium_lines(model: Model) -> list[str]:

@@ -176,6 +176,9 @@ class AugmentedLinear:
     modes_only: bool = False
     #: The static part in modal coordinates, shape (N,) (``x_eq = Φ q_eq``).
     q_eq: np.ndarray = field(default=None, repr=False)
+    #: The constant load that deforms the springs, ``F0 − M a`` (a the free pieces' acceleration), shape (N,):
+    #: ``K x_eq`` (the static spring forces follow from it by the load path, :mod:`numeric.storeys`).
+    static_load: np.ndarray = field(default=None, repr=False)
 
     @classmethod
     def from_system(cls, system: System) -> "AugmentedLinear":
@@ -247,7 +250,9 @@ class AugmentedLinear:
             F0 = np.sum(loads, axis=0)
             el_ = w > 0
             q_eq[el_] = (Phi[:, el_].T @ F0) / (w[el_] * w[el_])
-        return cls(A, n, extra0, tuple(inputs), Phi, scale, x_eq, m, w, rigid_force, G is None and h == 0, q_eq)
+        static_load = (np.sum(loads, axis=0) - m * static.acceleration) if loads else np.zeros(n)
+        return cls(A, n, extra0, tuple(inputs), Phi, scale, x_eq, m, w, rigid_force, G is None and h == 0, q_eq,
+                   static_load)
 
     def _initial(self, x0: np.ndarray, v0: np.ndarray) -> np.ndarray:
         """``z(0)`` (modal: ``ω̂ (q0 − q_eq)``, ``q̇0``, oscillators, u) from physical ``x0``, ``v0`` (shape (N,))."""
@@ -280,7 +285,8 @@ class AugmentedLinear:
         return x, v
 
     def _closed_form(self, x0: np.ndarray, v0: np.ndarray, t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """No damping, no harmonic forcing (constant loads only): each mode in closed form,
+        """The states ``(Z, D)`` (S, size) when there is no damping and no harmonic forcing (constant loads
+        only): each mode in closed form,
 
             y = y0 cos ωt + ẏ0 · t·sinc(ωt) + f t²/2,
             Δy = −2 y0 sin²(ωt/2) + ẏ0 · t·sinc(ωt) + f t²/2   (and their rates),
@@ -303,7 +309,7 @@ class AugmentedLinear:
         ramp, drift = 0.5 * f * tt * tt, f * tt
         Z = np.concatenate([(y0 * c + p0 * ts + ramp) * self.scale, p0 * c - (w * w) * y0 * ts + drift], axis=1)
         D = np.concatenate([(y0 * c1 + p0 * ts + ramp) * self.scale, p0 * c1 - (w * w) * y0 * ts + drift], axis=1)
-        return self._physical(Z, D, x0, v0)
+        return Z, D
 
     @cached_property
     def _eigen(self):
@@ -382,7 +388,32 @@ class AugmentedLinear:
 
     def solve(self, x0: np.ndarray, v0: np.ndarray, t: np.ndarray, h: float | None = None,
               anchor: int = 64) -> tuple[np.ndarray, np.ndarray]:
-        """x, v at times ``t`` (shape (S,)) from x0, v0 (shape (N,)); returns (S, N) arrays.
+        """x, v at times ``t`` (shape (S,)) from x0, v0 (shape (N,)); returns (S, N) arrays
+        (:meth:`states`, then the physical coordinates)."""
+        return self._physical(*self.states(x0, v0, t, h, anchor), x0, v0)
+
+    def solve_grid(self, x0: np.ndarray, v0: np.ndarray, t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """:meth:`solve` on a simulation's grid (uniform, possibly with a shorter last interval)."""
+        return self._physical(*self.states_grid(x0, v0, t), x0, v0)
+
+    def states_grid(self, x0: np.ndarray, v0: np.ndarray, t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """:meth:`states` on a simulation's grid: the uniform part propagated between anchors, a shorter
+        last interval on its own."""
+        t = np.asarray(t, dtype=float)
+        if t.shape[0] < 3 or abs((t[-1] - t[-2]) - (t[1] - t[0])) <= 1e-12 * abs(t[1] - t[0]):
+            return self.states(x0, v0, t, float(t[1] - t[0]) if t.shape[0] > 1 else None)
+        Z, D = self.states(x0, v0, t[:-1], float(t[1] - t[0]))
+        Zl, Dl = self.states(x0, v0, t[-1:], None)
+        return np.concatenate([Z, Zl]), np.concatenate([D, Dl])
+
+    def modal_coordinates(self, Z: np.ndarray) -> np.ndarray:
+        """``y = q − q_eq`` (S, N) of states Z (:meth:`states`): ``x = x_eq + Φ y``."""
+        return Z[:, :self.n] / self.scale[None, :]
+
+    def states(self, x0: np.ndarray, v0: np.ndarray, t: np.ndarray, h: float | None = None,
+               anchor: int = 64) -> tuple[np.ndarray, np.ndarray]:
+        """The states ``Z = z(t)`` and their changes ``D = z(t) − z(0)`` (S, size) at times ``t`` (S,) from
+        x0, v0 (N,) (the modal coordinates: :meth:`modal_coordinates`; x and v: :meth:`solve`).
 
         The state and its change ``z(t) − z(0)`` are both propagated (:meth:`_physical`). If the
         times are a uniform grid ``t = i·h`` pass ``h`` to propagate between anchors,
@@ -411,7 +442,7 @@ class AugmentedLinear:
                 for i in range(i0 + 1, min(i0 + anchor, t.shape[0])):
                     z, d = Eh @ z, Eh @ d + dh
                     Z[i], D[i] = z, d
-        return self._physical(Z, D, x0, v0)
+        return Z, D
 
     def _input_values(self, a: float, b: float, tol: float) -> tuple[np.ndarray, np.ndarray]:
         """One-sided limits ``u(a⁺)`` and ``u(b⁻)`` of every input, shape (m,) each."""
@@ -426,7 +457,8 @@ class AugmentedLinear:
         return np.array(right), np.array(left)
 
     def _solve_inputs(self, x0: np.ndarray, v0: np.ndarray, t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """First-order-hold solution on the union of ``t`` and the tables' rows (see module docstring)."""
+        """The states ``(Z, D)`` at ``t`` of the first-order-hold solution on the union of ``t`` and the
+        tables' rows (see module docstring)."""
         size, m = self.A.shape[0], len(self.inputs)
         z0 = self._initial(x0, v0)
         B = np.zeros((size, m))
@@ -455,7 +487,7 @@ class AugmentedLinear:
             forced = hold @ ua + ramp @ ((ub - ua) / h)
             Z[i + 1] = E @ Z[i] + forced
             D[i + 1] = E @ D[i] + d + forced
-        return self._physical(Z[out], D[out], x0, v0)
+        return Z[out], D[out]
 
 
 def frequency_response(system: System, drive: np.ndarray, force: np.ndarray) -> np.ndarray:

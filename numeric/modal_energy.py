@@ -121,7 +121,7 @@ def _equilibrium(system: System) -> np.ndarray:
     scene under gravity (:func:`numeric.equilibrium.equilibrium`), else 0."""
     mod, p, n = system.module, system.params, system.n
     if system.potential:
-        return np.asarray(mod.equilibrium(**p, n=n) if system.chain else mod.equilibrium(**p), dtype=float)
+        return system.potential_equilibrium()
     if "gravity" not in system.effects:
         return np.zeros(n)
     from .equilibrium import equilibrium

@@ -112,6 +112,37 @@ class System:
         """``(left, right)`` of a ``[chain]``; None otherwise."""
         return (self.provided.left, self.provided.right) if self.chain else None
 
+    def potential_equilibrium(self) -> np.ndarray | None:
+        """The static equilibrium x_eq of a scene with spring potentials (the module's ``equilibrium()``),
+        shape (N,); None without potentials."""
+        if not self.potential:
+            return None
+        mod, p = self.module, self.params
+        return np.asarray(mod.equilibrium(**p, n=self.n) if self.chain else mod.equilibrium(**p), dtype=float)
+
+    def spring_tensions(self, x: np.ndarray) -> np.ndarray:
+        """Tension V'(d) of every spring (scenes with spring potentials; the generated cancellation-free
+        forms) at the frames x, shape (F, N) -> (F, S), in ``spring_ends`` order."""
+        return self._law_values(x, "spring_tensions", "spring_force")
+
+    def spring_stiffnesses(self, x: np.ndarray) -> np.ndarray:
+        """Stiffness V''(d) of every spring (scenes with spring potentials) at the frames x, (F, N) -> (F, S)."""
+        return self._law_values(x, "spring_stiffnesses", "spring_stiffness")
+
+    def _law_values(self, x: np.ndarray, dense: str, chain: str) -> np.ndarray:
+        x = np.asarray(x, dtype=float)
+        mod, p = self.module, self.params
+        if not self.chain:
+            return np.asarray(getattr(mod, dense)(x.T, **p), dtype=float).T
+        ends = self.spring_ends
+        xe = np.concatenate([x, np.zeros((x.shape[0], 1))], axis=1)  # column -1 = wall
+        d = xe[:, ends[:, 1]] - xe[:, ends[:, 0]]
+        law = getattr(mod, chain)
+        if self.law_indexed:  # spring i spans (i, i + 1): the left wall spring is i = -1
+            i = np.where(ends[:, 0] >= 0, ends[:, 0], -1)[None, :]
+            return np.asarray(law(d, i, **p), dtype=float) * np.ones_like(d)
+        return np.asarray(law(d, **p), dtype=float) * np.ones_like(d)
+
     def has(self, name: str) -> bool:
         """Whether the module defines the contract function ``name``."""
         return self.provided.has(name)

@@ -309,17 +309,22 @@ class Simulation:
         return path
 
     def _spring_series(self, method: str):
-        """(drift, spring force, base shear) of ``method``'s trajectory (:func:`numeric.storeys.spring_series`)."""
-        from .numeric.storeys import spring_series
+        """(drift, spring force, base shear) of ``method``'s trajectory (:func:`numeric.storeys.series`: the
+        exact method's by the load path where the springs form a tree with the ground)."""
+        from .numeric.run import registry
+        from .numeric.storeys import series
 
-        return spring_series(_system(self.scene)[0], self.x[method])
+        exact = (self.scene.x0, self.scene.v0, self.t) if method == registry.EXACT else None
+        return series(_system(self.scene)[0], self.x[method], exact)[:3]
 
     def drifts(self, method: str):
         """Drift ``x_b − x_a`` of every spring ``between = [a, b]`` (a wall is 0), ndarray, shape (S, springs) [m]."""
         return self._spring_series(method)[0]
 
     def spring_forces(self, method: str):
-        """Tension ``k·d + k3·d³`` (d the drift) of every spring: storey shears, shape (S, springs) [N]."""
+        """Tension ``k·d + k3·d³`` (``V'(d)`` for a spring potential; d the drift) of every spring: storey
+        shears, shape (S, springs) [N]. The exact method's come from the load path where positions would
+        round them (:mod:`numeric.storeys`)."""
         return self._spring_series(method)[1]
 
     def base_shear(self, method: str):
@@ -476,15 +481,22 @@ def _streamed(sc: Scene, system, names, dt, steps, record_every, out, figures, o
             npz, tuple(Path(p) for p in summary["figures"]))
 
 
-def _spring_arrays(system, x: dict) -> dict:
+def _spring_arrays(system, x: dict, exact: tuple | None = None) -> tuple[dict, list[str]]:
     """NPZ arrays ``drift_<method>``, ``spring_force_<method>`` (S × springs) and ``base_shear_<method>``
-    (S,) of every method's frames ``x[method]`` (S, N) (:func:`numeric.storeys.spring_series`)."""
-    from .numeric.storeys import spring_series
+    (S,) of every method's frames ``x[method]`` (S, N) (:func:`numeric.storeys.series`; ``exact = (x0, v0,
+    t)``: the exact method's by the load path), and the notes of those whose float64 rounding of drifts
+    formed from positions exceeds :data:`numeric.storeys.FORCE_ROUNDING` of the largest force."""
+    from .numeric.run import registry
+    from .numeric.storeys import rounding_note, series
 
-    out = {}
+    out, notes = {}, []
     for m, xm in x.items():
-        out[f"drift_{m}"], out[f"spring_force_{m}"], out[f"base_shear_{m}"] = spring_series(system, xm)
-    return out
+        drift, force, base, bound = series(system, xm, exact if m == registry.EXACT else None)
+        out[f"drift_{m}"], out[f"spring_force_{m}"], out[f"base_shear_{m}"] = drift, force, base
+        note = rounding_note(m, bound)
+        if note is not None:
+            notes.append(note)
+    return out, notes
 
 
 def _notes_array(notes: list[str]) -> dict:
@@ -510,11 +522,13 @@ def _kept(sc: Scene, system, names, dt, steps, record_every, options, out, figur
     notes = list(notes) + diverged
     t = next(iter(runs.values())).t
     x, v = {m: r.x for m, r in runs.items()}, {m: r.v for m, r in runs.items()}
+    spring_notes = []
     with quiet_floats(bool(diverged)):  # a run that left the finite numbers is said once, in its note
         extra = absolute_npz_arrays(system, t, x, v)
         if springs:
-            extra.update(_spring_arrays(system, x))
-        extra.update(_notes_array(notes))
+            arrays, spring_notes = _spring_arrays(system, x, (sc.x0, sc.v0, t))
+            extra.update(arrays)
+        extra.update(_notes_array(notes + spring_notes))
         npz, figs = None, ()
         if out is not None:
             from .numeric.npz import save_npz
@@ -531,6 +545,7 @@ def _kept(sc: Scene, system, names, dt, steps, record_every, options, out, figur
                     figs = tuple(write_figures(out, sc.name, sc.mass_names, system, runs))
         summary = compare(system, runs)
     summary["diverged"] = diverged
+    summary["spring_notes"] = spring_notes
     return summary, t, x, v, extra, npz, figs
 
 
@@ -614,6 +629,7 @@ def simulate(scene: str | Path | Scene, methods: list[str] | None = None, dt: fl
         registry.method(name, options)  # before any derivation
     with phase("loading the generated module (deriving it if not cached)", enabled=progress):
         system, origin = _system(sc)
+    _check_motion(sc, "simulate", system)
     names, notes = methods, []
     if not methods:  # a default Verlet that would be unstable at this dt gives way to the exact method
         names, notes = sim.unstable_defaults(system, sim.default_methods(system), dt)
@@ -623,18 +639,20 @@ def simulate(scene: str | Path | Scene, methods: list[str] | None = None, dt: fl
     if system.chain:
         summary, t, x, v, extra, npz, figs = _streamed(sc, system, names, dt, steps, record_every, out, figures,
                                                        options)
-        if springs or limits or summary["diverged"]:  # from the frames read back; the NPZ rewritten with them
+        if springs:  # from the frames read back
+            arrays, summary["spring_notes"] = _spring_arrays(system, x)
+            extra.update(arrays)
+        if springs or limits or summary["diverged"]:  # the NPZ rewritten with them
             from .numeric.npz import save_npz
 
-            extra.update(_spring_arrays(system, x) if springs else {})
-            extra.update(_notes_array(limits + summary["diverged"]))
+            extra.update(_notes_array(limits + summary["diverged"] + summary.get("spring_notes", [])))
             save_npz(npz, t, x, v, extra)
     else:
         summary, t, x, v, extra, npz, figs = _kept(sc, system, names, dt, steps, record_every, options, out, figures,
                                                    springs, limits)
     if modal_energy:
         summary["modal_energy"], figs = _modal_energies(sc, system, t, x, v, extra, npz, figs, figures, progress)
-    notes = notes + limits + summary.pop("diverged", [])
+    notes = notes + limits + summary.pop("diverged", []) + summary.pop("spring_notes", [])
     summary.update({"scene": sc.name, "module": origin, "dt": dt, "steps": steps, "t_end": steps * dt,
                     "npz": None if npz is None else str(npz), "figures": [str(p) for p in figs],
                     "methods_that_apply": sim.applicable(system),
@@ -644,14 +662,24 @@ def simulate(scene: str | Path | Scene, methods: list[str] | None = None, dt: fl
 
 
 # -- plan and bench ---------------------------------------------------------------------------------
-def _check_motion(sc: Scene, what: str) -> None:
-    """Refuse a run whose answer is known: no ``[initial]`` and nothing driving the scene."""
+def _check_motion(sc: Scene, what: str, system=None) -> None:
+    """Refuse a run whose answer is known: no ``[initial]`` (it starts at rest at x = 0), nothing driving
+    the scene, and x = 0 its equilibrium. With spring potentials x = 0 need not be the equilibrium (a
+    pre-stressed spring, V'(0) ≠ 0, out of balance): such a scene moves, and is decided once its
+    equilibrium is known (``system``; called without it before the derivation, with it after)."""
     from .numeric.errors import RunRefused
 
-    if not sc.initial_given and not sc.loaded:
-        raise RunRefused(f"{sc.file}: initial: missing; {what} of {sc.name!r} would start at rest with nothing "
-                         "driving it (its motion is zero); accepted: a table [initial] with x = [...] and/or "
-                         "v = [...] (modes and derive do not need one)", quantity="initial")
+    if sc.initial_given or sc.loaded:
+        return
+    if sc.has_potential:
+        if system is None:
+            return
+        x_eq = system.potential_equilibrium()
+        if x_eq is not None and bool((x_eq != 0.0).any()):
+            return  # released at rest away from its equilibrium: it oscillates about x_eq
+    raise RunRefused(f"{sc.file}: initial: missing; {what} of {sc.name!r} would start at rest at its equilibrium "
+                     "x = 0 with nothing driving it (its motion is zero); accepted: a table [initial] with "
+                     "x = [...] and/or v = [...] (modes and derive do not need one)", quantity="initial")
 
 
 def _horizon(sc: Scene, t_end: float | None) -> float:
@@ -686,6 +714,7 @@ def plan(scene: str | Path | Scene, tol: float, t_end: float | None = None, *, a
     sc = load(scene)
     _check_motion(sc, "plan")
     system, _ = _system(sc)
+    _check_motion(sc, "plan", system)
     from .numeric.plan_pilot import PilotPlanner, needs_pilot, tight_reference_applies
 
     with single_threaded_blas():
@@ -722,6 +751,7 @@ def bench(scene: str | Path | Scene = "seed", t_end: float | None = None, *, qui
     sc = load(scene)
     _check_motion(sc, "bench")
     system, _ = _system(sc)
+    _check_motion(sc, "bench", system)
     import sympy  # noqa: F401  (imported before timing: the derive time excludes the SymPy import)
 
     t0 = time.perf_counter()

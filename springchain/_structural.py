@@ -408,7 +408,9 @@ def rsa(scene, spectrum, combine: str = "cqc") -> RSA:
         notes.append(f"Gamma, drifts and spring forces from float64 shapes ({why}): each mode's values are good to "
                      "float64 of the largest mode's, not certified per mode at high stiffness contrast (the storey "
                      "shears of a chain hung from one wall come from inertia sums, free of that cancellation)")
-    if not system.linear:
+    if system.potential and not system.linear:
+        notes.append(linearisation_note(system.potential_equilibrium()))
+    elif not system.linear:
         notes.append("cubic springs: the analysis uses the linear springs (the linearization about x = 0)")
     if isinstance(spectrum, (str, Path)):
         read = read_spectrum_file(spectrum)
@@ -445,6 +447,14 @@ def rsa(scene, spectrum, combine: str = "cqc") -> RSA:
 
 
 # -- time-history outputs -------------------------------------------------------------------------
+def linearisation_note(x_eq) -> str:
+    """The note of an analysis of a scene with spring potentials: about its static equilibrium x_eq (N,)."""
+    shown = ", ".join(f"{v:.10g}" for v in x_eq[:6]) + (f", ... ({len(x_eq)} masses)" if len(x_eq) > 6 else "")
+    where = "x_eq = 0 (every spring at rest)" if not any(x_eq) else f"x_eq = ({shown})"
+    return (f"spring potentials: the analysis uses the linearisation about the static equilibrium {where}: K is the "
+            "Hessian of V there (each spring's stiffness V''(d) at x_eq); the peaks are of the motion about x_eq")
+
+
 def spring_series(scene: Scene, x):
     """Drifts, spring forces and base shear of a trajectory ``x`` (S, N) of ``scene``
     (:func:`numeric.storeys.spring_series`)."""

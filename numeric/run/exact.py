@@ -131,13 +131,8 @@ def solve(system: System, x0: np.ndarray, v0: np.ndarray,
 
     aug = AugmentedLinear.from_system(system)
 
-    def evaluate(t):
-        if t.shape[0] < 3 or abs((t[-1] - t[-2]) - (t[1] - t[0])) <= 1e-12 * abs(t[1] - t[0]):
-            return aug.solve(x0, v0, t, float(t[1] - t[0]) if t.shape[0] > 1 else None)
-        # a uniform grid with a shorter last interval: the uniform part, then the last time on its own
-        x, v = aug.solve(x0, v0, t[:-1], float(t[1] - t[0]))
-        xl, vl = aug.solve(x0, v0, t[-1:], None)
-        return np.concatenate([x, xl]), np.concatenate([v, vl])
+    def evaluate(t):  # a uniform grid, possibly with a shorter last interval
+        return aug.solve_grid(x0, v0, t)
 
     return Solution("exact: augmented matrix exponential (numeric.linear_exact), float64", evaluate, whole=True)
 
