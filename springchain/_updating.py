@@ -301,7 +301,7 @@ def update(scene: str | Path | Scene, measured, parameters, bounds=(), modes: in
     import numpy as np
 
     from ._sensitivity import Setup, default_modes, parameter_list
-    from .numeric.updating.fit import Problem, solve
+    from .numeric.updating.fit import Memo, Problem, solve
     from .numeric.updating.measured import Measured
     from .numeric.updating.residuals import pair, weighted
 
@@ -348,17 +348,23 @@ def update(scene: str | Path | Scene, measured, parameters, bounds=(), modes: in
     pairing = pair(m, positions, np.sqrt(first.omega2[elastic]), sensor_shapes)
     lower, upper = parse_bounds(bounds, names, sc.parameters)
 
-    def model(p):
+    def evaluate(p):
         vals = dict(zip(names, (float(v) for v in p)))
         r = setup.at(vals, pairing.modes)
         slots = np.searchsorted(r.index, pairing.modes)
         shapes = r.shapes[sensors][:, slots] if sensors else None
         d_shapes = r.d_shapes[:, sensors][:, :, slots] if sensors else None
-        return r, slots, shapes, d_shapes
+        res, jac = weighted(m, p, r.omega2[slots], r.d_omega2[:, slots], shapes, d_shapes, known)
+        return (r, slots, shapes, d_shapes), res, jac
+
+    # once per point: the fit's residual, its Jacobian and the before/after tables
+    point = Memo(evaluate, score=lambda v: float(v[1] @ v[1]))
+
+    def model(p):
+        return point(p)[0]
 
     def residual(p):
-        r, slots, shapes, d_shapes = model(p)
-        return weighted(m, p, r.omega2[slots], r.d_omega2[:, slots], shapes, d_shapes, known)
+        return point(p)[1:]
 
     fit = solve(Problem(names, start, residual, lower, upper, known, int(with_shapes.size) if sensors else 0))
     notes = [frf_note] if frf_note else []
@@ -374,7 +380,8 @@ def update(scene: str | Path | Scene, measured, parameters, bounds=(), modes: in
 
     mac0 = macs(sh0) if sensors else np.full(m.rows, np.nan)
     mac1 = macs(sh1) if sensors else np.full(m.rows, np.nan)
-    after = setup.at(dict(zip(names, fit.values)), candidates)
+    same = np.array_equal(np.asarray(candidates), pairing.modes)  # every mode paired: the fit's last evaluation
+    after = model(fit.values)[0] if same else setup.at(dict(zip(names, fit.values)), candidates)
     again = pair(m, after.index[~after.rigid], np.sqrt(after.omega2[~after.rigid]),
                  after.shapes[sensors][:, ~after.rigid] if sensors else None)
     if not np.array_equal(again.modes, pairing.modes):
