@@ -357,3 +357,14 @@ def test_the_fit_evaluates_each_point_once():
     keys = [p.tobytes() for p in points]
     assert len(keys) == len(set(keys)) == fit.evaluations
     assert points[0] is not None and np.array_equal(points[0], start)
+
+
+def test_the_interlacing_refusal_shows_the_values_apart(tmp_path, capsys):
+    """Spectra that fail to interlace by 1e-15 relative: the refusal prints the three values with digits
+    enough to tell them apart (at 12 digits they read alike) and the signed difference that fails."""
+    bad = tmp_path / "close.csv"
+    bad.write_text('omega2_free,omega2_clamped\n"1.0","2.0000000000000010"\n"2.0000000000000005",\n')
+    status, out, err = run_cli(["reconstruct", bad, "--total-mass", "2"], capsys)
+    one_line_error(status, out, err, "do not interlace")
+    assert "2.000000000000001" in err and "2.0000000000000005" in err, err
+    assert "omega2_free[1] - omega2_clamped[0] = -5.0e-16" in err, err
