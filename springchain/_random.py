@@ -58,7 +58,11 @@ class RandomVibration:
         raise KeyError(f"no output {name!r} of kind {kind!r}")
 
     def _display(self, kind: str, units=None) -> tuple[str, float]:
-        """(unit, SI value of one unit) an output kind is shown in."""
+        """(unit, SI value of one unit) an output kind is shown in (``units``: parsed by
+        :func:`springchain.derive.units.output.output_units`)."""
+        from .derive.units.output import output_units
+
+        units = output_units(units)
         si = {"displacement": "m", "velocity": "m/s", "acceleration": "m/s^2", "spring force": "N"}[kind]
         if kind == "acceleration" and self.input_unit == "g" and units is None:
             return "g", self.input_factor
@@ -66,12 +70,30 @@ class RandomVibration:
 
     def _input_display(self, units=None) -> tuple[str, float]:
         """(unit, SI value of one unit) the input is shown in."""
+        from .derive.units.output import output_units
+
+        units = output_units(units)
         if units is None:
             return self.input_unit, self.input_factor
         return units.of("N" if self.on else "m/s^2")
 
     def to_json(self, units=None) -> dict:
-        """Exactly what ``springchain psd ... --json`` prints."""
+        """Exactly what ``springchain psd ... --json`` prints.
+
+        Parameters
+        ----------
+        units : None, str, sequence of str or OutputUnits
+            Results in these units: ``"mm,kN,g"`` as ``--units`` takes it (one unit per dimension, ``g``
+            standard gravity; PSDs follow as unit²/Hz), None for SI (accelerations in g when the input was).
+
+        Raises
+        ------
+        SceneError
+            A bad units text (one line; pint missing included).
+        """
+        from .derive.units.output import output_units
+
+        units = output_units(units)
         r = self.response
         rows = []
         for nm, kd, v in zip(r.names, r.kinds, r.rms):
@@ -85,6 +107,22 @@ class RandomVibration:
                 "notes": list(self.notes)}
 
     def to_text(self, units=None) -> str:
+        """What ``springchain psd`` prints.
+
+        Parameters
+        ----------
+        units : None, str, sequence of str or OutputUnits
+            Results in these units: ``"mm,kN,g"`` as ``--units`` takes it (one unit per dimension, ``g``
+            standard gravity; PSDs follow as unit²/Hz), None for SI (accelerations in g when the input was).
+
+        Raises
+        ------
+        SceneError
+            A bad units text (one line; pint missing included).
+        """
+        from .derive.units.output import output_units
+
+        units = output_units(units)
         r = self.response
         what = f"a random force on {self.on}" if self.on else "a random base acceleration"
         iu, ifac = self._input_display(units)
@@ -103,9 +141,12 @@ class RandomVibration:
         return "\n".join(lines) + "\n"
 
     def plot(self, kind: str = "acceleration", units=None):
-        """Log–log figure: input PSD and the response PSD of every mass's ``kind`` (or spring forces)."""
+        """Log–log figure: input PSD and the response PSD of every mass's ``kind`` (or spring forces);
+        ``units`` as :meth:`to_text` (e.g. ``"mm,kN,g"``)."""
+        from .derive.units.output import output_units
         from .numeric.random.figures import psd_figure
 
+        units = output_units(units)
         r = self.response
         u, fac = self._display(kind, units)
         curves = [(nm, r.psd[j] / fac**2, float(r.rms[j]) / fac) for j, (nm, kd) in enumerate(zip(r.names, r.kinds))
@@ -117,7 +158,7 @@ class RandomVibration:
                           f"{self.scene.name}: {kind} PSD under a random {what}")
 
     def save(self, out: str | Path = DEFAULT_OUT, kind: str = "acceleration", units=None) -> Path:
-        """Write the figure as ``OUT/<scene>-psd-<kind>.png``; returns its path."""
+        """Write the figure as ``OUT/<scene>-psd-<kind>.png``; returns its path (``units`` as :meth:`to_text`)."""
         from .numeric import plots
 
         path = Path(out) / f"{self.scene.name}-psd-{kind.replace(' ', '-')}.png"

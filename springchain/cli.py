@@ -381,16 +381,9 @@ def cmd_animate(args) -> int:
 # -- the ecosystem: random vibration, output units ------------------------------------------------
 def _output_units(args):
     """The ``--units`` list (None without it); a bad entry is one line naming the flag."""
-    spec = getattr(args, "units", None)
-    if not spec:
-        return None
-    from .derive.units import UnitProblem
-    from .derive.units.output import OutputUnits
+    from .derive.units.output import output_units
 
-    try:
-        return OutputUnits.parse(spec)
-    except UnitProblem as exc:
-        raise SceneError(None, "--units", f"{spec!r}: {exc}") from None
+    return output_units(getattr(args, "units", None), "--units")
 
 
 def cmd_psd(args) -> int:

@@ -171,3 +171,26 @@ def test_psd_command_g_units_and_one_line_refusals(tmp_path, capsys):
     one_line_error(*run_cli(["psd", path, "--input", tmp_path / "dec.csv"], capsys), "not strictly increasing")
     one_line_error(*run_cli(["psd", path, "--input", tmp_path / "none.csv"], capsys), "cannot read")
     one_line_error(*run_cli(["psd", "seed", "--input", tmp_path / "spec.csv"], capsys), "rigid-body")
+
+
+def test_units_as_the_command_line_writes_them(tmp_path):
+    """``units="mm,kN,g"`` in to_text, to_json and plot: displacements in mm (1e3 per m), spring forces in
+    kN (1e-3 per N), accelerations in g (1/9.80665 per m/s², standard gravity, written here)."""
+    pytest.importorskip("pint")
+    from springchain.derive.errors import SceneError
+
+    path, fn = sdof(tmp_path)
+    r = sc.random_response(path, {"f": [1.0, 100.0], "psd": [0.5, 0.5]})
+    rows = {row["kind"]: row for row in r.to_json("mm,kN,g")["rms"]}
+    assert rows["displacement"]["unit"] == "mm" and rows["spring force"]["unit"] == "kN"
+    assert rows["displacement"]["rms"] == pytest.approx(1e3 * r.rms("m1", "displacement"), rel=1e-14)
+    assert rows["spring force"]["rms"] == pytest.approx(1e-3 * r.rms("spring 0", "spring force"), rel=1e-14)
+    assert rows["acceleration"]["unit"] == "g"
+    assert rows["acceleration"]["rms"] == pytest.approx(r.rms("m1", "acceleration") / 9.80665, rel=1e-14)
+    assert r.to_json(["mm", "kN", "g"]) == r.to_json("mm,kN,g")
+    text = r.to_text("mm,kN,g")
+    assert "RMS displacement (relative to the base) [mm]" in text and "[kN]" in text
+    fig = r.plot("displacement", "mm,kN,g")
+    assert fig.axes[1].get_ylabel() == "response PSD [mm²/Hz]" and fig.axes[0].get_ylabel() == "input PSD [g²/Hz]"
+    with pytest.raises(SceneError, match="units: 'mm,zorks': unknown unit"):
+        r.to_text("mm,zorks")
