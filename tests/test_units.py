@@ -168,6 +168,21 @@ def test_hostile_or_unknown_units_are_refused_without_evaluating_them(unit, why)
     assert info.value.key == "springs[1].k" and "\n" not in str(info.value)
 
 
+def test_a_power_followed_by_a_product_is_a_unit(ureg):
+    """``N^2*s`` (a force PSD per rad/s-like unit), ``kg*m^2*s^-2``: a power then ``*`` is a product, not a
+    nested exponent (which stays refused); factors and dimensions against pint's own."""
+    from springchain.derive.units import parse_unit
+
+    for text in ("N^2*s", "kg*m^2*s^-2", "kN**2*ms", "(mm/s^2)^2/Hz"):
+        u = parse_unit(text)
+        ref = ureg.Quantity(1, text.replace("^", "**")).to_base_units()
+        assert float(u.factor) == pytest.approx(ref.magnitude, rel=1e-15)
+        assert dict(u.dimension.map) == {k: v for k, v in ref.dimensionality.items()}
+    for text in ("m^2**3", "m^2^3", "m**2**3"):
+        with pytest.raises(ValueError, match="not a small whole number"):
+            parse_unit(text)
+
+
 def test_potentials_are_energies_of_the_extension_in_metres():
     pytest.importorskip("pint")
     base = '''name = "p"

@@ -30,7 +30,7 @@ MAX_UNIT_EXPONENT = 16
 QUANTITY = re.compile(r"\s*([+-]?(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?)(?![\d.eE])\s*((?:[A-Za-z_(]|1\s*/).*?)\s*\Z",
                       re.S)
 _UNIT_CHARS = re.compile(r"[A-Za-z0-9_ */.()^-]*\Z")
-_POWER = re.compile(r"(\^|\*\*)\s*(-?\d{1,2}|\(\s*-?\d{1,2}\s*\))(?![\d^*.])")
+_POWER = re.compile(r"(\^|\*\*)\s*(-?\d{1,2}|\(\s*-?\d{1,2}\s*\))(?![\d^.]|\*\*)")  # "m^2*s" is a product
 _BARE_G = re.compile(r"(?<![A-Za-z0-9_])g(?![A-Za-z0-9_])")
 
 
