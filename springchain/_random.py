@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import math
 import os
+import re
 import stat
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -36,7 +37,9 @@ class RandomVibration:
     response : springchain.numeric.random.response.RandomResponse
         ``names``, ``kinds``, ``units``, ``rms`` (Y,), ``f`` (W,) [Hz], ``psd`` (Y, W), ``input_psd`` (W,).
     input_unit : str
-        The unit the input is shown in (``g`` when the file gave g²/Hz, else SI).
+        The unit the input is shown in: U when the file's header gave ``psd [U^2/Hz]`` (``g``, ``kN``,
+        ``mm/s^2``), else SI. Outputs of the input's dimension (accelerations under a base acceleration,
+        spring forces under a force) are shown in it too, unless ``units`` says otherwise.
     input_factor : float
         SI value of one ``input_unit``.
     notes : list of str
@@ -64,8 +67,9 @@ class RandomVibration:
 
         units = output_units(units)
         si = {"displacement": "m", "velocity": "m/s", "acceleration": "m/s^2", "spring force": "N"}[kind]
-        if kind == "acceleration" and self.input_unit == "g" and units is None:
-            return "g", self.input_factor
+        if units is None and kind == ("spring force" if self.on else "acceleration") and \
+                (self.input_unit, self.input_factor) != (si, 1.0):
+            return self.input_unit, self.input_factor  # the input's own unit (g, kN, ...) for its dimension
         return (si, 1.0) if units is None else units.of(si)
 
     def _input_display(self, units=None) -> tuple[str, float]:
@@ -226,14 +230,41 @@ def read_psd(path: str | Path, ground: bool):
             raise bad(f"row {r} {line[:40]!r} is not two finite numbers")
         rows.append((a * ff, b * fg))
     data = np.array(rows, dtype=float).reshape(-1, 2)
-    display, factor = unit, 1.0
-    psd_text = lines[0].split(",")[1]
-    if ground and "[" in psd_text:
-        import re
-
-        if re.search(r"(?<![A-Za-z0-9_])g(?![A-Za-z0-9_])", psd_text):
-            display, factor = "g", 9.80665
+    display, factor = input_unit(lines[0].split(",")[1], base, fg) or (unit, 1.0)
     return data[:, 0], data[:, 1], display, factor
+
+
+#: A PSD unit ``U^2/Hz`` (or ``(U)^2/Hz``, ``U**2/Hz``): U, the unit the input itself is shown in.
+_PSD_UNIT = re.compile(r"\s*\[\s*(?:\((?P<paren>[^\[\]]+)\)|(?P<bare>[^\s()\[\]^*/]+))\s*(?:\^|\*\*)\s*2\s*/\s*Hz\s*\]\s*\Z")
+
+
+def input_unit(psd_header: str, dimension, psd_factor: float) -> tuple[str, float] | None:
+    """``(U, SI value of one U)`` for a PSD column headed ``psd [U^2/Hz]`` (``g^2/Hz``, ``kN^2/Hz``,
+    ``(mm/s^2)^2/Hz``), so that the input and the outputs of its dimension are shown in U as given;
+    None when the header has no such unit (SI is shown).
+
+    Parameters
+    ----------
+    psd_header : str
+        The header cell, ``"psd [kN^2/Hz]"``.
+    dimension : Dimension
+        The input's (a force or an acceleration).
+    psd_factor : float
+        The SI value of one unit of the PSD column (already checked), to cross-check U.
+    """
+    from .derive.units import UnitProblem, parse_unit
+
+    m = _PSD_UNIT.match(psd_header[psd_header.find("["):] if "[" in psd_header else "")
+    if m is None:
+        return None
+    text = (m.group("paren") or m.group("bare")).strip()
+    try:
+        u = parse_unit(text, dimension)  # a bare g in an acceleration: standard gravity
+    except UnitProblem:
+        return None
+    if u.dimension != dimension or not math.isclose(float(u.factor) ** 2, psd_factor, rel_tol=1e-12):
+        return None
+    return text, float(u.factor)
 
 
 def random_response(scene: str | Path | Scene, input, on=None, *, interpolation: str = "loglog") -> RandomVibration:
