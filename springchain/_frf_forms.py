@@ -153,7 +153,8 @@ class FrfForm:
             fd = r.omega_d / (2 * math.pi) if self.hz else r.omega_d
             lines.append(f"  {fd:.8g} {u}   zeta = {r.zeta:.4g}")
         k = int(np.argmax(np.abs(self.values)))
-        lines.append(f"largest magnitude {mag[k]:.6g} at {f[k]:.8g} {u}")
+        lines.append(f"largest magnitude on the grid (not an exact peak: {f.shape[0]} frequencies, refined at "
+                     f"each resonance): {mag[k]:.6g} at {f[k]:.8g} {u}")
         lines += [f"note: {n}" for n in self.notes]
         return "\n".join(lines) + "\n"
 

@@ -199,12 +199,12 @@ class Update:
 
         f = self.fit
         known = self.measured.omega_std is not None
-        lines = [f"Updated {self.scene.name!r} to {self.measured.file}: {self.measured.rows} measured modes, "
-                 f"{len(self.parameters)} parameters (least squares in log p, analytic Jacobian; {f.evaluations} "
-                 f"evaluations: {f.status})",
+        lines = [f"Updated {self.scene.name!r} to {self.measured.file}: {self.measured.rows} measured mode{'' if self.measured.rows == 1 else 's'}, "
+                 f"{len(self.parameters)} parameter{'' if len(self.parameters) == 1 else 's'} (least squares in log p, "
+                 f"analytic Jacobian; {f.evaluations} model evaluation{'' if f.evaluations == 1 else 's'}: {f.status})",
                  "noise: " + ("standard deviations from the file" if known else
                               f"unknown, estimated from the fit: s = {f.noise_scale:.3g} (relative)")
-                 + f"; chi^2 = {f.chi2:.4g} for {f.dof} degrees of freedom", "",
+                 + f"; chi^2 = {f.chi2:.4g} for {f.dof} degree{'' if f.dof == 1 else 's'} of freedom", "",
                  f"{'parameter':<14}{'start':>16}{'updated':>18}{'std. error':>14}{'rel.':>10}"]
         for p, a, b, se, ok in zip(self.parameters, self.start, self.values, self.standard_errors, f.identifiable):
             if ok:

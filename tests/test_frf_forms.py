@@ -125,3 +125,13 @@ def test_units_as_the_command_line_writes_them():
             r.magnitude(bad)
         text = str(exc.value)
         assert "units" in text and words in text and "\n" not in text, text
+
+
+def test_frf_says_what_its_largest_magnitude_is_and_describes_the_forms(capsys):
+    """The text's largest magnitude is the grid's, said so; equal to the largest |iω H| on the grid."""
+    r = sc.frf_form("building", "mobility", input="floor1", output="floor3")
+    line = next(x for x in r.to_text().splitlines() if x.startswith("largest magnitude"))
+    assert "on the grid (not an exact peak" in line
+    assert float(line.split("): ")[1].split(" at ")[0]) == pytest.approx(np.max(np.abs(r.values)), rel=1e-5)
+    status, out, _ = run_cli(["frf", "--help"], capsys)
+    assert status == 0 and all(w in out for w in ("mobility", "accelerance", "dynamic stiffness", "transmissibility"))

@@ -368,3 +368,17 @@ def test_the_interlacing_refusal_shows_the_values_apart(tmp_path, capsys):
     one_line_error(status, out, err, "do not interlace")
     assert "2.000000000000001" in err and "2.0000000000000005" in err, err
     assert "omega2_free[1] - omega2_clamped[0] = -5.0e-16" in err, err
+
+
+def test_the_report_speaks_in_its_own_words(tmp_path):
+    """Two measured frequencies, one fitted parameter, the noise estimated: 2 − 1 = 1 degree of freedom
+    (singular), and why the fit stopped in the report's words, not SciPy's message with its backticks."""
+    from springchain.numeric.updating.fit import STOPPED
+
+    meas = tmp_path / "two.csv"
+    meas.write_text("omega\n1.0005\n1.2905\n")
+    r = sc.update("seed", meas, parameters="k", out=None)
+    text = r.to_text()
+    assert r.fit.dof == 1 and "for 1 degree of freedom" in text and "1 degrees" not in text
+    assert "`" not in text and r.fit.status in STOPPED.values() and r.fit.status in text
+    assert "1 parameter (" in text and "2 measured modes" in text

@@ -37,6 +37,14 @@ from ..errors import RunRefused
 IDENTIFIABLE_RTOL = 1e-8
 #: A parameter belongs to an unidentifiable combination when its weight there exceeds this.
 INVOLVED = 1e-3
+#: Most model evaluations of one fit.
+MAX_EVALUATIONS = 200
+#: Why SciPy's ``least_squares`` stopped (its ``status``), in the report's words.
+STOPPED = {0: f"stopped at the evaluation limit ({MAX_EVALUATIONS}) before converging",
+           1: "converged (the gradient vanished to working precision)",
+           2: "converged (the sum of squares stopped decreasing)",
+           3: "converged (the parameter step fell below working precision)",
+           4: "converged (the sum of squares and the parameter step both settled)"}
 
 
 @dataclass(frozen=True)
@@ -220,13 +228,13 @@ def solve(problem: Problem) -> Fit:
         if V_null.shape[1] == 0:  # full rank: bounds apply directly (V_id is orthogonal)
             res = least_squares(lambda t: at(t)[0].copy(), np.clip(theta0, lo, hi), jac=lambda t: at(t)[1].copy(),
                                 bounds=(lo, hi), method="trf", x_scale=1.0, ftol=1e-15, xtol=1e-15, gtol=1e-15,
-                                max_nfev=200)
+                                max_nfev=MAX_EVALUATIONS)
             theta = res.x
         else:
             res = least_squares(fun, np.zeros(rank), jac=jac, method="trf", x_scale=1.0, ftol=1e-15, xtol=1e-15,
-                                gtol=1e-15, max_nfev=200)
+                                gtol=1e-15, max_nfev=MAX_EVALUATIONS)
             theta = theta0 + V_id @ res.x
-        status = res.message
+        status = STOPPED.get(int(res.status), f"stopped (SciPy status {int(res.status)})")
     r1, J1 = at(theta)
     p_end = problem.start if theta.tobytes() == start_key else np.exp(theta)
     chi2 = float(np.sum(r1 * r1))
