@@ -351,6 +351,36 @@ def test_generated_band_functions_against_the_symbolic_forms(name):
     np.testing.assert_allclose(np.sort(accurate.omega2, axis=1), got["omega2"], rtol=1e-12)
 
 
+def test_generated_group_velocity_is_finite_where_two_branches_touch():
+    """The diatomic module with m1 = m2 = m, k1 = k2 = k: a monatomic chain folded into cells of two. By hand,
+    with Q = q/2 the monatomic phase, ω = 2√(k/m) sin(Q/2): the lower branch is 2√(k/m) sin(|q|/4) and the upper
+    2√(k/m) cos(|q|/4), so dω/dq = ±√(k/m) cos(|q|/4)/2 and ∓√(k/m) sin(|q|/4)/2 (odd in q). At q = π they touch
+    and the closed form divides by the root of a vanishing discriminant (it gave ±inf): now each branch's limit
+    from inside (0, π), finite, to 1e-15 at q = π and within 1e-9 from it, with no warning."""
+    import warnings
+
+    from springchain._modules import system_of
+
+    k, m = 2.0, 3.0
+    system = system_of(sc.load("diatomic").with_parameters(m1=m, m2=m, k1=k, k2=k))[0]
+    eps = np.array([0.0, 1e-12, 1e-9, 1e-7, 1e-5, 1e-3, 3e-2, 0.5, 2.0])
+    q = np.concatenate([np.pi - eps, -(np.pi - eps)])
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        v = system.group_velocity(q)
+    a, sign = np.abs(q), np.sign(q)
+    lower = np.sqrt(k / m) * np.cos(a / 4) / 2 * sign
+    upper = -np.sqrt(k / m) * np.sin(a / 4) / 2 * sign
+    assert np.all(np.isfinite(v))
+    scale = np.sqrt(k / m) / 2
+    for got, ref in ((v[:, 0], lower), (v[:, 1], upper)):
+        err = np.abs(got - ref) / scale
+        assert np.all(err[np.tile(eps, 2) == 0] < 1e-15) and np.all(err < 1e-9), err
+    # the textbook diatomic (m1 != m2): a gap at q = pi, where both velocities vanish (closed form kept)
+    system = system_of(sc.load("diatomic"))[0]
+    assert np.all(np.abs(system.group_velocity(np.array([np.pi]))) < 1e-15)
+
+
 def test_generated_band_omega2_without_closed_form():
     from springchain._modules import system_of
 
