@@ -534,3 +534,57 @@ def _toml(data) -> str:
 
 def test_points_out_of_range_are_refused(capsys, tmp_path):
     one_line_error(*run_cli(["bands", "diatomic", "--points", "2", "--out", tmp_path], capsys), "--points")
+
+
+# -- modes of a periodic scene named by band -------------------------------------------------------------
+@pytest.mark.parametrize("cells", [5, 8])
+def test_modes_of_a_ring_are_named_by_band_at_2_pi_s_over_n(cells, capsys):
+    """``modes`` of a diatomic ring of N cells: every mode a band mode with q = 2πs/N, and its ω² that of the
+    ring's D from a 50-digit eigen-solve written here and ω²_j(2πs/N) of the textbook formula, to 1e-13."""
+    n = 2 * cells
+    scene = diatomic(n, left="ring", right="ring")
+    data = sc.modes(scene).to_json()
+    masses = [1.0, 3.0] * cells
+    springs = [(i, (i + 1) % n, 1.0 if i % 2 == 0 else 2.0) for i in range(n)]
+    ref = _ring_reference(masses, springs, n)
+    assert len(data["modes"]) == n and data["gap_modes"] == []
+    for rec, r in zip(data["modes"], ref):
+        assert rec["kind"] == "band" and rec["localisation_length"] is None and rec["bloch_weight"] > 1 - 1e-12
+        s = rec["q"] * cells / (2 * np.pi)
+        assert abs(s - round(s)) <= 1e-6, rec
+        lam = textbook_lambda(1, 3, 1, 2, 2 * mp.pi * round(s) / cells)[rec["band"]]
+        for want in (r, lam):
+            want = float(want)
+            assert (rec["omega2_value"] == 0 and abs(want) < 1e-40) or \
+                abs(rec["omega2_value"] - want) <= 1e-13 * abs(want), (rec, want)
+    text = sc.modes(scene).to_text()
+    assert "Modes named by band (unit cell of 2 masses" in text and text.count(" band 1, q = ") == cells
+
+
+def test_modes_names_gap_modes_and_costs_nothing_without_a_cell(monkeypatch):
+    """The free diatomic chain's edge mode is named with its localisation length (1/Im q of the attenuation);
+    a [masses] scene and a non-periodic [chain] get no band fields, and a [masses] scene never loads a module
+    for them; past MAX_MASSES masses a note says where the names are."""
+    import springchain._mode_bands as mb
+
+    m = sc.modes("diatomic")
+    data = m.to_json()
+    (edge,) = data["gap_modes"]
+    b = sc.bands("diatomic", finite=False, density=False)
+    kappa = float(b.attenuation([np.sqrt(edge["omega2"])])[0][0])
+    assert edge["kind"] == "edge" and edge["localisation_length"] == pytest.approx(1 / kappa, rel=1e-12)
+    assert "edge mode in a gap, localisation length" in m.to_text()
+    assert all(r["kind"] == "band" for r in data["modes"])  # the listed ends: 10 lowest, 10 highest
+    cell = sc.modes("mass_in_mass").to_json()
+    assert len(cell["modes"]) == 60 and {r["band"] for r in cell["modes"]} == {0, 1}
+    calls = []
+    monkeypatch.setattr("springchain._modules.system_of", lambda *a, **k: calls.append(a) or 1 / 0)
+    plain = sc.modes("building").to_json()
+    assert calls == [] and not any("band" in r for r in plain["modes"]) and "gap_modes" not in plain
+    monkeypatch.undo()
+    bumpy = sc.scene_from_dict({"name": "bumpy", "parameters": {"m": 1.0, "k": 1.0},
+                                "chain": {"n": 12, "mass": "m*(1 + i**2/100)", "k": "k"}})
+    assert not any("band" in r for r in sc.modes(bumpy).to_json()["modes"])
+    monkeypatch.setattr(mb, "MAX_MASSES", 10)
+    long = sc.modes(diatomic(12)).to_json()
+    assert not any("band" in r for r in long["modes"]) and any("named by band up to 10" in n for n in long["notes"])
