@@ -25,7 +25,7 @@ from dataclasses import dataclass
 import mpmath
 import sympy as sp
 
-from .printing import latex, sstr
+from .printing import closed, latex, sstr
 from .accurate import (MAX_DPS, MAX_MPMATH_MODES, NotAccurate, _eig_dynamical, _mp, certified, dynamical_bound,
                        exact_values, omega2_value, value)
 from .model import Model
@@ -491,7 +491,7 @@ def damped_mode_lines(model: Model, dm: DampedModes) -> list[str]:
         elif not dm.proportional:
             line += f"   (overdamped: real eigenvalues, sigma = {r.zeta * r.omega_n:.10g})"
         if r.zeta_expr is not None:
-            line += f"   zeta = {sstr(r.zeta_expr)}"
+            line += f"   zeta = {closed(sstr(r.zeta_expr))}"
         out.append(line)
     return out
 

@@ -27,7 +27,7 @@ from dataclasses import dataclass
 import mpmath
 import sympy as sp
 
-from .printing import latex
+from .printing import closed, latex
 
 from .accurate import (MAX_DPS, MAX_MPMATH_MODES, NotAccurate, _eig_dynamical, certified, clusters, dynamical_bound,
                        exact_values, omega2_value, value)
@@ -331,9 +331,17 @@ def text_lines(p: Participation) -> list[str]:
                    f"{frac[j]:>10.6f}  {cum[j]:>10.6f}")
     out.append(f"    total mass = {p.total_mass:.10g}; sum of M* = {p.effective_mass_sum:.17g} "
                f"(relative difference {abs(p.effective_mass_sum - p.total_mass) / p.total_mass:.1e}); {p.route}")
+    long = []
     for j, g in enumerate(p.gamma_expr):
         if g is not None:
-            out.append(f"    mode {j + 1}: Gamma = {sp.sstr(g)}   M* = {sp.sstr(p.effective_mass_expr[j])}")
+            gt, mt = sp.sstr(g), sp.sstr(p.effective_mass_expr[j])
+            if closed(gt) == gt and closed(mt) == mt:
+                out.append(f"    mode {j + 1}: Gamma = {gt}   M* = {mt}")
+            else:
+                long.append((j + 1, max(len(gt), len(mt)), closed(gt if len(gt) > len(mt) else mt)))
+    if long:
+        out.append(f"    modes {', '.join(str(j) for j, _, _ in long)}: Gamma and M* "
+                   + max(long, key=lambda r: r[1])[2].replace("closed form omitted:", "closed forms omitted: up to").replace("carries it", "carries them"))
     for j, s in enumerate(p.shapes):
         out.append(f"    mode {j + 1}: mass-normalised shape ({', '.join(f'{c:.10g}' for c in s)})")
     return out

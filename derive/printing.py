@@ -9,6 +9,13 @@
   they never read like a parameter named ``K``.
 
 Only for reports: JSON fields keep SymPy's ``sstr`` (read back by ``parse_expression``).
+
+**Size caps of printed closed forms** (characters of the printed text, measured after printing, so
+they cost nothing): a text report prints a closed form of at most :data:`MAX_TEXT_CLOSED_FORM`
+characters and shows a longer one by its value with :func:`closed`'s note; ``--json`` carries closed
+forms of at most :data:`MAX_JSON_CLOSED_FORM` characters and a longer one is null, with a note
+(:func:`json_closed`). A three-mass chain of unequal masses has ω² of ~75 characters but shapes, ζ,
+Γ, M*, α_R and β_R of 170–650, which the text report now names instead of printing.
 """
 
 from __future__ import annotations
@@ -81,4 +88,30 @@ def latex(expr, **settings) -> str:
     return sp.latex(expr, symbol_names=names, **settings)
 
 
-__all__ = ["sstr", "latex", "symbol_latex", "ScenePrinter", "MATRIX_LATEX", "MATRIX_TEXT"]
+#: Longest closed form a text report prints (characters, about two terminal lines).
+MAX_TEXT_CLOSED_FORM = 160
+#: Longest closed form a ``--json`` field carries (characters); a longer one is null, with a note.
+MAX_JSON_CLOSED_FORM = 4000
+
+
+def closed(text: str) -> str:
+    """``text`` (a printed closed form) if it is at most :data:`MAX_TEXT_CLOSED_FORM` characters long,
+    else the note a text report prints in its place."""
+    if len(text) <= MAX_TEXT_CLOSED_FORM:
+        return text
+    where = "--json carries it" if len(text) <= MAX_JSON_CLOSED_FORM else "too long for --json as well"
+    return f"(closed form omitted: {len(text)} characters; {where})"
+
+
+def json_closed(text: str | None, what: str, notes: list) -> str | None:
+    """``text`` for a ``--json`` field, or None (with a note appended to ``notes``) past
+    :data:`MAX_JSON_CLOSED_FORM` characters."""
+    if text is None or len(text) <= MAX_JSON_CLOSED_FORM:
+        return text
+    notes.append(f"{what}: closed form of {len(text)} characters omitted (null; the limit is "
+                 f"{MAX_JSON_CLOSED_FORM}); the value is in the value field")
+    return None
+
+
+__all__ = ["sstr", "latex", "symbol_latex", "ScenePrinter", "MATRIX_LATEX", "MATRIX_TEXT", "MAX_TEXT_CLOSED_FORM",
+           "MAX_JSON_CLOSED_FORM", "closed", "json_closed"]

@@ -28,7 +28,7 @@ from dataclasses import dataclass
 import mpmath
 import sympy as sp
 
-from .printing import latex
+from .printing import closed, latex
 
 from .accurate import (MAX_DPS, MAX_MPMATH_MODES, _eig_dynamical, certified, dynamical_bound, exact_values,
                        omega2_value, value)
@@ -228,8 +228,8 @@ def model_fit(model, mode_set) -> RayleighFit | None:
 def text_lines(f: RayleighFit) -> list[str]:
     z = ", ".join(sp.sstr(x) for x in f.zeta_targets)
     out = [f"Rayleigh damping from targets zeta = ({z}) at modes {f.modes[0]} and {f.modes[1]}: C = α_R M + β_R K with",
-           f"    α_R = {f.alpha:.10g}" + (f" = {sp.sstr(f.alpha_expr)}" if f.alpha_expr is not None else ""),
-           f"    β_R = {f.beta:.10g}" + (f" = {sp.sstr(f.beta_expr)}" if f.beta_expr is not None else ""),
+           f"    α_R = {f.alpha:.10g}" + (f" = {closed(sp.sstr(f.alpha_expr))}" if f.alpha_expr is not None else ""),
+           f"    β_R = {f.beta:.10g}" + (f" = {closed(sp.sstr(f.beta_expr))}" if f.beta_expr is not None else ""),
            "    zeta of every elastic mode, alpha/(2 omega) + beta omega/2: "
            + ", ".join(f"{j + 1}: {x:.6g}" for j, x in enumerate(f.zeta))]
     return out

@@ -12,7 +12,7 @@ import sympy as sp
 from .accurate import exact_values, omega2_value, value
 from .model import Effect, Model
 from .modes import ModeSet
-from .printing import MATRIX_LATEX, MATRIX_TEXT, ScenePrinter, latex, sstr
+from .printing import MATRIX_LATEX, MATRIX_TEXT, MAX_TEXT_CLOSED_FORM, ScenePrinter, closed, json_closed, latex, sstr
 
 MAX_MATRIX = 8  # larger matrices are described, not printed
 #: Larger scenes print T, V, R as element sums (first ... last) and sums in stored order.
@@ -184,15 +184,37 @@ def modes_json(model: Model, modes: ModeSet) -> dict:
 
     if part.applies(model):
         extra.update(part.json_fields(part.participation(model, modes), records))
+    notes = list(modes.notes) + effect_notes(model)
+    _cap_closed_forms(records, extra, notes)
     return {
         "scene": sc.name,
         "parameters": {k: sc.parameters[k] for k in sorted(sc.parameters)},
         "masses": list(sc.mass_names),
         "modes": records,
         "closed_form": modes.closed_form,
-        "notes": list(modes.notes) + effect_notes(model),
+        "notes": notes,
         **extra,
     }
+
+
+#: The closed-form fields of a ``modes --json`` record (each beside its value field).
+_RECORD_FORMS = ("omega2", "damping_ratio_expr", "participation_factor_expr", "effective_mass_expr")
+
+
+def _cap_closed_forms(records: list[dict], extra: dict, notes: list) -> None:
+    """Null (with a note) every closed form past :data:`printing.MAX_JSON_CLOSED_FORM` characters, in place:
+    the fields stay, their values become None (a shape as a whole)."""
+    for j, rec in enumerate(records, start=1):
+        for key in _RECORD_FORMS:
+            if isinstance(rec.get(key), str):
+                rec[key] = json_closed(rec[key], f"modes[{j - 1}].{key}", notes)
+        if isinstance(rec.get("shape"), list) and rec["shape"]:
+            if json_closed(", ".join(rec["shape"]), f"modes[{j - 1}].shape", notes) is None:
+                rec["shape"] = None
+    fit = extra.get("damping", {}).get("rayleigh_coefficients")
+    for key in ("alpha_expr", "beta_expr"):
+        if fit is not None and isinstance(fit.get(key), str):
+            fit[key] = json_closed(fit[key], f"damping.rayleigh_coefficients.{key}", notes)
 
 
 def static_equilibrium(model: Model) -> list[sp.Expr] | None:
@@ -263,9 +285,18 @@ def mode_lines(model: Model, modes: ModeSet) -> list[str]:
         value = omega2_value(mode, _values(model))
         tag = "  rigid-body: uniform translation of a free piece" if mode.rigid else ""
         mult = f"  (multiplicity {mode.multiplicity})" if mode.multiplicity > 1 else ""
-        lines.append(f"ω² = {sstr(mode.omega2)}   (= {value:.10g} at the scene's values){mult}{tag}")
+        text = sstr(mode.omega2)
+        if len(text) <= MAX_TEXT_CLOSED_FORM:
+            lines.append(f"ω² = {text}   (= {value:.10g} at the scene's values){mult}{tag}")
+        else:
+            lines.append(f"ω² = {value:.10g} at the scene's values   {closed(text)}{mult}{tag}")
         for s in mode.shapes:
-            lines.append(f"    shape ({', '.join(_text(c) for c in s)})")
+            text = ", ".join(_text(c) for c in s)
+            if len(text) <= MAX_TEXT_CLOSED_FORM:
+                lines.append(f"    shape ({text})")
+            else:
+                lines.append(f"    shape ({', '.join(f'{_num(c, model):.10g}' for c in s)}) at the scene's values   "
+                             f"{closed(text)}")
     return lines
 
 

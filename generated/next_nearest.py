@@ -217,6 +217,8 @@ CELL_SPRINGS = ((0, 1, 0), (1, 0, 1), (0, 0, 1), (1, 1, 1))
 CELL_DAMPERS = ()
 _CELL_SPRINGS = CELL_SPRINGS  # what bodies read (a parameter cannot shadow a private name)
 BAND_CLOSED_FORM = True
+#: Pairs of branches closer than this (relative) take the Hellmann-Feynman group velocity.
+BAND_TOUCH = 0.01
 
 
 def cell_masses(k1, k2, m1, m2):
@@ -272,34 +274,94 @@ def band_omega(q, k1, k2, m1, m2):
 
 def group_velocity(q, k1, k2, m1, m2):
     """Closed-form group velocity dω_j/dq [cells/s], shape q.shape + (p,) (odd in q; the
-    right-hand limit at q = 0)."""
+    right-hand limit at q = 0); where two branches of one quadratic touch (the closed form divides by
+    the root of their discriminant), Hellmann-Feynman on D(q), each branch its limit from
+    inside (0, pi)."""
     _q = _np.asarray(q, dtype=_np.float64)
     _qa = _np.arctan2(_np.sin(_q), _np.cos(_q))  # q folded into (-pi, pi]
     _qf = _np.abs(_qa)
-    _x0 = m1**(-1.0)
-    _x1 = (1/2)*_qf
-    _x2 = _np.sin(_x1)
-    _x3 = _x2**2
-    _x4 = 2*k2
-    _x5 = _x3*_x4 + k1
-    _x6 = m2**(-1.0)
-    _x7 = k1**2
-    _x8 = _x0*_x6*_x7
-    _x9 = -_x0 + _x6
-    _x10 = _x9**2
-    _x11 = _np.sqrt(_x10*_x5**2 + 2*_x8*(_np.cos(_qf) + 1))
-    _x12 = _x0*_x5 + _x11 + _x5*_x6
-    _x13 = _x12**(-1.0)
-    _x14 = _np.cos(_x1)
-    _x15 = 4*_x3*k2**2
-    _x16 = _np.sqrt(_x15 + _x7 + 4*k1*k2)
-    _x17 = _x14*_x2
-    _x18 = _x17*_x4
-    _x19 = _x11**(-1.0)
-    _x20 = _x8*_np.sin(_qf)
-    _x21 = _x18*_x5
-    _x22 = _x17*k2
-    return _np.where((_qa < 0)[..., None], -1.0, 1.0) * _np.stack([_np.broadcast_to(_np.sqrt(_x13)*(-_x13*_x16*_x2*(_x0*_x18 + _x18*_x6 - _x19*(_x20 - _x21*_x9**2)) + _x14*_x15/_x16 + _x14*_x16)/(_np.sqrt(m1)*_np.sqrt(m2)), _q.shape), _np.broadcast_to((_x0*_x22 - 1/2*_x19*(-_x10*_x21 + _x20) + _x22*_x6)/_np.sqrt(_x12), _q.shape)], axis=-1)
+    with _np.errstate(divide="ignore", invalid="ignore"):  # where branches touch: replaced below
+        _x0 = m1**(-1.0)
+        _x1 = (1/2)*_qf
+        _x2 = _np.sin(_x1)
+        _x3 = _x2**2
+        _x4 = 2*k2
+        _x5 = _x3*_x4 + k1
+        _x6 = m2**(-1.0)
+        _x7 = k1**2
+        _x8 = _x0*_x6*_x7
+        _x9 = -_x0 + _x6
+        _x10 = _x9**2
+        _x11 = _np.sqrt(_x10*_x5**2 + 2*_x8*(_np.cos(_qf) + 1))
+        _x12 = _x0*_x5 + _x11 + _x5*_x6
+        _x13 = _x12**(-1.0)
+        _x14 = _np.cos(_x1)
+        _x15 = 4*_x3*k2**2
+        _x16 = _np.sqrt(_x15 + _x7 + 4*k1*k2)
+        _x17 = _x14*_x2
+        _x18 = _x17*_x4
+        _x19 = _x11**(-1.0)
+        _x20 = _x8*_np.sin(_qf)
+        _x21 = _x18*_x5
+        _x22 = _x17*k2
+        _v = _np.stack([_np.broadcast_to(_np.sqrt(_x13)*(-_x13*_x16*_x2*(_x0*_x18 + _x18*_x6 - _x19*(_x20 - _x21*_x9**2)) + _x14*_x15/_x16 + _x14*_x16)/(_np.sqrt(m1)*_np.sqrt(m2)), _q.shape), _np.broadcast_to((_x0*_x22 - 1/2*_x19*(-_x10*_x21 + _x20) + _x22*_x6)/_np.sqrt(_x12), _q.shape)], axis=-1)
+    _v = _band_touching(_qf, _v, _band_omega2(_qf, k1, k2, m1, m2), _cell_masses(k1, k2, m1, m2), _cell_stiffness(k1, k2, m1, m2), ((0, 1),))
+    return _np.where((_qa < 0)[..., None], -1.0, 1.0) * _v
+
+
+def _band_touching(_qf, _v, _w2, _m, _k, _pairs):
+    """_v (shape _qf.shape + (p,), closed-form dω/dq at _qf in [0, π]) where the branches of a pair are within
+    BAND_TOUCH of each other or _v is not finite: Hellmann-Feynman on D(q) = M^-1/2 K(q) M^-1/2."""
+    _v = _np.array(_v, dtype=_np.float64)
+    _p = _v.shape[-1]
+    _fq, _fv, _fw = _qf.reshape(-1), _v.reshape(-1, _p), _np.broadcast_to(_w2, _v.shape).reshape(-1, _p)
+    for _i, _j in _pairs:
+        _lo, _hi = _np.minimum(_fw[:, _i], _fw[:, _j]), _np.maximum(_fw[:, _i], _fw[:, _j])
+        _near = (_lo > 0) & ((_hi - _lo <= BAND_TOUCH * _hi) | ~_np.isfinite(_fv[:, _i]) | ~_np.isfinite(_fv[:, _j]))
+        _at = _np.flatnonzero(_near)
+        if _at.size == 0:
+            continue
+        _d = _band_pair_slopes(_fq[_at], _m, _k, _lo[_at], _hi[_at])  # dω²/dq of (lower, upper)
+        _low_i = _fw[_at, _i] <= _fw[_at, _j]
+        _fv[_at, _i] = _np.where(_low_i, _d[:, 0], _d[:, 1]) / (2 * _np.sqrt(_fw[_at, _i]))
+        _fv[_at, _j] = _np.where(_low_i, _d[:, 1], _d[:, 0]) / (2 * _np.sqrt(_fw[_at, _j]))
+    return _v
+
+
+def _band_pair_slopes(_q, _m, _k, _lo, _hi):
+    """dω²/dq (shape (Q, 2): lower, upper) of the two adjacent eigenvalues of D(q) nearest _lo, _hi: the diagonal of
+    dD/dq in D's eigenvectors; where they are equal within rounding, the eigenvalues of dD/dq on their eigenspace,
+    the larger to the lower branch (its limit from inside (0, π); the smaller at q = 0)."""
+    _p = _m.shape[0]
+    _K = _np.zeros(_q.shape + (_p, _p), dtype=_np.complex128)
+    _dK = _np.zeros_like(_K)
+    for (_a, _b, _r), _w in zip(_CELL_SPRINGS, _k):
+        if _a < 0 or _b < 0:
+            _c = _b if _a < 0 else _a
+            _K[..., _c, _c] += _w
+        elif _a == _b:
+            _K[..., _a, _a] += 4 * _w * _np.sin(_r * _q / 2) ** 2
+            _dK[..., _a, _a] += 2 * _r * _w * _np.sin(_r * _q)
+        else:
+            _e = _np.exp(1j * _r * _q)
+            _K[..., _a, _a] += _w
+            _K[..., _b, _b] += _w
+            _K[..., _a, _b] -= _w * _e
+            _K[..., _b, _a] -= _w * _np.conj(_e)
+            _dK[..., _a, _b] -= 1j * _r * _w * _e
+            _dK[..., _b, _a] += 1j * _r * _w * _np.conj(_e)
+    _s = 1 / _np.sqrt(_m)
+    _lam, _U = _np.linalg.eigh(_K * _s[:, None] * _s[None, :])
+    _G = _np.einsum("qki,qkl,qlj->qij", _U.conj(), _dK * _s[:, None] * _s[None, :], _U)
+    _t = _np.argmin(_np.abs(_lam[:, :-1] - _lo[:, None]) + _np.abs(_lam[:, 1:] - _hi[:, None]), axis=1)
+    _rows = _np.arange(_q.shape[0])
+    _B = _np.stack([_np.stack([_G[_rows, _t, _t], _G[_rows, _t, _t + 1]], -1),
+                      _np.stack([_G[_rows, _t + 1, _t], _G[_rows, _t + 1, _t + 1]], -1)], -2)
+    _diag = _np.stack([_B[:, 0, 0].real, _B[:, 1, 1].real], -1)
+    _eig = _np.linalg.eigvalsh(_B)  # ascending
+    _eig = _np.where((_q > 0)[:, None], _eig[:, ::-1], _eig)
+    _same = _lam[_rows, _t + 1] - _lam[_rows, _t] <= 1e-13 * _np.abs(_lam).max(axis=1)
+    return _np.where(_same[:, None], _eig, _diag)
 
 
 # Private aliases used by the function bodies above.

@@ -127,23 +127,55 @@ class Modes:
         return chain_report(self.model, self.modes, _chain_omega2(self.scene, self.modes),
                             _chain_damped(self.scene, self.model), self.participation)
 
+    @functools.cached_property
+    def bands(self):
+        """The modes of a periodic scene's finite chain named by band and q, or as gap modes
+        (:class:`springchain._mode_bands.ModeBands`); None for a scene without a unit cell."""
+        from ._mode_bands import mode_bands
+
+        return mode_bands(self.scene, uniform_chain=self.chain and bool(self.model.chain.uniform))
+
     def to_json(self) -> dict:
-        """Exactly what ``springchain modes SCENE --json`` prints."""
+        """Exactly what ``springchain modes SCENE --json`` prints.
+
+        A periodic scene's listed modes also carry ``band``, ``q`` (rad per cell), ``kind`` (``band``, ``edge``
+        or ``defect``), ``localisation_length`` (cells, gap modes) and ``bloch_weight`` (band modes), as
+        ``springchain bands`` names them (up to :data:`springchain._mode_bands.MAX_MASSES` masses).
+        """
         if self.chain:
             import copy
 
-            return copy.deepcopy(self._chain_report[1])  # the caller may edit its dict
-        from .derive.report import modes_json
+            data = copy.deepcopy(self._chain_report[1])  # the caller may edit its dict
+        else:
+            from .derive.report import modes_json
 
-        return modes_json(self.model, self.modes)
+            data = modes_json(self.model, self.modes)
+        b = self.bands
+        if b is not None:
+            from .derive.chain import MODES_LISTED_EACH_END
+
+            b.records(data["modes"], self.scene.n, MODES_LISTED_EACH_END)
+            if b.labels is not None:
+                data["gap_modes"] = b.gap_modes()
+            data["notes"].append(b.note or f"modes named by band: band and q (rad per cell) of the unit cell of "
+                                            f"{b.p} masses (springchain bands), or a gap mode's kind and "
+                                            "localisation length (cells)")
+        return data
 
     def to_text(self) -> str:
-        """What ``springchain modes SCENE`` prints."""
+        """What ``springchain modes SCENE`` prints (a periodic scene's modes named by band at the end)."""
         if self.chain:
-            return self._chain_report[0]
-        from .derive.report import render_text
+            text = self._chain_report[0]
+        else:
+            from .derive.report import render_text
 
-        return render_text(self.model, self.modes)
+            text = render_text(self.model, self.modes)
+        b = self.bands
+        if b is None:
+            return text
+        from .derive.chain import MODES_LISTED_EACH_END
+
+        return text + "\n".join(b.text_lines(MODES_LISTED_EACH_END)).lstrip("\n").join(["\n", "\n"])
 
     def to_latex(self) -> str:
         """What ``springchain modes SCENE --latex`` prints (amsmath)."""

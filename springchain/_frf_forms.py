@@ -75,15 +75,32 @@ class FrfForm:
         return FORMS[self.form][0]
 
     def display_unit(self, units=None) -> tuple[str, float]:
-        """(unit, SI value of one unit) the magnitude is shown in (``units``: an ``--units`` list)."""
+        """(unit, SI value of one unit) the magnitude is shown in.
+
+        Parameters
+        ----------
+        units : None, str, sequence of str or OutputUnits
+            Results in these units: ``"mm,kN"`` as ``--units`` takes it (one unit per dimension, ``g``
+            standard gravity; ratios follow their numerator and denominator), None for SI.
+
+        Raises
+        ------
+        SceneError
+            A bad units text (one line; pint missing included).
+        """
+        from .derive.units.output import output_units
         from .numeric.interop.frf_forms import RATIO
 
+        units = output_units(units)
         if units is None:
             return self.unit, 1.0
         return units.ratio(*RATIO[self.form])
 
     def magnitude(self, units=None) -> np.ndarray:
-        """|value| in the display unit, or in dB re 1 display unit (``db``), shape (W,)."""
+        """|value| in the display unit, or in dB re 1 display unit (``db``), shape (W,).
+
+        ``units``: as :meth:`display_unit` (e.g. ``"mm,kN"``).
+        """
         from .numeric.interop.frf_forms import decibels
 
         _, fac = self.display_unit(units)
@@ -96,6 +113,7 @@ class FrfForm:
         return np.degrees(np.unwrap(np.angle(self.values)))
 
     def magnitude_label(self, units=None) -> str:
+        """The magnitude axis label with its unit (``units``: as :meth:`display_unit`)."""
         from .numeric.interop.frf_forms import FORMS
 
         u, _ = self.display_unit(units)
@@ -105,7 +123,10 @@ class FrfForm:
         return f"|{what}| [{u}]" if u != "1" else f"|{what}| [-]"
 
     def to_json(self, units=None) -> dict:
-        """What ``springchain frf ... --form F --json`` prints."""
+        """What ``springchain frf ... --form F --json`` prints (``units``: as :meth:`display_unit`)."""
+        from .derive.units.output import output_units
+
+        units = output_units(units)
         u, _ = self.display_unit(units)
         return {"scene": self.scene.name, "form": self.form, "input": self.input, "output": self.output,
                 "frequency": self.frequency.tolist(), "magnitude": self.magnitude(units).tolist(),
@@ -117,6 +138,10 @@ class FrfForm:
                 "notes": list(self.notes)}
 
     def to_text(self, units=None) -> str:
+        """What ``springchain frf ... --form F`` prints (``units``: as :meth:`display_unit`)."""
+        from .derive.units.output import output_units
+
+        units = output_units(units)
         f, u = self.frequency, self.frequency_unit
         mag = self.magnitude(units)
         lines = [f"{self.magnitude_label(units)} of {self.scene.name!r}, input {self.input}, output {self.output}: "
@@ -128,14 +153,18 @@ class FrfForm:
             fd = r.omega_d / (2 * math.pi) if self.hz else r.omega_d
             lines.append(f"  {fd:.8g} {u}   zeta = {r.zeta:.4g}")
         k = int(np.argmax(np.abs(self.values)))
-        lines.append(f"largest magnitude {mag[k]:.6g} at {f[k]:.8g} {u}")
+        lines.append(f"largest magnitude on the grid (not an exact peak: {f.shape[0]} frequencies, refined at "
+                     f"each resonance): {mag[k]:.6g} at {f[k]:.8g} {u}")
         lines += [f"note: {n}" for n in self.notes]
         return "\n".join(lines) + "\n"
 
     def plot(self, units=None):
-        """Magnitude (log or dB) and phase against frequency, axes labelled with units."""
+        """Magnitude (log or dB) and phase against frequency, axes labelled with units (``units``: as
+        :meth:`display_unit`, e.g. ``"mm,kN"``)."""
+        from .derive.units.output import output_units
         from .numeric.plots import new_figure
 
+        units = output_units(units)
         fig, (ax, axp) = new_figure(2, 1, figsize=(9, 6.5), sharex=True)
         f, mag = self.frequency, self.magnitude(units)
         (ax.semilogx if self.db else ax.loglog)(f, mag, lw=1.3, color="C0")
@@ -149,7 +178,8 @@ class FrfForm:
         return fig
 
     def save(self, out: str | Path = DEFAULT_OUT, units=None) -> Path:
-        """Write the figure as ``OUT/<scene>-frf-<form>-<input>-<output>.png``; returns its path."""
+        """Write the figure as ``OUT/<scene>-frf-<form>-<input>-<output>.png``; returns its path (``units``: as
+        :meth:`display_unit`)."""
         from .numeric import plots
 
         path = Path(out) / f"{self.scene.name}-frf-{self.form}-{self.input}-{self.output}.png"

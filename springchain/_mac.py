@@ -169,8 +169,8 @@ def mac(a, b, masses=None) -> MAC:
             dofs = named if named is not None and len(named) == len(s.dofs) else other.dofs
             if len(dofs) != len(s.dofs):
                 raise SceneError(None, "masses", f"an array of {len(s.dofs)} rows against {other.label} with "
-                                 f"{len(other.dofs)} degrees of freedom; accepted: as many rows, or masses=... "
-                                 "naming one mass per row")
+                                 f"{len(other.dofs)} degrees of freedom; accepted: as many rows, or the masses "
+                                 "compared, one per row (--masses on the command line, masses= in Python)")
             s = ModeSet(s.label, tuple(dofs), s.shapes, s.omega, s.modes)
             sa, sb = (s, sb) if i == 0 else (sa, s)
     if all(arrays) and len(sa.dofs) != len(sb.dofs):
@@ -189,7 +189,8 @@ def mac(a, b, masses=None) -> MAC:
         if not dofs:
             raise SceneError(None, "masses", f"{sa.label} and {sb.label} share no degree of freedom ({sa.label}: "
                              f"{', '.join(sa.dofs[:6])}; {sb.label}: {', '.join(sb.dofs[:6])}); accepted: sets "
-                             "sampled at common masses, or masses=... naming them")
+                             "sampled at common masses, or the masses to compare (--masses on the command line, "
+                             "masses= in Python)")
     sa, sb = sa.at(dofs, "masses"), sb.at(dofs, "masses")
     matrix = mac_matrix(sa.shapes, sb.shapes)
     return MAC(sa, sb, matrix, pair(matrix))

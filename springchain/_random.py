@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import math
 import os
+import re
 import stat
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -36,7 +37,9 @@ class RandomVibration:
     response : springchain.numeric.random.response.RandomResponse
         ``names``, ``kinds``, ``units``, ``rms`` (Y,), ``f`` (W,) [Hz], ``psd`` (Y, W), ``input_psd`` (W,).
     input_unit : str
-        The unit the input is shown in (``g`` when the file gave g²/Hz, else SI).
+        The unit the input is shown in: U when the file's header gave ``psd [U^2/Hz]`` (``g``, ``kN``,
+        ``mm/s^2``), else SI. Outputs of the input's dimension (accelerations under a base acceleration,
+        spring forces under a force) are shown in it too, unless ``units`` says otherwise.
     input_factor : float
         SI value of one ``input_unit``.
     notes : list of str
@@ -58,20 +61,43 @@ class RandomVibration:
         raise KeyError(f"no output {name!r} of kind {kind!r}")
 
     def _display(self, kind: str, units=None) -> tuple[str, float]:
-        """(unit, SI value of one unit) an output kind is shown in."""
+        """(unit, SI value of one unit) an output kind is shown in (``units``: parsed by
+        :func:`springchain.derive.units.output.output_units`)."""
+        from .derive.units.output import output_units
+
+        units = output_units(units)
         si = {"displacement": "m", "velocity": "m/s", "acceleration": "m/s^2", "spring force": "N"}[kind]
-        if kind == "acceleration" and self.input_unit == "g" and units is None:
-            return "g", self.input_factor
+        if units is None and kind == ("spring force" if self.on else "acceleration") and \
+                (self.input_unit, self.input_factor) != (si, 1.0):
+            return self.input_unit, self.input_factor  # the input's own unit (g, kN, ...) for its dimension
         return (si, 1.0) if units is None else units.of(si)
 
     def _input_display(self, units=None) -> tuple[str, float]:
         """(unit, SI value of one unit) the input is shown in."""
+        from .derive.units.output import output_units
+
+        units = output_units(units)
         if units is None:
             return self.input_unit, self.input_factor
         return units.of("N" if self.on else "m/s^2")
 
     def to_json(self, units=None) -> dict:
-        """Exactly what ``springchain psd ... --json`` prints."""
+        """Exactly what ``springchain psd ... --json`` prints.
+
+        Parameters
+        ----------
+        units : None, str, sequence of str or OutputUnits
+            Results in these units: ``"mm,kN,g"`` as ``--units`` takes it (one unit per dimension, ``g``
+            standard gravity; PSDs follow as unit²/Hz), None for SI (accelerations in g when the input was).
+
+        Raises
+        ------
+        SceneError
+            A bad units text (one line; pint missing included).
+        """
+        from .derive.units.output import output_units
+
+        units = output_units(units)
         r = self.response
         rows = []
         for nm, kd, v in zip(r.names, r.kinds, r.rms):
@@ -85,6 +111,22 @@ class RandomVibration:
                 "notes": list(self.notes)}
 
     def to_text(self, units=None) -> str:
+        """What ``springchain psd`` prints.
+
+        Parameters
+        ----------
+        units : None, str, sequence of str or OutputUnits
+            Results in these units: ``"mm,kN,g"`` as ``--units`` takes it (one unit per dimension, ``g``
+            standard gravity; PSDs follow as unit²/Hz), None for SI (accelerations in g when the input was).
+
+        Raises
+        ------
+        SceneError
+            A bad units text (one line; pint missing included).
+        """
+        from .derive.units.output import output_units
+
+        units = output_units(units)
         r = self.response
         what = f"a random force on {self.on}" if self.on else "a random base acceleration"
         iu, ifac = self._input_display(units)
@@ -103,9 +145,12 @@ class RandomVibration:
         return "\n".join(lines) + "\n"
 
     def plot(self, kind: str = "acceleration", units=None):
-        """Log–log figure: input PSD and the response PSD of every mass's ``kind`` (or spring forces)."""
+        """Log–log figure: input PSD and the response PSD of every mass's ``kind`` (or spring forces);
+        ``units`` as :meth:`to_text` (e.g. ``"mm,kN,g"``)."""
+        from .derive.units.output import output_units
         from .numeric.random.figures import psd_figure
 
+        units = output_units(units)
         r = self.response
         u, fac = self._display(kind, units)
         curves = [(nm, r.psd[j] / fac**2, float(r.rms[j]) / fac) for j, (nm, kd) in enumerate(zip(r.names, r.kinds))
@@ -117,7 +162,7 @@ class RandomVibration:
                           f"{self.scene.name}: {kind} PSD under a random {what}")
 
     def save(self, out: str | Path = DEFAULT_OUT, kind: str = "acceleration", units=None) -> Path:
-        """Write the figure as ``OUT/<scene>-psd-<kind>.png``; returns its path."""
+        """Write the figure as ``OUT/<scene>-psd-<kind>.png``; returns its path (``units`` as :meth:`to_text`)."""
         from .numeric import plots
 
         path = Path(out) / f"{self.scene.name}-psd-{kind.replace(' ', '-')}.png"
@@ -185,14 +230,41 @@ def read_psd(path: str | Path, ground: bool):
             raise bad(f"row {r} {line[:40]!r} is not two finite numbers")
         rows.append((a * ff, b * fg))
     data = np.array(rows, dtype=float).reshape(-1, 2)
-    display, factor = unit, 1.0
-    psd_text = lines[0].split(",")[1]
-    if ground and "[" in psd_text:
-        import re
-
-        if re.search(r"(?<![A-Za-z0-9_])g(?![A-Za-z0-9_])", psd_text):
-            display, factor = "g", 9.80665
+    display, factor = input_unit(lines[0].split(",")[1], base, fg) or (unit, 1.0)
     return data[:, 0], data[:, 1], display, factor
+
+
+#: A PSD unit ``U^2/Hz`` (or ``(U)^2/Hz``, ``U**2/Hz``): U, the unit the input itself is shown in.
+_PSD_UNIT = re.compile(r"\s*\[\s*(?:\((?P<paren>[^\[\]]+)\)|(?P<bare>[^\s()\[\]^*/]+))\s*(?:\^|\*\*)\s*2\s*/\s*Hz\s*\]\s*\Z")
+
+
+def input_unit(psd_header: str, dimension, psd_factor: float) -> tuple[str, float] | None:
+    """``(U, SI value of one U)`` for a PSD column headed ``psd [U^2/Hz]`` (``g^2/Hz``, ``kN^2/Hz``,
+    ``(mm/s^2)^2/Hz``), so that the input and the outputs of its dimension are shown in U as given;
+    None when the header has no such unit (SI is shown).
+
+    Parameters
+    ----------
+    psd_header : str
+        The header cell, ``"psd [kN^2/Hz]"``.
+    dimension : Dimension
+        The input's (a force or an acceleration).
+    psd_factor : float
+        The SI value of one unit of the PSD column (already checked), to cross-check U.
+    """
+    from .derive.units import UnitProblem, parse_unit
+
+    m = _PSD_UNIT.match(psd_header[psd_header.find("["):] if "[" in psd_header else "")
+    if m is None:
+        return None
+    text = (m.group("paren") or m.group("bare")).strip()
+    try:
+        u = parse_unit(text, dimension)  # a bare g in an acceleration: standard gravity
+    except UnitProblem:
+        return None
+    if u.dimension != dimension or not math.isclose(float(u.factor) ** 2, psd_factor, rel_tol=1e-12):
+        return None
+    return text, float(u.factor)
 
 
 def random_response(scene: str | Path | Scene, input, on=None, *, interpolation: str = "loglog") -> RandomVibration:

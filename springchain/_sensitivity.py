@@ -319,7 +319,7 @@ def sensitivities(scene: str | Path | Scene, parameters=None, modes=None) -> Sen
         result = setup.at(None, wanted)
     if modes is None and sc.n > MAX_ALL_MODES:
         notes.append(f"{sc.n} masses: the {MODES_EACH_END} lowest and {MODES_EACH_END} highest modes are listed "
-                     f"(modes=[...] chooses others)")
+                     f"(others: --modes J,K,... on the command line, modes=[...] in Python)")
     if sc.dampers or sc.chain_dampers or sc.damping is not None:
         notes.append("damping is not part of these derivatives: they are those of the undamped modes (K, M)")
     if not sc.linear:

@@ -199,12 +199,12 @@ class Update:
 
         f = self.fit
         known = self.measured.omega_std is not None
-        lines = [f"Updated {self.scene.name!r} to {self.measured.file}: {self.measured.rows} measured modes, "
-                 f"{len(self.parameters)} parameters (least squares in log p, analytic Jacobian; {f.evaluations} "
-                 f"evaluations: {f.status})",
+        lines = [f"Updated {self.scene.name!r} to {self.measured.file}: {self.measured.rows} measured mode{'' if self.measured.rows == 1 else 's'}, "
+                 f"{len(self.parameters)} parameter{'' if len(self.parameters) == 1 else 's'} (least squares in log p, "
+                 f"analytic Jacobian; {f.evaluations} model evaluation{'' if f.evaluations == 1 else 's'}: {f.status})",
                  "noise: " + ("standard deviations from the file" if known else
                               f"unknown, estimated from the fit: s = {f.noise_scale:.3g} (relative)")
-                 + f"; chi^2 = {f.chi2:.4g} for {f.dof} degrees of freedom", "",
+                 + f"; chi^2 = {f.chi2:.4g} for {f.dof} degree{'' if f.dof == 1 else 's'} of freedom", "",
                  f"{'parameter':<14}{'start':>16}{'updated':>18}{'std. error':>14}{'rel.':>10}"]
         for p, a, b, se, ok in zip(self.parameters, self.start, self.values, self.standard_errors, f.identifiable):
             if ok:
@@ -301,7 +301,7 @@ def update(scene: str | Path | Scene, measured, parameters, bounds=(), modes: in
     import numpy as np
 
     from ._sensitivity import Setup, default_modes, parameter_list
-    from .numeric.updating.fit import Problem, solve
+    from .numeric.updating.fit import Memo, Problem, solve
     from .numeric.updating.measured import Measured
     from .numeric.updating.residuals import pair, weighted
 
@@ -348,17 +348,23 @@ def update(scene: str | Path | Scene, measured, parameters, bounds=(), modes: in
     pairing = pair(m, positions, np.sqrt(first.omega2[elastic]), sensor_shapes)
     lower, upper = parse_bounds(bounds, names, sc.parameters)
 
-    def model(p):
+    def evaluate(p):
         vals = dict(zip(names, (float(v) for v in p)))
         r = setup.at(vals, pairing.modes)
         slots = np.searchsorted(r.index, pairing.modes)
         shapes = r.shapes[sensors][:, slots] if sensors else None
         d_shapes = r.d_shapes[:, sensors][:, :, slots] if sensors else None
-        return r, slots, shapes, d_shapes
+        res, jac = weighted(m, p, r.omega2[slots], r.d_omega2[:, slots], shapes, d_shapes, known)
+        return (r, slots, shapes, d_shapes), res, jac
+
+    # once per point: the fit's residual, its Jacobian and the before/after tables
+    point = Memo(evaluate, score=lambda v: float(v[1] @ v[1]))
+
+    def model(p):
+        return point(p)[0]
 
     def residual(p):
-        r, slots, shapes, d_shapes = model(p)
-        return weighted(m, p, r.omega2[slots], r.d_omega2[:, slots], shapes, d_shapes, known)
+        return point(p)[1:]
 
     fit = solve(Problem(names, start, residual, lower, upper, known, int(with_shapes.size) if sensors else 0))
     notes = [frf_note] if frf_note else []
@@ -374,7 +380,8 @@ def update(scene: str | Path | Scene, measured, parameters, bounds=(), modes: in
 
     mac0 = macs(sh0) if sensors else np.full(m.rows, np.nan)
     mac1 = macs(sh1) if sensors else np.full(m.rows, np.nan)
-    after = setup.at(dict(zip(names, fit.values)), candidates)
+    same = np.array_equal(np.asarray(candidates), pairing.modes)  # every mode paired: the fit's last evaluation
+    after = model(fit.values)[0] if same else setup.at(dict(zip(names, fit.values)), candidates)
     again = pair(m, after.index[~after.rigid], np.sqrt(after.omega2[~after.rigid]),
                  after.shapes[sensors][:, ~after.rigid] if sensors else None)
     if not np.array_equal(again.modes, pairing.modes):

@@ -125,6 +125,9 @@ def cmd_modes(args) -> int:
 
     if getattr(args, "sensitivity", False) or getattr(args, "parameters", None) is not None:
         return cmd_modes_sensitivity(args)
+    if getattr(args, "modes", None) is not None:
+        raise SceneError(None, "--modes", "without --sensitivity: accepted: --modes with --sensitivity (the modes "
+                                          "report lists every mode)")
     m = modes(args.scene)
     if args.uff:
         from ._uff import write_modes_uff
@@ -311,13 +314,17 @@ def cmd_sweep(args) -> int:
 
 
 def cmd_frf(args) -> int:
-    """frequency response X_out/F_in: Bode figure, JSON, transfer function
+    """frequency response: receptance, mobility, accelerance, dynamic stiffness, transmissibility
 
     The receptance H(iw) = X_out / F_in of (K - w^2 M + i w C) X = F (a dense solve per frequency; a
     tridiagonal one for [chain] scenes) on a log grid refined around every resonance, with the exact
     peak of |H| of each damped one (undamped resonances are infinite: the grid stops 1e-4 short of
     them). Prints the resonances and, for scenes of at most 6 masses, the transfer function H(s) as a
     ratio of polynomials in s (text and LaTeX); writes the Bode figure DIR/<scene>-frf-<in>-<out>.png.
+    With --form, the mobility (V_out/F_in), accelerance (A_out/F_in) or dynamic stiffness (F_in/X_out)
+    of the same receptances, or for a moving base (--input ground) the absolute or relative
+    transmissibility, in Hz (--hz), dB (--db) and your units (--units); writes
+    DIR/<scene>-frf-<form>-<in>-<out>.png.
     """
     from ._frf import frf
 
@@ -381,16 +388,9 @@ def cmd_animate(args) -> int:
 # -- the ecosystem: random vibration, output units ------------------------------------------------
 def _output_units(args):
     """The ``--units`` list (None without it); a bad entry is one line naming the flag."""
-    spec = getattr(args, "units", None)
-    if not spec:
-        return None
-    from .derive.units import UnitProblem
-    from .derive.units.output import OutputUnits
+    from .derive.units.output import output_units
 
-    try:
-        return OutputUnits.parse(spec)
-    except UnitProblem as exc:
-        raise SceneError(None, "--units", f"{spec!r}: {exc}") from None
+    return output_units(getattr(args, "units", None), "--units")
 
 
 def cmd_psd(args) -> int:
@@ -559,6 +559,18 @@ def add_sensitivity_options(m) -> None:
                         "with --json one JSON object (shapes and their derivatives up to 40 masses)")
     m.add_argument("--parameters", metavar="P,Q,...",
                    help="the parameters of --sensitivity (default: every parameter the masses and springs use)")
+    m.add_argument("--modes", metavar="J,K,...", type=_mode_list,
+                   help="with --sensitivity: the modes listed, as positions 0, 1, ... in ascending omega^2 (rigid "
+                        "modes included; default: every mode up to 40 masses, else the 10 lowest and 10 highest)")
+
+
+def _mode_list(text: str) -> tuple[int, ...]:
+    """``--modes 0,3,5``: distinct mode positions (an argparse type: one line on anything else)."""
+    items = [t.strip() for t in str(text).split(",")]
+    if not all(t.isdigit() and len(t) < 10 for t in items) or len(set(map(int, items))) != len(items):
+        raise argparse.ArgumentTypeError(f"--modes {text[:60]!r}: accepted: distinct mode positions 0, 1, ... "
+                                         "separated by commas, e.g. 0,1,2")
+    return tuple(int(t) for t in items)
 
 
 def cmd_modes_sensitivity(args) -> int:
@@ -567,7 +579,7 @@ def cmd_modes_sensitivity(args) -> int:
 
     if args.latex:
         raise SceneError(None, "--sensitivity", "with --latex: accepted: --sensitivity alone (text) or with --json")
-    result = sensitivities(args.scene, parameters=args.parameters)
+    result = sensitivities(args.scene, parameters=args.parameters, modes=args.modes)
     print(_dumps(result.to_json(), indent=1) if args.json else result.to_text(), end="\n" if args.json else "")
     return 0
 

@@ -218,6 +218,48 @@ def test_edge_mode_of_the_free_diatomic_chain():
     assert sum(m.kind == "band" for m in b.finite) == 79
 
 
+def test_every_band_mode_carries_its_bloch_weight():
+    """``bloch_weight`` is given for every band mode (null only for gap modes): the fraction of the mode in the
+    span of its band's Bloch waves at ±q. Reference written here: the finite chain's modes from the 50-digit
+    eigen-solve of its D, the cell vector from the 2 x 2 D(q) of the textbook diatomic chain, the projection by
+    least squares. A ring's modes are Bloch waves: weight 1."""
+    n = 16
+    b = sc.bands(diatomic(n), density=False)
+    data = b.to_json()["finite"]["modes"]
+    assert all((m["bloch_weight"] is None) == (m["kind"] != "band") for m in data)
+    masses = [1.0, 3.0] * (n // 2)
+    springs = [(i, i + 1, 1.0 if i % 2 == 0 else 2.0) for i in range(n - 1)]
+    with mp.workdps(50):
+        K = mp.zeros(n, n)
+        for i, j, k in springs:
+            K[i, i] += k
+            K[j, j] += k
+            K[i, j] -= k
+            K[j, i] -= k
+        D = mp.matrix(n, n)
+        for i in range(n):
+            for j in range(n):
+                D[i, j] = K[i, j] / mp.sqrt(mp.mpf(masses[i]) * masses[j])
+        w2, vecs = mp.eigsy(D)
+        order = sorted(range(n), key=lambda c: w2[c])
+        modes = np.array([[float(vecs[i, c]) for c in order] for i in range(n)])
+    for m, col in zip(b.finite, modes.T):
+        if m.kind != "band":
+            continue
+        q = m.q
+        off = -(1.0 + 2.0 * np.exp(-1j * q)) / np.sqrt(3.0)  # D(q)[0, 1]: k1 inside the cell, k2 to the next
+        Dq = np.array([[3.0, off], [np.conj(off), 1.0]])
+        lam, U = np.linalg.eigh(Dq)
+        u = U[:, m.band]
+        c = np.arange(n // 2)[:, None]
+        W = np.stack([(np.exp(1j * q * c) * u).ravel(), (np.exp(-1j * q * c) * u.conj()).ravel()], axis=1)
+        coef = np.linalg.lstsq(W, col.astype(complex), rcond=1e-8)[0]
+        ref = np.linalg.norm(W @ coef) ** 2 / np.linalg.norm(col) ** 2
+        assert 0.0 <= m.weight <= 1.0 and m.weight == pytest.approx(ref, abs=1e-8), (m, ref)
+    ring = sc.bands(diatomic(12, left="ring", right="ring"), q=[0.0], density=False)
+    assert all(m.kind == "band" and abs(m.weight - 1.0) < 1e-12 for m in ring.finite)
+
+
 def test_a_defect_cell_gives_a_defect_mode_in_the_gap():
     """A ring of diatomic cells with one heavy mass changed, read against the perfect chain's bands."""
     cells = 24
@@ -351,6 +393,36 @@ def test_generated_band_functions_against_the_symbolic_forms(name):
     np.testing.assert_allclose(np.sort(accurate.omega2, axis=1), got["omega2"], rtol=1e-12)
 
 
+def test_generated_group_velocity_is_finite_where_two_branches_touch():
+    """The diatomic module with m1 = m2 = m, k1 = k2 = k: a monatomic chain folded into cells of two. By hand,
+    with Q = q/2 the monatomic phase, ω = 2√(k/m) sin(Q/2): the lower branch is 2√(k/m) sin(|q|/4) and the upper
+    2√(k/m) cos(|q|/4), so dω/dq = ±√(k/m) cos(|q|/4)/2 and ∓√(k/m) sin(|q|/4)/2 (odd in q). At q = π they touch
+    and the closed form divides by the root of a vanishing discriminant (it gave ±inf): now each branch's limit
+    from inside (0, π), finite, to 1e-15 at q = π and within 1e-9 from it, with no warning."""
+    import warnings
+
+    from springchain._modules import system_of
+
+    k, m = 2.0, 3.0
+    system = system_of(sc.load("diatomic").with_parameters(m1=m, m2=m, k1=k, k2=k))[0]
+    eps = np.array([0.0, 1e-12, 1e-9, 1e-7, 1e-5, 1e-3, 3e-2, 0.5, 2.0])
+    q = np.concatenate([np.pi - eps, -(np.pi - eps)])
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        v = system.group_velocity(q)
+    a, sign = np.abs(q), np.sign(q)
+    lower = np.sqrt(k / m) * np.cos(a / 4) / 2 * sign
+    upper = -np.sqrt(k / m) * np.sin(a / 4) / 2 * sign
+    assert np.all(np.isfinite(v))
+    scale = np.sqrt(k / m) / 2
+    for got, ref in ((v[:, 0], lower), (v[:, 1], upper)):
+        err = np.abs(got - ref) / scale
+        assert np.all(err[np.tile(eps, 2) == 0] < 1e-15) and np.all(err < 1e-9), err
+    # the textbook diatomic (m1 != m2): a gap at q = pi, where both velocities vanish (closed form kept)
+    system = system_of(sc.load("diatomic"))[0]
+    assert np.all(np.abs(system.group_velocity(np.array([np.pi]))) < 1e-15)
+
+
 def test_generated_band_omega2_without_closed_form():
     from springchain._modules import system_of
 
@@ -462,3 +534,57 @@ def _toml(data) -> str:
 
 def test_points_out_of_range_are_refused(capsys, tmp_path):
     one_line_error(*run_cli(["bands", "diatomic", "--points", "2", "--out", tmp_path], capsys), "--points")
+
+
+# -- modes of a periodic scene named by band -------------------------------------------------------------
+@pytest.mark.parametrize("cells", [5, 8])
+def test_modes_of_a_ring_are_named_by_band_at_2_pi_s_over_n(cells, capsys):
+    """``modes`` of a diatomic ring of N cells: every mode a band mode with q = 2πs/N, and its ω² that of the
+    ring's D from a 50-digit eigen-solve written here and ω²_j(2πs/N) of the textbook formula, to 1e-13."""
+    n = 2 * cells
+    scene = diatomic(n, left="ring", right="ring")
+    data = sc.modes(scene).to_json()
+    masses = [1.0, 3.0] * cells
+    springs = [(i, (i + 1) % n, 1.0 if i % 2 == 0 else 2.0) for i in range(n)]
+    ref = _ring_reference(masses, springs, n)
+    assert len(data["modes"]) == n and data["gap_modes"] == []
+    for rec, r in zip(data["modes"], ref):
+        assert rec["kind"] == "band" and rec["localisation_length"] is None and rec["bloch_weight"] > 1 - 1e-12
+        s = rec["q"] * cells / (2 * np.pi)
+        assert abs(s - round(s)) <= 1e-6, rec
+        lam = textbook_lambda(1, 3, 1, 2, 2 * mp.pi * round(s) / cells)[rec["band"]]
+        for want in (r, lam):
+            want = float(want)
+            assert (rec["omega2_value"] == 0 and abs(want) < 1e-40) or \
+                abs(rec["omega2_value"] - want) <= 1e-13 * abs(want), (rec, want)
+    text = sc.modes(scene).to_text()
+    assert "Modes named by band (unit cell of 2 masses" in text and text.count(" band 1, q = ") == cells
+
+
+def test_modes_names_gap_modes_and_costs_nothing_without_a_cell(monkeypatch):
+    """The free diatomic chain's edge mode is named with its localisation length (1/Im q of the attenuation);
+    a [masses] scene and a non-periodic [chain] get no band fields, and a [masses] scene never loads a module
+    for them; past MAX_MASSES masses a note says where the names are."""
+    import springchain._mode_bands as mb
+
+    m = sc.modes("diatomic")
+    data = m.to_json()
+    (edge,) = data["gap_modes"]
+    b = sc.bands("diatomic", finite=False, density=False)
+    kappa = float(b.attenuation([np.sqrt(edge["omega2"])])[0][0])
+    assert edge["kind"] == "edge" and edge["localisation_length"] == pytest.approx(1 / kappa, rel=1e-12)
+    assert "edge mode in a gap, localisation length" in m.to_text()
+    assert all(r["kind"] == "band" for r in data["modes"])  # the listed ends: 10 lowest, 10 highest
+    cell = sc.modes("mass_in_mass").to_json()
+    assert len(cell["modes"]) == 60 and {r["band"] for r in cell["modes"]} == {0, 1}
+    calls = []
+    monkeypatch.setattr("springchain._modules.system_of", lambda *a, **k: calls.append(a) or 1 / 0)
+    plain = sc.modes("building").to_json()
+    assert calls == [] and not any("band" in r for r in plain["modes"]) and "gap_modes" not in plain
+    monkeypatch.undo()
+    bumpy = sc.scene_from_dict({"name": "bumpy", "parameters": {"m": 1.0, "k": 1.0},
+                                "chain": {"n": 12, "mass": "m*(1 + i**2/100)", "k": "k"}})
+    assert not any("band" in r for r in sc.modes(bumpy).to_json()["modes"])
+    monkeypatch.setattr(mb, "MAX_MASSES", 10)
+    long = sc.modes(diatomic(12)).to_json()
+    assert not any("band" in r for r in long["modes"]) and any("named by band up to 10" in n for n in long["notes"])

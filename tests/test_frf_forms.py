@@ -101,3 +101,37 @@ def test_frf_cli_forms_and_refusals(tmp_path, capsys):
                               tmp_path], capsys)
     assert set(json.loads(out)) == {"scene", "input", "output", "omega", "magnitude", "phase", "units", "resonances",
                                     "transfer_function", "notes"}
+
+
+def test_units_as_the_command_line_writes_them():
+    """``units="mm,kN"`` (the --units text) works in every method: a mobility (m/s)/N shown in (mm/s)/kN is
+    1e-3/1e3 = 1e-6 of the SI unit per unit, so the numbers are 1e6 larger (mm = 1e-3 m, kN = 1e3 N written
+    here); a list of texts is the same; a bad text is one line naming units and what is accepted."""
+    pytest.importorskip("pint")
+    from springchain.derive.errors import SceneError
+
+    r = sc.frf_form("building", "mobility", input="floor1", output="floor3")
+    si = r.magnitude()
+    assert np.allclose(r.magnitude("mm,kN"), si * 1e6, rtol=1e-13, atol=0)
+    assert np.allclose(r.magnitude(["mm", "kN"]), si * 1e6, rtol=1e-13, atol=0)
+    assert r.magnitude_label("mm, kN") == "|mobility V_out / F_in| [(mm/s)/kN]"
+    assert r.to_json("mm,kN")["units"]["magnitude"] == "(mm/s)/kN"
+    assert "[(mm/s)/kN]" in r.to_text("mm,kN")
+    assert r.plot("mm,kN").axes[0].get_ylabel() == "|mobility V_out / F_in| [(mm/s)/kN]"
+    assert np.array_equal(r.magnitude(""), si) and np.array_equal(r.magnitude(None), si)
+    for bad, words in (("mm,zorks", "unknown unit"), ("Hz", "frequency"), ("mm,cm", "two units"),
+                       (3.0, "accepted: a text such as 'mm,kN,g'")):
+        with pytest.raises(SceneError) as exc:
+            r.magnitude(bad)
+        text = str(exc.value)
+        assert "units" in text and words in text and "\n" not in text, text
+
+
+def test_frf_says_what_its_largest_magnitude_is_and_describes_the_forms(capsys):
+    """The text's largest magnitude is the grid's, said so; equal to the largest |iω H| on the grid."""
+    r = sc.frf_form("building", "mobility", input="floor1", output="floor3")
+    line = next(x for x in r.to_text().splitlines() if x.startswith("largest magnitude"))
+    assert "on the grid (not an exact peak" in line
+    assert float(line.split("): ")[1].split(" at ")[0]) == pytest.approx(np.max(np.abs(r.values)), rel=1e-5)
+    status, out, _ = run_cli(["frf", "--help"], capsys)
+    assert status == 0 and all(w in out for w in ("mobility", "accelerance", "dynamic stiffness", "transmissibility"))

@@ -171,3 +171,57 @@ def test_psd_command_g_units_and_one_line_refusals(tmp_path, capsys):
     one_line_error(*run_cli(["psd", path, "--input", tmp_path / "dec.csv"], capsys), "not strictly increasing")
     one_line_error(*run_cli(["psd", path, "--input", tmp_path / "none.csv"], capsys), "cannot read")
     one_line_error(*run_cli(["psd", "seed", "--input", tmp_path / "spec.csv"], capsys), "rigid-body")
+
+
+def test_units_as_the_command_line_writes_them(tmp_path):
+    """``units="mm,kN,g"`` in to_text, to_json and plot: displacements in mm (1e3 per m), spring forces in
+    kN (1e-3 per N), accelerations in g (1/9.80665 per m/s², standard gravity, written here)."""
+    pytest.importorskip("pint")
+    from springchain.derive.errors import SceneError
+
+    path, fn = sdof(tmp_path)
+    r = sc.random_response(path, {"f": [1.0, 100.0], "psd": [0.5, 0.5]})
+    rows = {row["kind"]: row for row in r.to_json("mm,kN,g")["rms"]}
+    assert rows["displacement"]["unit"] == "mm" and rows["spring force"]["unit"] == "kN"
+    assert rows["displacement"]["rms"] == pytest.approx(1e3 * r.rms("m1", "displacement"), rel=1e-14)
+    assert rows["spring force"]["rms"] == pytest.approx(1e-3 * r.rms("spring 0", "spring force"), rel=1e-14)
+    assert rows["acceleration"]["unit"] == "g"
+    assert rows["acceleration"]["rms"] == pytest.approx(r.rms("m1", "acceleration") / 9.80665, rel=1e-14)
+    assert r.to_json(["mm", "kN", "g"]) == r.to_json("mm,kN,g")
+    text = r.to_text("mm,kN,g")
+    assert "RMS displacement (relative to the base) [mm]" in text and "[kN]" in text
+    fig = r.plot("displacement", "mm,kN,g")
+    assert fig.axes[1].get_ylabel() == "response PSD [mm²/Hz]" and fig.axes[0].get_ylabel() == "input PSD [g²/Hz]"
+    with pytest.raises(SceneError, match="units: 'mm,zorks': unknown unit"):
+        r.to_text("mm,zorks")
+
+
+def test_the_input_keeps_the_unit_its_file_gave(tmp_path, capsys):
+    """A force PSD in kN²/Hz reports its input RMS in kN (√(0.01 · 99) kN) and spring forces in kN (the SI
+    run with 0.01e6 N²/Hz, over 1000); a base acceleration in (mm/s²)²/Hz reports its input in mm/s² and
+    accelerations in mm/s² (SI × 1000); other outputs stay SI; ``units=`` still wins."""
+    pytest.importorskip("pint")
+    import json
+
+    path, fn = sdof(tmp_path)
+    (tmp_path / "kn.csv").write_text("f [Hz], psd [kN^2/Hz]\n1, 0.01\n100, 0.01\n")
+    status, out, err = run_cli(["psd", path, "--input", tmp_path / "kn.csv", "--on", "m1", "--json",
+                                "--no-figures"], capsys)
+    assert status == 0, err
+    data = json.loads(out)
+    assert data["input_unit"] == "kN" and data["input_rms"] == pytest.approx(math.sqrt(0.01 * 99), rel=1e-12)
+    si = sc.random_response(path, {"f": [1.0, 100.0], "psd": [0.01e6] * 2}, on="m1")
+    rows = {row["kind"]: row for row in data["rms"]}
+    assert rows["spring force"]["unit"] == "kN" and rows["displacement"]["unit"] == "m"
+    assert rows["spring force"]["rms"] == pytest.approx(si.rms("spring 0", "spring force") / 1e3, rel=1e-12)
+    assert rows["displacement"]["rms"] == pytest.approx(si.rms("m1", "displacement"), rel=1e-12)
+    (tmp_path / "mm.csv").write_text("f [Hz], psd [(mm/s^2)^2/Hz]\n1, 0.01\n100, 0.01\n")
+    r = sc.random_response(path, tmp_path / "mm.csv")
+    data = r.to_json()
+    assert data["input_unit"] == "mm/s^2" and data["input_rms"] == pytest.approx(math.sqrt(0.01 * 99), rel=1e-12)
+    si = sc.random_response(path, {"f": [1.0, 100.0], "psd": [0.01e-6] * 2})
+    acc = [row for row in data["rms"] if row["kind"] == "acceleration"][0]
+    assert acc["unit"] == "mm/s^2" and acc["rms"] == pytest.approx(1e3 * si.rms("m1", "acceleration"), rel=1e-12)
+    assert r.to_json("m")["input_unit"] == "m/s^2"  # units= chooses
+    (tmp_path / "odd.csv").write_text("f [Hz], psd [N^2*s]\n1, 0.01\n100, 0.01\n")  # no U^2/Hz form: SI shown
+    assert sc.random_response(path, tmp_path / "odd.csv", on="m1").to_json()["input_unit"] == "N"

@@ -176,3 +176,82 @@ def test_chain_refused(tmp_path):
                  '[damping]\nrayleigh_targets = {zeta = [0.05, 0.05], modes = [1, 2]}\n')
     with pytest.raises(sc.SceneError, match=r"damping\.rayleigh_targets: .*\[chain\]"):
         sc.load(str(p))
+
+
+UNEQUAL = """name = "r3"
+[parameters]
+m = 1.0
+k = 100.0
+[masses]
+a = "m"
+b = "2*m"
+c = "3*m"
+[[springs]]
+between = ["wall", "a"]
+k = "k"
+[[springs]]
+between = ["a", "b"]
+k = "2*k"
+[[springs]]
+between = ["b", "c"]
+k = "k"
+[damping]
+rayleigh_targets = {TARGETS}
+"""
+
+
+def test_long_closed_forms_are_shown_by_value_with_a_note(tmp_path):
+    """Three unequal masses with Rayleigh targets: the cubic's ω² (~75 characters) print in closed form,
+    the shapes, ζ, Γ, M*, α_R and β_R (160-650 characters) by their values with a note saying how long the
+    omitted closed form is; the text shrinks from 8.9 kB to under 5 kB. Values against the 60-digit mpmath
+    modes and the 2 x 2 solve for α, β written here. --json keeps every field and its closed form."""
+    from springchain.derive.printing import MAX_TEXT_CLOSED_FORM
+
+    m = sc.modes(str(_write(tmp_path, "{zeta = [0.02, 0.05], modes = [1, 3]}", "r3.toml", UNEQUAL)))
+    text = m.to_text()
+    assert len(text) < 5000
+    assert max(len(line) for line in text.splitlines()) < MAX_TEXT_CLOSED_FORM + 120
+    alpha, beta, w = _reference([1.0, 2.0, 3.0], [(-1, 0, 100.0), (0, 1, 200.0), (1, 2, 100.0)], "0.02", "0.05", 1, 3)
+    w2, shapes = mp_reference([1.0, 2.0, 3.0], [(-1, 0, 100.0), (0, 1, 200.0), (1, 2, 100.0)])
+    lines = text.splitlines()
+    a_line = next(line for line in lines if "α_R =" in line)
+    assert float(a_line.split("=")[1]) == pytest.approx(alpha, rel=1e-9)
+    assert "closed form omitted: 641 characters; --json carries it" in a_line
+    shape_lines = [line for line in lines if line.strip().startswith("shape (")]
+    assert len(shape_lines) == 3
+    for line, j in zip(shape_lines, range(3)):
+        assert "closed form omitted" in line and "at the scene's values" in line
+        printed = [float(v) for v in line.split("(")[1].split(")")[0].split(",")]
+        ref = [float(shapes[i, j] / shapes[0, j]) for i in range(3)]  # the printed shapes start with 1
+        assert printed == pytest.approx(ref, rel=1e-9)
+    assert sum("ω² = " in line and "sqrt(427)" in line for line in lines) == 3  # ω² stays closed form
+    assert sum("zeta = (closed form omitted" in line for line in lines) == 3
+    assert "modes 1, 2, 3: Gamma and M* (closed forms omitted: up to" in text
+    data = m.to_json()  # fields and closed forms stay; the closed forms read back to the values
+    fit = data["damping"]["rayleigh_coefficients"]
+    assert len(fit["alpha_expr"]) == 641 and not any("omitted" in n for n in data["notes"])
+    for j, rec in enumerate(data["modes"]):
+        assert rec["shape"] is not None and rec["damping_ratio_expr"] is not None
+        e = m.parse(rec["omega2"])
+        assert float(e.subs({s: {"k": 100, "m": 1}[s.name] for s in e.free_symbols}).evalf(40)) == \
+            pytest.approx(float(w2[j]), rel=1e-14)
+
+
+def test_json_nulls_a_closed_form_past_its_limit_with_a_note(tmp_path, monkeypatch):
+    """With the --json limit lowered to 200 characters the same scene's long closed forms become null —
+    the fields stay, their values are still there — and each is named in a note."""
+    from springchain.derive import printing
+
+    monkeypatch.setattr(printing, "MAX_JSON_CLOSED_FORM", 200)
+    m = sc.modes(str(_write(tmp_path, "{zeta = [0.02, 0.05], modes = [1, 3]}", "r3.toml", UNEQUAL)))
+    data = m.to_json()
+    fit = data["damping"]["rayleigh_coefficients"]
+    assert fit["alpha_expr"] is None and fit["beta_expr"] is None and fit["alpha"] > 0
+    rec = data["modes"][0]
+    assert rec["omega2"] is not None and rec["shape"] is not None  # 75 and 193 characters: kept
+    assert rec["participation_factor_expr"] is None and rec["effective_mass_expr"] is None
+    assert rec["participation_factor"] > 0 and rec["damping_ratio"] == pytest.approx(0.02, rel=1e-12)
+    notes = [n for n in data["notes"] if "closed form of" in n]
+    assert any(n.startswith("damping.rayleigh_coefficients.alpha_expr: closed form of 641 characters") for n in notes)
+    assert any(n.startswith("modes[0].effective_mass_expr") for n in notes)
+    assert "too long for --json as well" in m.to_text()

@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import json
 
+import mpmath
 import numpy as np
 import pytest
 from helpers import chain_toml, one_line_error, run_cli, scene_toml
@@ -230,3 +231,34 @@ def test_sweep_follows_branches_by_mac_crossing_and_veering(tmp_path):
     assert b["crossings"] == [] and [v["branches"] for v in b["veerings"]] == [[0, 1]]
     assert min(min(row) for row in b["mac_next"]) < 0.9
     assert (tmp_path / "v" / "branches.png").stat().st_size > 0 and veer.figures[-1].name == "branches.png"
+
+
+def test_messages_name_the_flag_of_each_interface_and_modes_chooses_the_listed_modes(tmp_path, capsys):
+    """The mac refusal names --masses (and masses= for Python); past 40 masses the sensitivity note names
+    --modes; ``modes --sensitivity --modes 0,2`` lists exactly those modes. On the bundled building (equal
+    floors m, storeys k) ω² = (k/m)·λ exactly, so p/ω² ∂ω²/∂p is 1 for k and −1 for m, and ω²₀, ω²₂ against
+    the 50-digit eigenvalues of the fixed–free chain's (tridiagonal 2, 2, 1) matrix written here."""
+    one_line_error(*run_cli(["mac", "building", "seed"], capsys), "--masses on the command line", "masses= in Python")
+    with pytest.raises(sc.SceneError, match="masses= in Python"):
+        sc.mac("building", "seed")
+    status, out, err = run_cli(["modes", "building", "--sensitivity", "--modes", "0,2", "--json"], capsys)
+    assert status == 0, err
+    data = json.loads(out)
+    assert [rec["mode"] for rec in data["modes"]] == [0, 2]
+    with mpmath.workdps(50):
+        lam = sorted(mpmath.eigsy(mpmath.matrix([[2, -1, 0], [-1, 2, -1], [0, -1, 1]]), eigvals_only=True))
+        ref = [float(lam[j] * mpmath.mpf(4000000) / 10000) for j in (0, 2)]
+    for rec, w2 in zip(data["modes"], ref):
+        assert rec["omega2"] == pytest.approx(w2, rel=1e-13)
+        assert rec["normalised"]["k"] == pytest.approx(1.0, rel=1e-12)
+        assert rec["normalised"]["m"] == pytest.approx(-1.0, rel=1e-12)
+    one_line_error(*run_cli(["modes", "building", "--sensitivity", "--modes", "0,x"], capsys), "--modes", "0,1,2")
+    one_line_error(*run_cli(["modes", "building", "--modes", "1"], capsys), "--modes", "--sensitivity")
+    path = tmp_path / "long.toml"
+    path.write_text('name = "long"\n[parameters]\nm = 1.0\nk = 1.0\n[chain]\nn = 45\nmass = "m"\nk = "k"\n')
+    status, out, err = run_cli(["modes", path, "--sensitivity"], capsys)
+    assert status == 0, err
+    assert "others: --modes J,K,... on the command line, modes=[...] in Python" in out
+    status, out, err = run_cli(["modes", path, "--sensitivity", "--modes", "20", "--json"], capsys)
+    assert status == 0, err
+    assert [rec["mode"] for rec in json.loads(out)["modes"]] == [20]

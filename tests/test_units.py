@@ -123,6 +123,35 @@ def test_a_unit_of_the_wrong_dimension_is_refused_in_one_line(tmp_path, capsys, 
     assert "accepted:" in line
 
 
+@pytest.mark.parametrize("old, new, key", [
+    # a parameter in grams lands where an acceleration belongs: 0.3 g was meant as 0.3 standard gravity
+    ('g = "9.81 m/s^2"', 'g = "a0"', "gravity.g"),
+    # ... in a force, multiplied by a mass
+    ('f = "F0*cos(w*t)"', 'f = "a0*m*cos(w*t)"', "forces[0].f"),
+    # ... in a sum with an acceleration
+    ('g = "9.81 m/s^2"', 'g = "a0 + a1"', "gravity.g"),
+    # a value written "0.3 g" directly in a force slot
+    ('f = "F0*cos(w*t)"', 'f = "0.3 g"', "forces[0].f"),
+])
+def test_a_value_in_grams_where_another_dimension_belongs_suggests_g_0(tmp_path, capsys, old, new, key):
+    """pint's g is the gram: in a parameter (no slot to say otherwise) "0.3 g" is 0.3 gram (3e-4 kg, pint's
+    own conversion), and where it lands in a slot of another dimension the refusal says that standard
+    gravity is g_0. A bare g in an acceleration slot is standard gravity already and loads."""
+    pytest.importorskip("pint")
+    text = ENGINEERING.replace("[masses]", 'a0 = "0.3 g"\na1 = "1 m/s^2"\n[masses]', 1).replace(old, new, 1)
+    path = tmp_path / "gram.toml"
+    path.write_text(text)
+    with pytest.raises(SceneError) as info:
+        load_scene(path)
+    assert info.value.key == key
+    one_line_error(*run_cli(["modes", path], capsys), key, "g is the gram", "g_0", "'0.3 g_0'")
+    fixed = load_scene("eng.toml", text.replace('a0 = "0.3 g"', 'a0 = "0.3 g_0"').replace('f = "0.3 g"', 'f = "F0"'))
+    assert fixed.parameters["a0"] == pytest.approx(0.3 * 9.80665, rel=1e-15)
+    assert load_scene("eng.toml", ENGINEERING.replace('"9.81 m/s^2"', '"1 g"')).parameters  # g there: gravity
+    grams = load_scene("eng.toml", ENGINEERING.replace("[masses]", 'a0 = "0.3 g"\n[masses]', 1))
+    assert grams.parameters["a0"] == pytest.approx(3e-4, rel=1e-15)  # a parameter alone: pint's gram
+
+
 @pytest.mark.parametrize("unit, why", [
     ("MN/m^(10^10)", "a power that is not a small whole number"),
     ("m^99", "exponent beyond 16"),
@@ -137,6 +166,21 @@ def test_hostile_or_unknown_units_are_refused_without_evaluating_them(unit, why)
     with pytest.raises(SceneError, match=why) as info:
         load_scene("eng.toml", text)
     assert info.value.key == "springs[1].k" and "\n" not in str(info.value)
+
+
+def test_a_power_followed_by_a_product_is_a_unit(ureg):
+    """``N^2*s`` (a force PSD per rad/s-like unit), ``kg*m^2*s^-2``: a power then ``*`` is a product, not a
+    nested exponent (which stays refused); factors and dimensions against pint's own."""
+    from springchain.derive.units import parse_unit
+
+    for text in ("N^2*s", "kg*m^2*s^-2", "kN**2*ms", "(mm/s^2)^2/Hz"):
+        u = parse_unit(text)
+        ref = ureg.Quantity(1, text.replace("^", "**")).to_base_units()
+        assert float(u.factor) == pytest.approx(ref.magnitude, rel=1e-15)
+        assert dict(u.dimension.map) == {k: v for k, v in ref.dimensionality.items()}
+    for text in ("m^2**3", "m^2^3", "m**2**3"):
+        with pytest.raises(ValueError, match="not a small whole number"):
+            parse_unit(text)
 
 
 def test_potentials_are_energies_of_the_extension_in_metres():

@@ -307,3 +307,78 @@ def test_a_measured_frf_is_reduced_to_modes_and_updated(tmp_path):
     bad.write_text("omega,f1.re\n" + "\n".join(f"{x},1.0" for x in range(1, 7)) + "\n")
     with pytest.raises(ValueError, match="needs both f1.re and f1.im"):
         sc.update(nominal, bad, parameters="k1", out=None)
+
+
+def test_each_model_evaluation_happens_once(tmp_path, monkeypatch):
+    """SciPy asks for the residuals and then the Jacobian at one point; each model evaluation yields both,
+    so no (parameter values, modes asked) pair is evaluated twice — neither in the fit nor for the
+    before/after tables (measured: 19 evaluations of the five-storey example before, 9 after)."""
+    from springchain._sensitivity import Setup
+
+    seen = []
+    original = Setup.at
+
+    def at(self, values=None, wanted=None):
+        seen.append((None if values is None else tuple(sorted(values.items())),
+                     None if wanted is None else tuple(np.asarray(wanted).tolist())))
+        return original(self, values, wanted)
+
+    monkeypatch.setattr(Setup, "at", at)
+    nominal = tmp_path / "storeys.toml"
+    nominal.write_text(storeys(NOMINAL))
+    omega, phi = true_modes(storeys(TRUE))
+    meas = measured_csv(tmp_path / "m.csv", omega, phi[[0, 2, 4]], ("f1", "f3", "f5"), omega_std=1e-3 * omega,
+                        shape_std=0.01)
+    r = sc.update(nominal, meas, parameters="k1,k2,k3,k4,k5", out=None)
+    assert abs(r.values[3] / TRUE["k4"] - 1) < 1e-10
+    assert len(seen) == len(set(seen)), [s for s in seen if seen.count(s) > 1][:2]
+    fitted = [s for s in seen if s[0] is not None and s[1] == tuple(r.modes.tolist())]
+    assert len(fitted) == r.fit.evaluations
+
+
+def test_the_fit_evaluates_each_point_once():
+    """:func:`numeric.updating.fit.solve` on a problem written here (a straight line in log p): every point
+    asked is evaluated once, the start with the given values themselves."""
+    from springchain.numeric.updating.fit import Problem, solve
+
+    points = []
+    x = np.linspace(0.0, 1.0, 7)
+    y = 2.0 * np.exp(0.5 * x)
+
+    def residual(p):
+        points.append(np.array(p, dtype=float))
+        model = p[0] * p[1] ** x
+        J = np.stack([model, model * x], axis=1)  # with respect to log a, log b
+        return (model - y) / y, J / y[:, None]
+
+    start = np.array([1.5, 1.3])
+    fit = solve(Problem(("a", "b"), start, residual, np.zeros(2), np.full(2, np.inf), True))
+    assert np.allclose(fit.values, [2.0, np.exp(0.5)], rtol=1e-10)
+    keys = [p.tobytes() for p in points]
+    assert len(keys) == len(set(keys)) == fit.evaluations
+    assert points[0] is not None and np.array_equal(points[0], start)
+
+
+def test_the_interlacing_refusal_shows_the_values_apart(tmp_path, capsys):
+    """Spectra that fail to interlace by 1e-15 relative: the refusal prints the three values with digits
+    enough to tell them apart (at 12 digits they read alike) and the signed difference that fails."""
+    bad = tmp_path / "close.csv"
+    bad.write_text('omega2_free,omega2_clamped\n"1.0","2.0000000000000010"\n"2.0000000000000005",\n')
+    status, out, err = run_cli(["reconstruct", bad, "--total-mass", "2"], capsys)
+    one_line_error(status, out, err, "do not interlace")
+    assert "2.000000000000001" in err and "2.0000000000000005" in err, err
+    assert "omega2_free[1] - omega2_clamped[0] = -5.0e-16" in err, err
+
+
+def test_the_report_speaks_in_its_own_words(tmp_path):
+    """Two measured frequencies, one fitted parameter, the noise estimated: 2 − 1 = 1 degree of freedom
+    (singular), and why the fit stopped in the report's words, not SciPy's message with its backticks."""
+    from springchain.numeric.updating.fit import STOPPED
+
+    meas = tmp_path / "two.csv"
+    meas.write_text("omega\n1.0005\n1.2905\n")
+    r = sc.update("seed", meas, parameters="k", out=None)
+    text = r.to_text()
+    assert r.fit.dof == 1 and "for 1 degree of freedom" in text and "1 degrees" not in text
+    assert "`" not in text and r.fit.status in STOPPED.values() and r.fit.status in text
+    assert "1 parameter (" in text and "2 measured modes" in text

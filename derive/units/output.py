@@ -36,9 +36,9 @@ class OutputUnits:
                 continue
             unit = parse_unit(text, ACCELERATION)  # a bare g: standard gravity
             if unit.dimension == RATE:
-                raise UnitProblem(f"--units {text!r} is a frequency", "frequencies in rad/s, or Hz with --hz")
+                raise UnitProblem(f"{text!r} is a frequency", "frequencies in rad/s, or Hz with --hz")
             if unit.dimension in chosen:
-                raise UnitProblem(f"--units lists two units of dimension {unit.dimension}", "one unit per dimension")
+                raise UnitProblem(f"two units of dimension {unit.dimension}", "one unit per dimension")
             chosen[unit.dimension] = (text, float(unit.factor))
         if LENGTH in chosen and VELOCITY not in chosen:
             t_text, t_f = chosen.get(TIME, ("s", 1.0))
@@ -66,4 +66,42 @@ class OutputUnits:
         return f"{wrap(a)}/{wrap(b)}", fa / fb
 
 
-__all__ = ["OutputUnits", "SI"]
+def output_units(units, key: str = "units") -> OutputUnits | None:
+    """The results' units from anything the command line's ``--units`` or the API's ``units=`` takes.
+
+    Parameters
+    ----------
+    units : None, str, sequence of str, or OutputUnits
+        ``"mm,kN,g"`` (the ``--units`` text: one unit per dimension, ``g`` standard gravity), the same as
+        a list ``["mm", "kN", "g"]``, or an :class:`OutputUnits` (returned as is). None or ``""``: SI.
+    key : str
+        What the error names (``--units`` on the command line).
+
+    Returns
+    -------
+    OutputUnits or None
+        None for SI.
+
+    Raises
+    ------
+    SceneError
+        A bad entry, a frequency unit, two units of one dimension, another type, or pint missing (one line).
+    """
+    from ..errors import SceneError
+
+    if units is None or isinstance(units, OutputUnits):
+        return units
+    if isinstance(units, (list, tuple)) and all(isinstance(u, str) for u in units):
+        units = ",".join(units)
+    if not isinstance(units, str):
+        raise SceneError(None, key, f"{type(units).__name__} {str(units)[:40]!r}; accepted: a text such as "
+                                    "'mm,kN,g' (as --units), a list of unit texts, or None for SI")
+    if not units.strip():
+        return None
+    try:
+        return OutputUnits.parse(units)
+    except UnitProblem as exc:
+        raise SceneError(None, key, f"{units[:80]!r}: {exc}") from None
+
+
+__all__ = ["OutputUnits", "SI", "output_units"]

@@ -30,7 +30,7 @@ MAX_UNIT_EXPONENT = 16
 QUANTITY = re.compile(r"\s*([+-]?(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?)(?![\d.eE])\s*((?:[A-Za-z_(]|1\s*/).*?)\s*\Z",
                       re.S)
 _UNIT_CHARS = re.compile(r"[A-Za-z0-9_ */.()^-]*\Z")
-_POWER = re.compile(r"(\^|\*\*)\s*(-?\d{1,2}|\(\s*-?\d{1,2}\s*\))(?![\d^*.])")
+_POWER = re.compile(r"(\^|\*\*)\s*(-?\d{1,2}|\(\s*-?\d{1,2}\s*\))(?![\d^.]|\*\*)")  # "m^2*s" is a product
 _BARE_G = re.compile(r"(?<![A-Za-z0-9_])g(?![A-Za-z0-9_])")
 
 
@@ -137,6 +137,17 @@ def parse_unit(text: str, expected: Dimension | None = None) -> Unit:
     return Unit(text, Fraction(base.magnitude), Dimension.of(dict(base.dimensionality)))
 
 
+def gram_hint(text: str, dimension: Dimension) -> str:
+    """A clause for a message when ``text`` (a unit or ``"NUMBER UNIT"``) of ``dimension`` uses pint's ``g``
+    (the gram) and so has a mass in it where the slot wanted something else: the silent "0.3 g is
+    0.3 gram" of a scene that meant standard gravity. ``""`` when ``g`` is not involved.
+    """
+    if not isinstance(text, str) or "[mass]" not in dimension.map or not _BARE_G.search(text):
+        return ""
+    return (f"; g is the gram there (a mass); standard gravity (9.80665 m/s^2) is g_0, as in "
+            f"{_BARE_G.sub('g_0', text.strip())!r}")
+
+
 def si_unit_text(dimension: Dimension) -> str:
     """The SI base-unit text of a dimension (``kg/s^2``), for writing a number back with its unit."""
     names = {"[mass]": "kg", "[length]": "m", "[time]": "s", "[current]": "A", "[temperature]": "K",
@@ -147,4 +158,5 @@ def si_unit_text(dimension: Dimension) -> str:
     return text + "".join(f"/{d}" for d in den) if den else text
 
 
-__all__ = ["EXTRA", "Unit", "UnitProblem", "parse_unit", "split_quantity", "registry", "si_unit_text", "MAX_UNIT"]
+__all__ = ["EXTRA", "Unit", "UnitProblem", "parse_unit", "split_quantity", "registry", "si_unit_text", "MAX_UNIT",
+           "gram_hint"]

@@ -15,7 +15,7 @@ from __future__ import annotations
 from ..errors import SceneError, show
 from .check import VARIABLES, DimensionProblem, dimension_of
 from .dimension import Dimension, meaning
-from .registry import UnitProblem, parse_unit, si_unit_text, split_quantity
+from .registry import UnitProblem, gram_hint, parse_unit, si_unit_text, split_quantity
 
 #: What common dimensions are called in messages.
 _NAMES = {}
@@ -70,8 +70,8 @@ class SceneUnits:
         except UnitProblem as p:
             raise self._fail(key, value, p.why, p.accepted) from None
         if m is not None and unit.dimension != m.dimension:
-            raise self._fail(key, value, f"unit {unit.text} is {called(unit.dimension)}{_weight(unit.dimension, m)}",
-                             f"{m}")
+            raise self._fail(key, value, f"unit {unit.text} is {called(unit.dimension)}{_weight(unit.dimension, m)}"
+                                         f"{gram_hint(value, unit.dimension)}", f"{m}")
         if key.startswith("parameters."):
             name = key.split(".", 1)[1]
             self.dims[name], self.given[name] = unit.dimension, value
@@ -95,14 +95,18 @@ class SceneUnits:
         hint = (f" (in an expression with units, the plain-number parameter{'s' if len(plain) > 1 else ''} "
                 f"{', '.join(plain)} count{'' if len(plain) > 1 else 's'} as dimensionless: give "
                 f"{'them units' if len(plain) > 1 else 'it a unit'})") if plain else ""
-        with_units = ", ".join(f"{p} = {self.given[p]!r}" for p in sorted(expr.symbols() & self.dims.keys()))
+        involved = sorted(expr.symbols() & self.dims.keys())
+        with_units = ", ".join(f"{p} = {self.given[p]!r}" for p in involved)
+        # a parameter in grams where the expression does not want a mass: likely meant standard gravity
+        grams = "".join(gram_hint(self.given[p], self.dims[p]).replace("; g is", f"; {p}: g is", 1)
+                        for p in involved)
         try:
             dim = dimension_of(expr, names)
         except DimensionProblem as p:
-            raise self._fail(key, text, f"{p.why} (with {with_units}){hint}",
+            raise self._fail(key, text, f"{p.why} (with {with_units}){hint}{grams}",
                              "a dimensionally consistent expression" + (f" giving {m}" if m else "")) from None
         if m is not None and dim != m.dimension:
-            raise self._fail(key, text, f"has dimension {called(dim)}{_weight(dim, m)} (with {with_units}){hint}",
+            raise self._fail(key, text, f"has dimension {called(dim)}{_weight(dim, m)} (with {with_units}){hint}{grams}",
                              f"{m}")
 
     def keep_unit(self, name: str, value: float):

@@ -9,7 +9,7 @@ from __future__ import annotations
 import re
 
 from .dimension import ACCELERATION, FORCE, TIME, Dimension
-from .registry import UnitProblem, parse_unit
+from .registry import UnitProblem, gram_hint, parse_unit
 from .scope import called
 
 #: ``name`` or ``name [unit]``.
@@ -50,7 +50,7 @@ def header_factors(line: str, names: tuple[str, ...],
             raise HeaderProblem(f"header {line[:60]!r}: column {name}: {exc.why} (accepted: {exc.accepted})") from None
         if unit.dimension != dim:
             raise HeaderProblem(f"header {line[:60]!r}: column {name} [{unit.text}] is {called(unit.dimension)}, "
-                                f"expected {what}, {dim}")
+                                f"expected {what}, {dim}{gram_hint(unit.text, unit.dimension)}")
         factors.append(float(unit.factor))
     return tuple(factors)
 

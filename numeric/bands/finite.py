@@ -6,7 +6,8 @@ place i % p of the cell. A mode at ω² is
 
 * a **band mode** (band j = the j-th lowest branch at each q, wavenumber q ∈ [0, π]) when some band reaches
   ω²: q solves ω²_j(q) = ω² (safeguarded Newton on the accurate branch with its group velocity); where several
-  (j, q) do, the one whose Bloch waves e^{±iqc} U_j(±q) carry most of the mode's weight (its projection);
+  (j, q) do, the one whose Bloch waves e^{±iqc} U_j(±q) carry most of the mode's weight (its projection), that
+  fraction given for every band mode (``bloch_weight``);
 * a **gap mode** otherwise: it decays by e^{−κ} per cell, κ = Im q(ω) (:mod:`.decay`), localisation length
   1/κ cells; an **edge** mode when its largest cell is at an open end (within :data:`EDGE_CELLS` cells), a
   **defect** mode otherwise (a cell that differs, or a ring).
@@ -37,7 +38,9 @@ class FiniteMode:
     q: float | None
     kind: str  # "band", "edge" or "defect"
     localisation: float | None = None  # cells (gap modes)
-    weight: float | None = None  # fraction of the mode's weight on the Bloch waves (band modes)
+    #: Band modes: the fraction of the mode (mass-weighted) in the span of its band's Bloch waves at ±q (1 for a
+    #: ring's mode, near 1 for an open chain's standing wave); None for gap modes.
+    weight: float | None = None
 
     @property
     def omega(self) -> float:
@@ -56,15 +59,18 @@ def _solve(cell: Cell, j: int, a: float, b: float, target: np.ndarray) -> np.nda
     return newton(cell, j, a, b, wa, wb, target)
 
 
-def _weight(cell: Cell, psi: np.ndarray, j: int, q: float) -> float:
-    """Fraction of the mode (mass-weighted, shape (cells, p)) on the Bloch waves of band j at ±q."""
-    u = spectrum(cell, np.array([q])).vectors[0, :, j]
-    c = np.arange(psi.shape[0])
+def _weight(psi: np.ndarray, u: np.ndarray, q: float) -> float:
+    """Fraction of the mode (mass-weighted, shape (cells, p)) in the span of the Bloch waves e^{±iqc} of the cell
+    vector ``u`` (p,) at ±q over the chain's cells: the squared norm of its orthogonal projection there, over its
+    own (in [0, 1]; at q = 0 or π the two waves are one, and near them nearly parallel: their span counts once)."""
     total = float(np.sum(np.abs(psi) ** 2))
     if total == 0:
         return 0.0
-    amp = [abs(np.sum((psi @ (u if s > 0 else u.conj()).conj()) * np.exp(-1j * s * q * c))) ** 2 for s in (1, -1)]
-    return float(sum(amp) / (total * psi.shape[0]))
+    phase = np.exp(1j * q * np.arange(psi.shape[0]))[:, None]
+    waves = np.stack([(phase * u[None, :]).ravel(), (phase.conj() * u.conj()[None, :]).ravel()], axis=1)
+    basis, r, _ = np.linalg.svd(waves, full_matrices=False)
+    basis = basis[:, r > 1e-8 * r[0]]
+    return float(min(np.sum(np.abs(basis.conj().T @ psi.ravel()) ** 2) / total, 1.0))
 
 
 def label(cell: Cell, omega2: np.ndarray, vectors: np.ndarray, ring: bool) -> list[FiniteMode]:
@@ -97,14 +103,16 @@ def label(cell: Cell, omega2: np.ndarray, vectors: np.ndarray, ring: bool) -> li
                     candidates[k].append((j, float(q)))
     out: list[FiniteMode | None] = [None] * n
     gap = [k for k in range(n) if not candidates[k]]
-    for k in range(n):
-        if not candidates[k]:
-            continue
+    flat = [(k, j, q) for k in range(n) for j, q in candidates[k]]
+    bloch = spectrum(cell, np.array([q for _, _, q in flat])).vectors if flat else None  # (C, p, p), one call
+    best: dict[int, tuple[float, int, float]] = {}
+    for c, (k, j, q) in enumerate(flat):
         psi = np.zeros(cells * p, dtype=complex)
         psi[:n] = vectors[:, k]
-        psi = psi.reshape(cells, p)
-        scored = [(_weight(cell, psi, j, q) if len(candidates[k]) > 1 else None, j, q) for j, q in candidates[k]]
-        w, j, q = max(scored, key=lambda t: -1.0 if t[0] is None else t[0])
+        w = _weight(psi.reshape(cells, p), bloch[c, :, j], q)
+        if k not in best or w > best[k][0]:
+            best[k] = (w, j, q)
+    for k, (w, j, q) in best.items():
         out[k] = FiniteMode(float(omega2[k]), j, q, "band", None, w)
     if gap:
         kappa, _ = attenuation(cell, omega[gap])

@@ -37,6 +37,14 @@ from ..errors import RunRefused
 IDENTIFIABLE_RTOL = 1e-8
 #: A parameter belongs to an unidentifiable combination when its weight there exceeds this.
 INVOLVED = 1e-3
+#: Most model evaluations of one fit.
+MAX_EVALUATIONS = 200
+#: Why SciPy's ``least_squares`` stopped (its ``status``), in the report's words.
+STOPPED = {0: f"stopped at the evaluation limit ({MAX_EVALUATIONS}) before converging",
+           1: "converged (the gradient vanished to working precision)",
+           2: "converged (the sum of squares stopped decreasing)",
+           3: "converged (the parameter step fell below working precision)",
+           4: "converged (the sum of squares and the parameter step both settled)"}
 
 
 @dataclass(frozen=True)
@@ -68,6 +76,49 @@ class Problem:
     constrained: int = 0
 
 
+class Memo:
+    """``fn(x)`` evaluated once per point: SciPy's ``least_squares`` asks for the residual and then for the
+    Jacobian at the same point, and each model evaluation yields both.
+
+    Keeps the first point's value (the start, asked again for the report), the value of lowest ``score``
+    (the trust-region method accepts a step only when the cost falls, so its solution is the evaluated
+    point of lowest cost, asked again at the end) and the last ``keep`` others, keyed by the exact bits of
+    ``x`` (a float array).
+
+    Parameters
+    ----------
+    fn : callable
+        ``fn(x (P,)) -> value``.
+    score : callable, optional
+        ``score(value) -> float``: the cost of a value.
+    keep : int
+    """
+
+    def __init__(self, fn: Callable, score: Callable | None = None, keep: int = 2):
+        self.fn, self.score, self.keep = fn, score, keep
+        self.values: dict[bytes, object] = {}
+        self.best: tuple[float, bytes] | None = None
+        #: Evaluations of ``fn`` (points not found in the memo).
+        self.calls = 0
+
+    def __call__(self, x):
+        key = np.ascontiguousarray(x, dtype=float).tobytes()
+        if key in self.values:
+            return self.values[key]
+        self.calls += 1
+        value = self.fn(x)
+        if self.score is not None:
+            cost = float(self.score(value))
+            if self.best is None or cost < self.best[0]:
+                self.best = (cost, key)
+        pinned = {next(iter(self.values), None), self.best[1] if self.best else None}
+        others = [k for k in self.values if k not in pinned]
+        for k in others[:max(len(others) - self.keep + 1, 0)]:
+            del self.values[k]
+        self.values[key] = value
+        return value
+
+
 @dataclass(frozen=True)
 class Fit:
     """The result of :func:`solve`.
@@ -97,6 +148,7 @@ class Fit:
         Residuals minus identifiable parameters.
     status : str
     evaluations : int
+        Model evaluations (each gives the residuals and their Jacobian at one point, once).
     """
 
     values: np.ndarray = field(repr=False)
@@ -139,7 +191,15 @@ def solve(problem: Problem) -> Fit:
 
     P = len(problem.names)
     theta0 = np.log(problem.start)
-    r0, J0 = problem.residual(problem.start)
+    start_key = theta0.tobytes()
+    # one model evaluation per point p (two θ an ulp apart may give one p); at θ₀ the given start itself, not
+    # exp(log p), which may differ from it by an ulp
+    memo = Memo(problem.residual, score=lambda rj: float(rj[0] @ rj[0]))
+
+    def at(t):
+        return memo(problem.start if t.tobytes() == start_key else np.exp(t))
+
+    r0, J0 = at(theta0)
     if not (np.all(np.isfinite(r0)) and np.all(np.isfinite(J0))):
         raise RunRefused("update: the residuals or their Jacobian are not finite at the starting parameters")
     m = r0.shape[0] - problem.constrained
@@ -155,38 +215,28 @@ def solve(problem: Problem) -> Fit:
                          "shapes, fewer parameters, or standard deviations in the file (omega_std)", "parameters")
     lo = np.log(np.maximum(problem.lower, 1e-300))
     hi = np.log(np.where(np.isfinite(problem.upper), problem.upper, np.inf))
-    count = [0]
 
     def fun(z):
-        count[0] += 1
-        p = np.exp(theta0 + V_id @ z)
-        r, _ = problem.residual(p)
-        return r
+        return at(theta0 + V_id @ z)[0].copy()  # SciPy owns what it is given
 
     def jac(z):
-        p = np.exp(theta0 + V_id @ z)
-        _, J = problem.residual(p)
-        return J @ V_id
+        return at(theta0 + V_id @ z)[1] @ V_id
 
     status = "no identifiable parameter"
     theta = theta0.copy()
     if rank:
         if V_null.shape[1] == 0:  # full rank: bounds apply directly (V_id is orthogonal)
-            def fun_t(t):
-                count[0] += 1
-                return problem.residual(np.exp(t))[0]
-
-            res = least_squares(fun_t, np.clip(theta0, lo, hi), jac=lambda t: problem.residual(np.exp(t))[1],
+            res = least_squares(lambda t: at(t)[0].copy(), np.clip(theta0, lo, hi), jac=lambda t: at(t)[1].copy(),
                                 bounds=(lo, hi), method="trf", x_scale=1.0, ftol=1e-15, xtol=1e-15, gtol=1e-15,
-                                max_nfev=200)
+                                max_nfev=MAX_EVALUATIONS)
             theta = res.x
         else:
             res = least_squares(fun, np.zeros(rank), jac=jac, method="trf", x_scale=1.0, ftol=1e-15, xtol=1e-15,
-                                gtol=1e-15, max_nfev=200)
+                                gtol=1e-15, max_nfev=MAX_EVALUATIONS)
             theta = theta0 + V_id @ res.x
-        status = res.message
-    p_end = np.exp(theta)
-    r1, J1 = problem.residual(p_end)
+        status = STOPPED.get(int(res.status), f"stopped (SciPy status {int(res.status)})")
+    r1, J1 = at(theta)
+    p_end = problem.start if theta.tobytes() == start_key else np.exp(theta)
     chi2 = float(np.sum(r1 * r1))
     dof = m - rank
     scale = 1.0 if problem.known_noise else float(np.sqrt(chi2 / dof)) if dof > 0 else np.nan
@@ -211,7 +261,7 @@ def solve(problem: Problem) -> Fit:
             v = V_id[:, i] * (1.0 if V_id[np.argmax(np.abs(V_id[:, i])), i] > 0 else -1.0)
             combos.append((v, float(v @ theta), float(np.sqrt(max(v @ cov @ v, 0.0)))))
     return Fit(p_end, se, corr, cov, s, V, [V_null[:, i] for i in range(V_null.shape[1])], ~involved, r0, r1,
-               scale, chi2, dof, str(status), count[0], combos)
+               scale, chi2, dof, str(status), memo.calls, combos)
 
 
-__all__ = ["Problem", "Fit", "solve", "describe", "IDENTIFIABLE_RTOL"]
+__all__ = ["Problem", "Fit", "Memo", "solve", "describe", "IDENTIFIABLE_RTOL"]

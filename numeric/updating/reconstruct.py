@@ -208,6 +208,19 @@ def condition(m: list, k: list) -> float:
     return float(np.max(np.sum(np.abs(np.linalg.inv(A)[:, :2 * n - 1]), axis=1)))
 
 
+def distinct_texts(values: list, least: int = 12) -> list[str]:
+    """The values printed with the fewest significant digits (at least ``least``, at most the working
+    precision) whose rounding stays below a tenth of the smallest difference between unequal values, so
+    that the texts show how they differ."""
+    gaps = [abs(a - b) for i, a in enumerate(values) for b in values[:i] if a != b]
+    gap = min(gaps) if gaps else mpmath.mpf(0)
+    for digits in range(least, mpmath.mp.dps + 1):
+        texts = [mpmath.nstr(v, digits) for v in values]
+        if all(10 * abs(mpmath.mpf(t) - v) <= gap for t, v in zip(texts, values)):
+            return texts
+    return [mpmath.nstr(v, mpmath.mp.dps) for v in values]
+
+
 def _rebuild(lam: list, mu: list | None, phi_end: list | None, total_mass, file: str) -> tuple[list, list]:
     """(m, k) at the current precision from mpmath inputs (checked here: positivity, order, interlacing)."""
     n = len(lam)
@@ -231,10 +244,13 @@ def _rebuild(lam: list, mu: list | None, phi_end: list | None, total_mass, file:
                              "spectra")
         bad = next((i for i in range(n - 1) if not lam[i] < mu[i] < lam[i + 1]), None)
         if bad is not None:
+            a, b, c = lam[bad], mu[bad], lam[bad + 1]
+            low, high, gap = (f"omega2_free[{bad}]", f"omega2_clamped[{bad}]", b - a) if not a < b else \
+                (f"omega2_clamped[{bad}]", f"omega2_free[{bad + 1}]", c - b)
             raise RunRefused(f"{file}: the spectra do not interlace: need omega2_free[{bad}] < omega2_clamped[{bad}] "
-                             f"< omega2_free[{bad + 1}], got {mpmath.nstr(lam[bad], 12)}, {mpmath.nstr(mu[bad], 12)}, "
-                             f"{mpmath.nstr(lam[bad + 1], 12)}; accepted: strictly interlacing spectra (every clamped "
-                             "value between two free ones, distinct in the digits given)", "spectra")
+                             f"< omega2_free[{bad + 1}], got {', '.join(distinct_texts([a, b, c]))} ({high} - {low} "
+                             f"= {mpmath.nstr(gap, 3)}); accepted: strictly interlacing spectra (every clamped value "
+                             "between two free ones, distinct in the digits given)", "spectra")
         w = weights_from_spectra(lam, mu)
     alpha, beta = lanczos(lam, w)
     if last is not None and total_mass is None:
