@@ -218,7 +218,7 @@ CELL_DAMPERS = ()
 _CELL_SPRINGS = CELL_SPRINGS  # what bodies read (a parameter cannot shadow a private name)
 BAND_CLOSED_FORM = True
 #: Pairs of branches closer than this (relative) take the Hellmann-Feynman group velocity.
-BAND_TOUCH = 0.01
+_BAND_TOUCH = 0.01
 
 
 def cell_masses(k1, k2, m1, m2):
@@ -298,13 +298,13 @@ def group_velocity(q, k1, k2, m1, m2):
 
 def _band_touching(_qf, _v, _w2, _m, _k, _pairs):
     """_v (shape _qf.shape + (p,), closed-form dω/dq at _qf in [0, π]) where the branches of a pair are within
-    BAND_TOUCH of each other or _v is not finite: Hellmann-Feynman on D(q) = M^-1/2 K(q) M^-1/2."""
+    _BAND_TOUCH of each other or _v is not finite: Hellmann-Feynman on D(q) = M^-1/2 K(q) M^-1/2."""
     _v = _np.array(_v, dtype=_np.float64)
     _p = _v.shape[-1]
     _fq, _fv, _fw = _qf.reshape(-1), _v.reshape(-1, _p), _np.broadcast_to(_w2, _v.shape).reshape(-1, _p)
     for _i, _j in _pairs:
         _lo, _hi = _np.minimum(_fw[:, _i], _fw[:, _j]), _np.maximum(_fw[:, _i], _fw[:, _j])
-        _near = (_lo > 0) & ((_hi - _lo <= BAND_TOUCH * _hi) | ~_np.isfinite(_fv[:, _i]) | ~_np.isfinite(_fv[:, _j]))
+        _near = (_lo > 0) & ((_hi - _lo <= _BAND_TOUCH * _hi) | ~_np.isfinite(_fv[:, _i]) | ~_np.isfinite(_fv[:, _j]))
         _at = _np.flatnonzero(_near)
         if _at.size == 0:
             continue

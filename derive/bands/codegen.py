@@ -64,7 +64,7 @@ def band_section(c) -> list[str]:
     pairs = _pairs(d) if d.branches is not None else ()
     if pairs:
         lines += ["#: Pairs of branches closer than this (relative) take the Hellmann-Feynman group velocity.",
-                  f"BAND_TOUCH = {BAND_TOUCH!r}"]
+                  f"_BAND_TOUCH = {BAND_TOUCH!r}"]
     lines += function(f"cell_masses({sig})", "Masses of one cell, shape (p,).", [f"    return {_vector(cell.masses)}"])
     lines += function(f"cell_stiffness({sig})",
                       "Stiffness of each CELL_SPRINGS spring (V''(0) of a potential), shape (S,).",
@@ -138,13 +138,13 @@ _TOUCHING = """
 
 def _band_touching(_qf, _v, _w2, _m, _k, _pairs):
     \"\"\"_v (shape _qf.shape + (p,), closed-form dω/dq at _qf in [0, π]) where the branches of a pair are within
-    BAND_TOUCH of each other or _v is not finite: Hellmann-Feynman on D(q) = M^-1/2 K(q) M^-1/2.\"\"\"
+    _BAND_TOUCH of each other or _v is not finite: Hellmann-Feynman on D(q) = M^-1/2 K(q) M^-1/2.\"\"\"
     _v = numpy.array(_v, dtype=float)
     _p = _v.shape[-1]
     _fq, _fv, _fw = _qf.reshape(-1), _v.reshape(-1, _p), numpy.broadcast_to(_w2, _v.shape).reshape(-1, _p)
     for _i, _j in _pairs:
         _lo, _hi = numpy.minimum(_fw[:, _i], _fw[:, _j]), numpy.maximum(_fw[:, _i], _fw[:, _j])
-        _near = (_lo > 0) & ((_hi - _lo <= BAND_TOUCH * _hi) | ~numpy.isfinite(_fv[:, _i]) | ~numpy.isfinite(_fv[:, _j]))
+        _near = (_lo > 0) & ((_hi - _lo <= _BAND_TOUCH * _hi) | ~numpy.isfinite(_fv[:, _i]) | ~numpy.isfinite(_fv[:, _j]))
         _at = numpy.flatnonzero(_near)
         if _at.size == 0:
             continue
