@@ -219,6 +219,24 @@ def solve(file: str, n: int, springs, loads, params: dict, values: dict, pieces,
     shape = tree(n, [(a, b) for a, b, _ in springs])
     if shape is not None and all(float(S(0.0, *problem.fvals)) > 0 for _, _, _, _, S in problem.f64):
         return _on_tree(file, problem, shape, springs, loads, subs, pieces, where)
+    x, how = _followed(file, problem, where)
+    refined = refine(problem, x)
+    if refined is None:
+        raise SceneError(file, where, "no static equilibrium found: applying the constant loads and pre-stress "
+                         f"gradually from rest reaches them only to float64's rounding (at |x| = "
+                         f"{max(abs(float(v)) for v in x):.3g}), and no equilibrium refines there in "
+                         f"extended precision (up to {MAX_DPS} digits): the springs hold the loads at most in the "
+                         "limit; accepted: springs and loads with a stable equilibrium (V''(d) > 0 there)")
+    xs, dps = refined
+    how += f", refined in mpmath to {dps} digits; " + _stable(pieces)
+    with mpmath.workdps(dps):
+        ext = [(xs[b] if b >= 0 else 0) - (xs[a] if a >= 0 else 0) for a, b, _ in springs]
+    return _result(file, springs, subs, xs, ext, how, dps)
+
+
+def _followed(file: str, problem: "_Problem", where) -> tuple:
+    """``(x, how)``: the equilibrium followed from rest by :func:`path` (or found by :func:`descent` where x = 0
+    is not stable), in float64, with the words saying how; refusals where neither reaches the loads."""
     found = path(problem)
     if isinstance(found, _PathEnd) and problem.float64_limited:
         raise SceneError(file, where, f"no static equilibrium found in float64: applying the constant loads and "
@@ -246,18 +264,7 @@ def solve(file: str, n: int, springs, loads, params: dict, values: dict, pieces,
         how = (f"the loads applied gradually from rest ({steps} load step{'s' if steps != 1 else ''}, Newton "
                + ("correctors with the residual in mpmath where K is ill-conditioned for float64)"
                   if problem.mp_corrections else "correctors in float64)"))
-    refined = refine(problem, x)
-    if refined is None:
-        raise SceneError(file, where, "no static equilibrium found: applying the constant loads and pre-stress "
-                         f"gradually from rest reaches them only to float64's rounding (at |x| = "
-                         f"{max(abs(float(v)) for v in x):.3g}), and no equilibrium refines there in "
-                         f"extended precision (up to {MAX_DPS} digits): the springs hold the loads at most in the "
-                         "limit; accepted: springs and loads with a stable equilibrium (V''(d) > 0 there)")
-    xs, dps = refined
-    how += f", refined in mpmath to {dps} digits; " + _stable(pieces)
-    with mpmath.workdps(dps):
-        ext = [(xs[b] if b >= 0 else 0) - (xs[a] if a >= 0 else 0) for a, b, _ in springs]
-    return _result(file, springs, subs, xs, ext, how, dps)
+    return x, how
 
 
 def _result(file: str, springs, subs: dict, xs: list, ext: list, how: str, dps: int) -> Equilibrium:

@@ -100,7 +100,7 @@ def test_frf_cli_forms_and_refusals(tmp_path, capsys):
     status, out, _ = run_cli(["frf", "building", "--input", "floor1", "--output", "floor3", "--json", "--out",
                               tmp_path], capsys)
     assert set(json.loads(out)) == {"scene", "input", "output", "omega", "magnitude", "phase", "units", "resonances",
-                                    "transfer_function", "notes"}
+                                    "connected", "other_peaks", "transfer_function", "notes"}
 
 
 def test_units_as_the_command_line_writes_them():

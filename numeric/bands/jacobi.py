@@ -44,9 +44,13 @@ def _jacobi_impl(X, V, tol, max_sweeps):  # pragma: no cover - compiled by numba
                     ag = abs(g)
                     if not ag > tol * np.sqrt(a) * np.sqrt(b):
                         continue
-                    rotated = True
                     zeta = (b - a) / (2.0 * ag)
-                    t = (1.0 if zeta >= 0 else -1.0) / (abs(zeta) + np.sqrt(1.0 + zeta * zeta))
+                    # hypot: zeta reaches 1e170 when the columns' norms span 1e160 (zeta**2 would overflow
+                    # and make t = 0, a rotation that never ends); t = 0 (zeta = inf) is converged
+                    t = (1.0 if zeta >= 0 else -1.0) / (abs(zeta) + np.hypot(1.0, zeta))
+                    if t == 0.0:
+                        continue
+                    rotated = True
                     c = 1.0 / np.sqrt(1.0 + t * t)
                     s = c * t
                     ph = (g / ag).conjugate()
@@ -116,11 +120,15 @@ def _jacobi_numpy(X: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
                 do = ag > tol * np.sqrt(a) * np.sqrt(b)
                 if not do.any():
                     continue
+                with np.errstate(over="ignore", divide="ignore", invalid="ignore"):
+                    zeta = (b - a) / (2.0 * ag)
+                t = np.where(zeta >= 0, 1.0, -1.0) / (np.abs(zeta) + np.hypot(1.0, zeta))  # as in _jacobi_impl
+                do &= t != 0.0
+                if not do.any():
+                    continue
                 rotated = True
                 idx = np.flatnonzero(do)
-                a, b, g, ag = a[idx], b[idx], g[idx], ag[idx]
-                zeta = (b - a) / (2.0 * ag)
-                t = np.where(zeta >= 0, 1.0, -1.0) / (np.abs(zeta) + np.sqrt(1.0 + zeta * zeta))
+                a, b, g, ag, t = a[idx], b[idx], g[idx], ag[idx], t[idx]
                 c = 1.0 / np.sqrt(1.0 + t * t)
                 s = c * t
                 ph = np.conj(g / ag)  # e^{-iφ}: x̃_j = e^{-iφ} x_j makes x_iᴴ x̃_j real
