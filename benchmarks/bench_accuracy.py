@@ -88,7 +88,7 @@ def _plain_frf(system, omega, i, o):
 
 
 def bench_frf(tmp: Path) -> list[dict]:
-    from springchain.numeric.frf import frequency_response
+    from springchain.numeric.frf.response import frequency_response
 
     rows = []
     for c in CONTRASTS:
@@ -111,8 +111,8 @@ def bench_frf(tmp: Path) -> list[dict]:
 
 def bench_chain_frf() -> list[dict]:
     """Open chain of 1e5 masses: dynamic stiffness against the tridiagonal LU, per frequency."""
-    from springchain.numeric.frf import Operator, _receptance_banded
-    from springchain.numeric.frf_chain import chain_elements, chain_receptance
+    from springchain.numeric.frf.response import Operator, _receptance_banded
+    from springchain.numeric.frf.chain import chain_elements, chain_receptance
 
     n = 100_000
     rng = np.random.default_rng(1)
@@ -165,7 +165,7 @@ def _plain_exact(system, x0, v0, t, h):
 
 
 def bench_loaded(tmp: Path) -> list[dict]:
-    from springchain.numeric.linear_exact import AugmentedLinear
+    from springchain.numeric.exact.linear import AugmentedLinear
 
     rows = []
     for label, damped in (("exact solution, gravity", False), ("exact solution, gravity + force + dashpots", True)):
@@ -221,7 +221,7 @@ def _plain_chain(system, x0, t):
 
 
 def bench_chain(tmp: Path, n: int = 30) -> list[dict]:
-    from springchain.numeric.chain_modal import ChainModal
+    from springchain.numeric.exact.chain import ChainModal
 
     rows = []
     for c in CONTRASTS:
@@ -244,7 +244,7 @@ def bench_chain(tmp: Path, n: int = 30) -> list[dict]:
                      "seconds_after": _best(lambda: ChainModal.from_module(system.module, system.params, x0,
                                                                            np.zeros(n)).at(run.t))})
     # set-up cost at n = 2000 (the modes alone)
-    from springchain.numeric.chain_spectrum import chain_spectrum
+    from springchain.numeric.modes.chain import chain_spectrum
 
     big = tmp / "chain2000.toml"
     big.write_text(_chain_text(2000, 1e4, 1e4, 1.0, 2))

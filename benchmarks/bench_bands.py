@@ -65,7 +65,7 @@ def _runs(scene, cell, grid, q):
 
 def timings(points: int) -> list[dict]:
     from springchain.numeric.bands.edges import edges
-    from springchain.numeric.timing import measure, single_threaded_blas
+    from springchain.numeric.bench.timing import measure, single_threaded_blas
 
     import springchain as sc
 

@@ -5,7 +5,7 @@ Run ``python benchmarks/bench_potential_chain.py [--n N] [--steps S] [--rounds R
 Two ``[chain]`` scenes of N = 10⁶ equal masses between walls, written here as TOML and derived
 like any user scene: the linear chain (``k = "k"``) and the FPUT-β chain
 (``potential = "k*d**2/2 + beta*d**4/4"``). Each runs velocity Verlet through
-:class:`springchain.numeric.fast.FusedVerlet` (numba; ``advance``, the two-steps-per-sweep
+:class:`springchain.numeric.compiled.fast.FusedVerlet` (numba; ``advance``, the two-steps-per-sweep
 half-step form every long Verlet run uses), S steps per call, the two interleaved for R rounds in
 one process with BLAS pinned to one thread; per-step time = the minimum over rounds / S. The FPUT-β
 kernel calls the tension ``V'(d) = k d + β d³`` that numba compiled from the generated module's
@@ -48,8 +48,8 @@ def _scene_text(name: str, n: int, law: str, params: str) -> str:
 def measure(n: int = 10**6, steps: int = 20, rounds: int = 7, h: float = 0.1) -> dict:
     import springchain as sc
     from springchain._modules import load_module
-    from springchain.numeric.fast import Backend, FusedVerlet
-    from springchain.numeric.timing import single_threaded_blas
+    from springchain.numeric.compiled.fast import Backend, FusedVerlet
+    from springchain.numeric.bench.timing import single_threaded_blas
 
     kernels, states = {}, {}
     with tempfile.TemporaryDirectory() as tmp:

@@ -23,7 +23,7 @@ with BLAS pinned to one thread, side by side:
    ``springchain.simulate`` (see :func:`exact_vs_floor`).
 
 Compile time (or loading from the disk cache) is reported once, separately, and is in no timing.
-Timings are the minimum of repeats (:func:`springchain.numeric.timing.measure`).
+Timings are the minimum of repeats (:func:`springchain.numeric.bench.timing.measure`).
 """
 
 from __future__ import annotations
@@ -60,7 +60,7 @@ def _system(name):
 
 
 def _timed(run, budget=0.5):
-    from springchain.numeric.timing import measure
+    from springchain.numeric.bench.timing import measure
 
     t = measure(run, budget=budget, min_repeats=1)
     return t.seconds, t.result
@@ -104,11 +104,11 @@ def _hand_verlet():
 
 def verlet_per_step(steps: int, budget: float = 4.0) -> dict:
     """springchain's Verlet (the method protocol into a memory recorder, the compiled loop) and the hand
-    loop, both recording every 1000th step, timed in turns (:func:`~numeric.timing.interleaved_seconds`)."""
+    loop, both recording every 1000th step, timed in turns (:func:`~numeric.bench.timing.interleaved_seconds`)."""
     from springchain.numeric.run import registry
     from springchain.numeric.run.grid import Grid
     from springchain.numeric.run.protocol import Options, record
-    from springchain.numeric.timing import interleaved_seconds
+    from springchain.numeric.bench.timing import interleaved_seconds
 
     system, x0, v0 = _system("seed")
     h = 0.1
@@ -235,7 +235,7 @@ def duffing(t_end: float, say=print) -> dict:
 # -- 3. exact solution against the sin/cos floor -----------------------------------------------------
 def exact_vs_floor(frames: int = 1001, budget: float = 3.0) -> dict:
     """The seed's exact solution (``modal``, S = ``frames`` times t = i·h) against ``np.cos``/``np.sin`` of
-    the N·S phases, timed in turns (:func:`~numeric.timing.interleaved_seconds`), three ways:
+    the N·S phases, timed in turns (:func:`~numeric.bench.timing.interleaved_seconds`), three ways:
 
     * ``evaluation``: the method's run into a memory recorder on a system whose modes are computed (what
       every run after the first on a loaded system pays: solution from x0, v0 and its S frames);
@@ -249,7 +249,7 @@ def exact_vs_floor(frames: int = 1001, budget: float = 3.0) -> dict:
     from springchain.numeric.run import registry
     from springchain.numeric.run.grid import Grid
     from springchain.numeric.run.protocol import Options, record
-    from springchain.numeric.timing import interleaved_seconds
+    from springchain.numeric.bench.timing import interleaved_seconds
 
     scene = _api.load("seed")
     system, x0, v0 = _system("seed")
@@ -284,7 +284,7 @@ def main(argv=None) -> int:
     args = ap.parse_args(argv)
     with _report.recorded(args.markdown, __file__, argv):
         from springchain.numeric.compiled.run import compile_seconds
-        from springchain.numeric.timing import single_threaded_blas
+        from springchain.numeric.bench.timing import single_threaded_blas
 
         import springchain.numeric.compiled.run as compiled_run
 

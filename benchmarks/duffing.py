@@ -66,7 +66,7 @@ def _setup(t_end: float, frames: int):
 def reference(system, x0, v0, t_end: float, frames: int, h: float, progress=print):
     """Kahan–Li 8 at step ``h`` (and ``2h`` for its error estimate) on the frames; also its difference
     from DOP853 at rtol 1e-13."""
-    from springchain.numeric.bench_reference import GridReference
+    from springchain.numeric.bench.reference import GridReference
 
     spacing = t_end / frames
     m_fine = max(2, int(math.ceil(spacing / h)))
@@ -120,7 +120,7 @@ def ratio_table(runs: dict[str, list[dict]]) -> list[dict]:
 
 def _settings(name: str, frames):
     """The sweep of one method: ``(label, method, grid)`` per index k = 0, 1, … (tightening)."""
-    from springchain.numeric.plan import with_tolerance
+    from springchain.numeric.plan.planner import with_tolerance
     from springchain.numeric.run import registry
     from springchain.numeric.run.grid import Grid
     from springchain.numeric.run.protocol import Kind, Options
@@ -144,7 +144,7 @@ def run(t_end: float = 1000.0, frames: int = 10, budget: float = 0.5, ref_h: flo
     """The sweeps, interleaved: at each sweep index every still-running method runs once (so a
     change in machine load between runs hits all methods alike)."""
     from springchain.numeric.run.protocol import record
-    from springchain.numeric.timing import measure, single_threaded_blas
+    from springchain.numeric.bench.timing import measure, single_threaded_blas
 
     names = ("dop853", *ADAPTIVE_METHODS, *STEP_METHODS)
     with single_threaded_blas():

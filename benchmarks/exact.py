@@ -32,7 +32,7 @@ TARGET = 3.0
 def measure(scene: str = "seed", rounds: int = 7, number: int = 200) -> dict:
     from springchain import _api
     from springchain._modules import system_of
-    from springchain.numeric.modal import ModalSolution
+    from springchain.numeric.exact.modal import ModalSolution
     from springchain.numeric.run.grid import Grid
 
     sc = _api.load(scene)
@@ -47,7 +47,7 @@ def measure(scene: str = "seed", rounds: int = 7, number: int = 200) -> dict:
     def trig():
         return np.cos(phase), np.sin(phase)
 
-    from springchain.numeric.timing import single_threaded_blas
+    from springchain.numeric.bench.timing import single_threaded_blas
 
     samples = {"exact": [], "trig": []}
     with single_threaded_blas():  # one BLAS thread, as every benchmark here

@@ -7,7 +7,7 @@ interleaved rounds, it times
   command — at two run lengths S₁ < S₂ (recording only the first and last frame), so the
   per-step cost ``(t(S₂) − t(S₁)) / (S₂ − S₁)`` has set-up, loading and writing cancelled;
 * the 32-byte-per-mass floor: one in-place pass ``x ← x + c·v, v ← v − c·x`` over two N-arrays
-  (:func:`springchain.numeric.fast.stream_update`) and a NumPy copy of 2N doubles; the faster.
+  (:func:`springchain.numeric.compiled.fast.stream_update`) and a NumPy copy of 2N doubles; the faster.
 
 for a uniform chain (the bundled ``chain100k`` at N masses) and an index-dependent one. BLAS is
 pinned to one thread. Targets (issue 13): uniform ≤ 1.5× the floor, index-dependent ≤ 2.5×.
@@ -61,7 +61,7 @@ def measure(n: int = 1_000_000, rounds: int = 5, short: int = 200, long: int = 2
     """Per-step seconds of ``simulate`` and the floor, median and minimum over interleaved rounds."""
     from springchain import _api
     from springchain.numeric import fast
-    from springchain.numeric.timing import single_threaded_blas
+    from springchain.numeric.bench.timing import single_threaded_blas
 
     out: dict = {"n": n, "rounds": rounds, "steps": [short, long], "numba": fast.available()}
     with tempfile.TemporaryDirectory() as tmp, single_threaded_blas():

@@ -4,7 +4,7 @@ Run ``python benchmarks/sine_transform.py [--n N] [--rounds R] [--json]``. In on
 interleaved rounds (BLAS and pocketfft pinned to one thread), it times on the same random vector
 
 * ``pocketfft``: ``scipy.fft.dst(x, type=1, norm="ortho")`` at length N (the route before);
-* ``chirp``: :func:`springchain.numeric.sine_transform.dst1` at length N (the chirp-z convolution
+* ``chirp``: :func:`springchain.numeric.exact.sine_transform.dst1` at length N (the chirp-z convolution
   that a slow length takes; its chirp spectrum cached, as in a run that evaluates many frames);
 * ``fast neighbour``: pocketfft at length N − 1 (``2N`` is 5-smooth for N = 10⁶), the floor;
 

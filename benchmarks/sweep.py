@@ -69,9 +69,9 @@ def main(argv=None) -> int:
 
         from springchain._modules import load_module
         from springchain.numeric import sweep_driver
-        from springchain.numeric.distributions import parse
-        from springchain.numeric.realisations import SweepSpec, compute_batch
-        from springchain.numeric.timing import single_threaded_blas
+        from springchain.numeric.sweep.distributions import parse
+        from springchain.numeric.sweep.realisations import SweepSpec, compute_batch
+        from springchain.numeric.bench.timing import single_threaded_blas
 
         tmp = Path(tempfile.mkdtemp(prefix="sweep-bench-"))
         scene_path = tmp / "chain.toml"

@@ -337,7 +337,7 @@ def _damping_ratios(model: ChainModel, records: list[dict], damped) -> str:
     chain (in place, the fields of non-chain scenes) and return a note (empty when every ζ is given).
 
     ``damped`` holds ``(ω_n, ζ, ω_d)`` of every mode ascending (the dense route of
-    ``numeric.chain_damped``, given by the caller) or None: then Rayleigh-only damping takes its
+    ``numeric.modes.chain_damping``, given by the caller) or None: then Rayleigh-only damping takes its
     closed form ζ_j = α/(2ω_j) + βω_j/2 at the listed ω (a sum of positive terms), and dashpots on a
     chain too long for the dense route leave ζ None, said in the note."""
     import math
@@ -381,7 +381,7 @@ def chain_report(model: ChainModel, modes: ChainModes, omega2_values=None, dampe
     closed_form, notes``; ``masses`` is empty: chain masses are indices 0 … n−1) plus the
     chain's ``n, left, right, uniform, j_range`` and its symbolic ``family`` (omega2, shape).
     A damped chain's listed modes carry ``damping_ratio`` and ``omega_damped`` (``damped``: the
-    ``(ω_n, ζ, ω_d)`` rows of ``numeric.chain_damped.damped_rows``, see :func:`_damping_ratios`).
+    ``(ω_n, ζ, ω_d)`` rows of ``numeric.modes.chain_damping.damped_rows``, see :func:`_damping_ratios`).
     ``participation``: a :class:`~.participation.Participation` of every mode (ascending ω, the
     records' order) for a chain whose supports move, printed and added to the records as for
     ``[masses]`` scenes; without it such a chain gets a note saying where participation is.

@@ -196,7 +196,7 @@ def chain_law_lines(model, sig: str) -> list[str]:
              "    return numpy.zeros(n)"]
     lines += helper_lines([energy, force])
     scalar = scalar_helper_names([force])
-    if scalar:  # the fused kernels call the tension on one float (numeric.potential_law)
+    if scalar:  # the fused kernels call the tension on one float (numeric.compiled.potential_law)
         from .law_helpers import helper_source
 
         lines += ["", "", *helper_source(scalar).rstrip("\n").split("\n")]

@@ -243,14 +243,14 @@ class System:
 
     @cached_property
     def spectrum(self):
-        """The accurate modes (:func:`numeric.spectrum.spectrum`: the spring-factor SVD), computed once."""
-        from .spectrum import spectrum
+        """The accurate modes (:func:`numeric.modes.spectrum.spectrum`: the spring-factor SVD), computed once."""
+        from .modes.spectrum import spectrum
 
         return spectrum(self.masses, self.spring_ends, self.stiffness)
 
     def omega_max_bound(self) -> float:
-        """A proven upper bound on ω_max (Gershgorin, :func:`numeric.bounds.omega2_bound`): no eigen-solve."""
-        from .bounds import omega2_bound
+        """A proven upper bound on ω_max (Gershgorin, :func:`numeric.modes.bounds.omega2_bound`): no eigen-solve."""
+        from .modes.bounds import omega2_bound
 
         return math.sqrt(omega2_bound(self.masses, self.spring_ends, self.stiffness))
 

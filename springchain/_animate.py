@@ -1,6 +1,6 @@
 """``springchain.animate``: a GIF of a mode shape oscillating, or of a simulated trajectory.
 
-The drawing is :mod:`springchain.numeric.animation`; trajectories come from :func:`springchain.simulate`
+The drawing is :mod:`springchain.numeric.plots.animation`; trajectories come from :func:`springchain.simulate`
 with only the frames drawn recorded.
 """
 
@@ -87,7 +87,7 @@ def animate(scene: str | Path | Scene, mode: int | None = None, method: str | No
     import numpy as np
 
     from ._api import _system, load, simulate
-    from .numeric import animation as anim
+    from .numeric.plots import animation as anim
     from .numeric.errors import RunRefused
 
     sc = load(scene)
@@ -105,7 +105,7 @@ def animate(scene: str | Path | Scene, mode: int | None = None, method: str | No
     chain = system.chain
     if method is None:
         if mode is None:
-            from .numeric.spectrum import free_pieces
+            from .numeric.modes.spectrum import free_pieces
 
             rigid = system.rigid_modes if chain else \
                 len(free_pieces(system.n, system.spring_ends))

@@ -17,7 +17,7 @@ from ._defaults import DEFAULT_OUT
 from ._scenes import load
 from .derive.errors import SceneError
 from .derive.scene import Scene
-from .numeric.files import human_bytes as _human_bytes
+from .numeric.io.files import human_bytes as _human_bytes
 from .numeric.run.protocol import DEFAULT_ATOL, DEFAULT_RTOL
 
 #: The most memory a simulation's recorded trajectories may take (in-memory runs).
@@ -29,7 +29,7 @@ def _chain_omega2(scene: Scene, chain_modes):
     """ω² of a chain without closed form (None when too large): every value from the generated
     module's ``omega2()`` for a chain whose modes are all listed, else ``{position: ω²}`` of the
     listed lowest and highest only, by bisection on the bidiagonal spring factor (the route of
-    ``omega2()``, O(n) per value; :mod:`numeric.chain_spectrum`)."""
+    ``omega2()``, O(n) per value; :mod:`numeric.modes.chain`)."""
     if chain_modes.omega2 is not None:
         return None
     from ._modules import load_module
@@ -41,7 +41,7 @@ def _chain_omega2(scene: Scene, chain_modes):
     if n > MAX_MODES_LISTED and read(module).left is not End.RING:
         import numpy as np
 
-        from .numeric.chain_spectrum import bidiagonal_factor, singular_values
+        from .numeric.modes.chain import bidiagonal_factor, singular_values
         from .numeric.progress import phase
 
         e = MODES_LISTED_EACH_END
@@ -59,12 +59,12 @@ def _chain_omega2(scene: Scene, chain_modes):
 
 def _chain_damped(scene: Scene, model):
     """``(ω_n, ζ, ω_d)`` of every mode of a chain with dashpots of at most ``chain_damped.DENSE_MAX``
-    masses (:mod:`numeric.chain_damped`), else None (Rayleigh-only damping has a closed form)."""
-    from .numeric.chain_damped import DENSE_MAX, damped_rows
+    masses (:mod:`numeric.modes.chain_damping`), else None (Rayleigh-only damping has a closed form)."""
+    from .numeric.modes.chain_damping import DENSE_MAX, damped_rows
 
     if not getattr(model, "dampers", None) or scene.chain.n > DENSE_MAX:
         return None
-    from .numeric.elements import Elements
+    from .numeric.modes.elements import Elements
 
     el = Elements.from_system(_system(scene)[0])
     return damped_rows(el.masses, el.spring_ends, el.stiffness, el.damper_ends, el.damping)
@@ -72,7 +72,7 @@ def _chain_damped(scene: Scene, model):
 
 def _chain_participation(scene: Scene, model):
     """Γⱼ, Mⱼ* and mass-normalised shapes of an open chain with a wall end or ``[ground]`` whose modes are
-    all listed (at most ``MAX_MODES_LISTED`` masses), from the spring-factor SVD (:mod:`numeric.spectrum`;
+    all listed (at most ``MAX_MODES_LISTED`` masses), from the spring-factor SVD (:mod:`numeric.modes.spectrum`;
     Γ by compensated sums; the sign of each shape: its first non-negligible component positive, as ``rsa``);
     else None."""
     from .derive import participation as part
@@ -83,8 +83,8 @@ def _chain_participation(scene: Scene, model):
         return None
     import numpy as np
 
-    from .numeric.elements import Elements
-    from .numeric.spectrum import spectrum
+    from .numeric.modes.elements import Elements
+    from .numeric.modes.spectrum import spectrum
 
     el = Elements.from_system(_system(scene)[0])
     spec = spectrum(el.masses, el.spring_ends, el.stiffness)
@@ -334,17 +334,17 @@ class Simulation:
 
     def save(self, path: str | Path) -> Path:
         """Write the NPZ ``springchain simulate`` writes (``t``, ``x_<method>``, ``v_<method>``)."""
-        from .numeric.npz import save_npz
+        from .numeric.io.npz import save_npz
 
         path = Path(path)
         save_npz(path, self.t, self.x, self.v, self.extra)
         return path
 
     def _spring_series(self, method: str):
-        """(drift, spring force, base shear) of ``method``'s trajectory (:func:`numeric.storeys.series`: the
+        """(drift, spring force, base shear) of ``method``'s trajectory (:func:`numeric.structural.storeys.series`: the
         exact method's by the load path where the springs form a tree with the ground)."""
         from .numeric.run import registry
-        from .numeric.storeys import series
+        from .numeric.structural.storeys import series
 
         exact = (self.scene.x0, self.scene.v0, self.t) if method == registry.EXACT else None
         return series(_system(self.scene)[0], self.x[method], exact)[:3]
@@ -356,7 +356,7 @@ class Simulation:
     def spring_forces(self, method: str):
         """Tension ``k·d + k3·d³`` (``V'(d)`` for a spring potential; d the drift) of every spring: storey
         shears, shape (S, springs) [N]. The exact method's come from the load path where positions would
-        round them (:mod:`numeric.storeys`)."""
+        round them (:mod:`numeric.structural.storeys`)."""
         return self._spring_series(method)[1]
 
     def base_shear(self, method: str):
@@ -368,7 +368,7 @@ class Simulation:
         (the first 12 masses; ``[chain]`` scenes: the profile at a few times)."""
         import numpy as np
 
-        from .numeric import plots
+        from .numeric.plots import figures as plots
 
         if quantity not in ("x", "v"):
             raise ValueError(f"quantity {quantity!r}: accepted: 'x' or 'v'")
@@ -499,7 +499,7 @@ def _streamed(sc: Scene, system, names, dt, steps, record_every, out, figures, o
     """A ``[chain]`` run streamed into ``out`` (bounded memory), read back from its NPZ."""
     import numpy as np
 
-    from .numeric.simulate import stream_methods
+    from .numeric.run.simulate import stream_methods
 
     out = Path(out if out is not None else DEFAULT_OUT)
     _check_disk(sc, steps, record_every, len(names), out, "steps")
@@ -515,11 +515,11 @@ def _streamed(sc: Scene, system, names, dt, steps, record_every, out, figures, o
 
 def _spring_arrays(system, x: dict, exact: tuple | None = None) -> tuple[dict, list[str]]:
     """NPZ arrays ``drift_<method>``, ``spring_force_<method>`` (S × springs) and ``base_shear_<method>``
-    (S,) of every method's frames ``x[method]`` (S, N) (:func:`numeric.storeys.series`; ``exact = (x0, v0,
+    (S,) of every method's frames ``x[method]`` (S, N) (:func:`numeric.structural.storeys.series`; ``exact = (x0, v0,
     t)``: the exact method's by the load path), and the notes of those whose float64 rounding of drifts
-    formed from positions exceeds :data:`numeric.storeys.FORCE_ROUNDING` of the largest force."""
+    formed from positions exceeds :data:`numeric.structural.storeys.FORCE_ROUNDING` of the largest force."""
     from .numeric.run import registry
-    from .numeric.storeys import rounding_note, series
+    from .numeric.structural.storeys import rounding_note, series
 
     out, notes = {}, []
     for m, xm in x.items():
@@ -542,10 +542,10 @@ def _kept(sc: Scene, system, names, dt, steps, record_every, options, out, figur
     """An in-memory run; the NPZ (and figures) written into ``out`` when given; with ``springs`` the
     drift, spring-force and base-shear arrays of every method among its NPZ arrays, with ``notes``
     a ``notes`` array of str (the float64-limit line, also in the summary)."""
-    from .numeric.absolute import absolute_npz_arrays
-    from .numeric.compare import compare
+    from .numeric.exact.absolute import absolute_npz_arrays
+    from .numeric.run.compare import compare
     from .numeric.progress import phase
-    from .numeric.simulate import non_finite_notes, quiet_floats, run_methods
+    from .numeric.run.simulate import non_finite_notes, quiet_floats, run_methods
 
     _check_memory(sc, steps, record_every, len(names), "steps")
     runs = run_methods(system, sc.x0, sc.v0, dt, steps, names, record_every, spectrum_source=options.spectrum,
@@ -563,7 +563,7 @@ def _kept(sc: Scene, system, names, dt, steps, record_every, options, out, figur
         extra.update(_notes_array(notes + spring_notes))
         npz, figs = None, ()
         if out is not None:
-            from .numeric.npz import save_npz
+            from .numeric.io.npz import save_npz
 
             out = Path(out)
             out.mkdir(parents=True, exist_ok=True)
@@ -571,7 +571,7 @@ def _kept(sc: Scene, system, names, dt, steps, record_every, options, out, figur
             with phase(f"writing {npz.name}", enabled=options.progress):
                 save_npz(npz, t, x, v, extra)
             if figures:
-                from .numeric.figures import write_figures
+                from .numeric.plots.simulation import write_figures
 
                 with phase("figures", enabled=options.progress):
                     figs = tuple(write_figures(out, sc.name, sc.mass_names, system, runs))
@@ -584,8 +584,8 @@ def _kept(sc: Scene, system, names, dt, steps, record_every, options, out, figur
 def _modal_energies(sc: Scene, system, t, x, v, extra, npz, figs, figures, progress):
     """``modal_energy_<method>`` into ``extra`` (and the NPZ, rewritten), the figure with ``figures``;
     returns the summary's ``modal_energy`` entry and the figures."""
-    from .numeric.modal_energy import modal_energy_figure, modal_energy_record
-    from .numeric.npz import save_npz
+    from .numeric.exact.modal_energy import modal_energy_figure, modal_energy_record
+    from .numeric.io.npz import save_npz
     from .numeric.progress import phase
 
     with phase("modal energies", enabled=progress):
@@ -629,7 +629,7 @@ def simulate(scene: str | Path | Scene, methods: list[str] | None = None, dt: fl
         terminal, a plain line every few seconds otherwise). ``False`` silences it.
     modal_energy : bool
         Also record ``modal_energy_<method>`` (S × N): the harmonic energy ½(q̇ⱼ² + ωⱼ² qⱼ²) of each
-        linear normal mode about the equilibrium, ascending ω (:mod:`numeric.modal_energy`), in
+        linear normal mode about the equilibrium, ascending ω (:mod:`numeric.exact.modal_energy`), in
         ``extra`` and the NPZ, and with ``figures`` the figure ``<scene>-modal-energy.png``.
     springs : bool
         Add ``drift_<method>``, ``spring_force_<method>`` (S × springs) and ``base_shear_<method>``
@@ -643,7 +643,7 @@ def simulate(scene: str | Path | Scene, methods: list[str] | None = None, dt: fl
     """
     import time
 
-    from .numeric import simulate as sim
+    from .numeric.run import simulate as sim
     from .numeric.progress import phase
     from .numeric.run import registry
     from .numeric.run.protocol import Options
@@ -675,7 +675,7 @@ def simulate(scene: str | Path | Scene, methods: list[str] | None = None, dt: fl
             arrays, summary["spring_notes"] = _spring_arrays(system, x)
             extra.update(arrays)
         if springs or limits or summary["diverged"]:  # the NPZ rewritten with them
-            from .numeric.npz import save_npz
+            from .numeric.io.npz import save_npz
 
             extra.update(_notes_array(limits + summary["diverged"] + summary.get("spring_notes", [])))
             save_npz(npz, t, x, v, extra)
@@ -733,12 +733,12 @@ def plan(scene: str | Path | Scene, tol: float, t_end: float | None = None, *, a
 
     Returns
     -------
-    springchain.numeric.plan.Plan
+    springchain.numeric.plan.planner.Plan
         ``.recommended``, ``.candidates``, ``.unreachable`` and ``.as_json()``.
     """
     from .numeric.errors import RunRefused
-    from .numeric.plan import Planner
-    from .numeric.timing import single_threaded_blas
+    from .numeric.plan.planner import Planner
+    from .numeric.bench.timing import single_threaded_blas
 
     if not (isinstance(tol, float | int) and math.isfinite(tol) and tol > 0):
         raise RunRefused(f"tol {tol!r}: accepted: a finite number > 0", quantity="tol")
@@ -747,7 +747,7 @@ def plan(scene: str | Path | Scene, tol: float, t_end: float | None = None, *, a
     _check_motion(sc, "plan")
     system, _ = _system(sc)
     _check_motion(sc, "plan", system)
-    from .numeric.plan_pilot import PilotPlanner, needs_pilot, tight_reference_applies
+    from .numeric.plan.pilot import PilotPlanner, needs_pilot, tight_reference_applies
 
     with single_threaded_blas():
         # damped, forced, gravity, ground scenes and long uniform chains: calibrated against the exact solution;
@@ -769,15 +769,15 @@ def bench(scene: str | Path | Scene = "seed", t_end: float | None = None, *, qui
 
     Returns
     -------
-    springchain.numeric.bench.BenchResult
+    springchain.numeric.bench.workprecision.BenchResult
         ``.records``, ``.targets`` and ``.as_json()``; write its files with
-        :func:`springchain.numeric.bench.write_outputs`.
+        :func:`springchain.numeric.bench.workprecision.write_outputs`.
     """
     import time
 
     from ._modules import derive
-    from .numeric.bench import BenchConfig, run_bench, with_derive_seconds
-    from .numeric.timing import single_threaded_blas
+    from .numeric.bench.workprecision import BenchConfig, run_bench, with_derive_seconds
+    from .numeric.bench.timing import single_threaded_blas
 
     settings = _method_settings(alpha, methods)
     sc = load(scene)
@@ -863,7 +863,7 @@ class Scaling:
 
     Attributes
     ----------
-    result : springchain.numeric.scaling.ScalingResult
+    result : springchain.numeric.bench.scaling.ScalingResult
     symbolic : springchain.symbolic_cost.SymbolicResult or None
     files : tuple of Path
     """
@@ -874,7 +874,7 @@ class Scaling:
 
     def to_json(self) -> dict:
         """What ``springchain scaling --json`` prints."""
-        from .numeric import scaling_report
+        from .numeric.bench import scaling_report
 
         return {"scaling": scaling_report.jsonable(self.result.to_json()),
                 "symbolic": None if self.symbolic is None else scaling_report.jsonable(self.symbolic.to_json()),
@@ -883,7 +883,7 @@ class Scaling:
     def to_markdown(self) -> str:
         """The tables ``springchain scaling`` prints."""
         from . import symbolic_cost
-        from .numeric import scaling_report
+        from .numeric.bench import scaling_report
 
         text = scaling_report.markdown(self.result) + "\n"
         return text + (symbolic_cost.markdown(self.symbolic) + "\n" if self.symbolic is not None else "")
@@ -897,7 +897,7 @@ def scaling(max_n: int = 1_000_000, symbolic_max_n: int = 40, out: str | Path = 
     Writes ``scaling.{json,md,png}`` (and ``symbolic-cost.*``) into ``out``.
     """
     from . import symbolic_cost
-    from .numeric import scaling as sc_mod, scaling_report
+    from .numeric.bench import scaling as sc_mod, scaling_report
     from .numeric.errors import RunRefused
 
     if isinstance(max_n, bool) or not isinstance(max_n, int) or max_n < 3:

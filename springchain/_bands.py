@@ -276,9 +276,9 @@ class Bands:
 
         import numpy as np
 
-        from .numeric import plots
-        from .numeric.files import atomic_write_bytes, atomic_write_text
-        from .numeric.strict_json import dumps
+        from .numeric.plots import figures as plots
+        from .numeric.io.files import atomic_write_bytes, atomic_write_text
+        from .numeric.io.strict_json import dumps
 
         out = Path(out)
         out.mkdir(parents=True, exist_ok=True)
@@ -322,7 +322,7 @@ class Bands:
     def _repr_png_(self) -> bytes:
         import io
 
-        from .numeric import plots
+        from .numeric.plots import figures as plots
 
         buf = io.BytesIO()
         fig = self.plot()

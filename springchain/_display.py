@@ -1,12 +1,12 @@
 """What a notebook shows for springchain's results: ``_repr_html_`` and ``_repr_png_`` bodies.
 
-Figures are made without pyplot (:mod:`springchain.numeric.plots`) and embedded as PNG; tables are
-built by :mod:`springchain.numeric.html`. Nothing here writes files or touches the user's backend.
+Figures are made without pyplot (:mod:`springchain.numeric.plots.figures`) and embedded as PNG; tables are
+built by :mod:`springchain.numeric.plots.html`. Nothing here writes files or touches the user's backend.
 """
 
 from __future__ import annotations
 
-from .numeric import html
+from .numeric.plots import html
 
 
 def simulation_png(sim) -> bytes:

@@ -1,5 +1,5 @@
 """``springchain.frf``: the receptance H(iω) = X_out / F_in of a scene, its Bode figure and, for small
-scenes, its transfer function in closed form. The numbers come from :mod:`springchain.numeric.frf`,
+scenes, its transfer function in closed form. The numbers come from :mod:`springchain.numeric.frf.response`,
 the algebra from :mod:`springchain.derive.transfer`; this module checks inputs and packages results.
 """
 
@@ -29,7 +29,7 @@ class FrequencyResponse:
         Angular frequencies [rad/s], ascending, never exactly on an undamped ω_j.
     H : ndarray, shape (W,), complex
         ``X_out / F_in`` [m/N].
-    resonances : list of springchain.numeric.frf.Resonance
+    resonances : list of springchain.numeric.frf.response.Resonance
         Each damped one with the local maximum of |H| attributed to it (or None: none near it).
     transfer : springchain.derive.transfer.TransferFunction or None
         ``H(s)`` as a ratio of polynomials (``[masses]`` scenes of at most 6 masses).
@@ -107,7 +107,7 @@ class FrequencyResponse:
 
     def plot(self):
         """The Bode figure (a matplotlib Figure: |H| log-log, phase in degrees, resonances marked)."""
-        from .numeric import plots
+        from .numeric.plots import figures as plots
 
         peaks = tuple((r.peak_omega, r.peak_magnitude) for r in self.resonances
                       if r.participates and r.peak_omega is not None) + tuple(self.extra_peaks)
@@ -121,7 +121,7 @@ class FrequencyResponse:
 
     def save(self, out: str | Path = DEFAULT_OUT) -> Path:
         """Write the Bode figure as ``OUT/<scene>-frf-<input>-<output>.png``; returns its path."""
-        from .numeric import plots
+        from .numeric.plots import figures as plots
 
         path = Path(out) / f"{self.scene.name}-frf-{self.input}-{self.output}.png"
         plots.save(self.plot(), path)
@@ -237,7 +237,7 @@ def frf(scene: str | Path | Scene, input, output, omega_min: float | None = None
     from ._modules import system_of as _system
     from ._scenes import load
     from .numeric.errors import RunRefused
-    from .numeric.frf import frequency_response
+    from .numeric.frf.response import frequency_response
 
     sc = load(scene)
     i, o = mass_index(sc, input, "input"), mass_index(sc, output, "output")
@@ -277,7 +277,7 @@ def frf(scene: str | Path | Scene, input, output, omega_min: float | None = None
             if tf is None:
                 notes.append("no closed-form transfer function: its determinant is past the symbolic work cap")
     if sc.chain is not None and system.damped and any(math.isnan(r.zeta) for r in response.resonances):
-        from .numeric.chain_damped import DENSE_MAX
+        from .numeric.modes.chain_damping import DENSE_MAX
 
         notes.append(f"damping ratios not computed (as `modes`): dashpots on a chain of {sc.chain.n} masses (the "
                      f"dense modal state matrix is used up to {DENSE_MAX} masses, or ζ below what it resolves)")
@@ -290,12 +290,12 @@ def frf(scene: str | Path | Scene, input, output, omega_min: float | None = None
 
 def _chain_modes(sc: Scene, system) -> list | None:
     """``(ω_n, ζ, ω_d)`` of a damped ``[chain]``'s modes by the route ``springchain modes`` takes: with
-    dashpots, :func:`numeric.chain_damped.damped_rows` (at most ``DENSE_MAX`` masses; longer: ζ NaN,
+    dashpots, :func:`numeric.modes.chain_damping.damped_rows` (at most ``DENSE_MAX`` masses; longer: ζ NaN,
     not computed); Rayleigh damping alone, ζ_j = α/(2ω_j) + βω_j/2 at the undamped ω_j (the
-    :data:`numeric.frf.MAX_REFINED` lowest)."""
-    from .numeric.chain_damped import DENSE_MAX, damped_rows
-    from .numeric.elements import Elements
-    from .numeric.frf import MAX_REFINED, undamped_omegas
+    :data:`numeric.frf.response.MAX_REFINED` lowest)."""
+    from .numeric.modes.chain_damping import DENSE_MAX, damped_rows
+    from .numeric.modes.elements import Elements
+    from .numeric.frf.response import MAX_REFINED, undamped_omegas
 
     if sc.chain_dampers:
         if sc.chain.n > DENSE_MAX:

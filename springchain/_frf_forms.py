@@ -2,7 +2,7 @@
 base) absolute and relative transmissibility, in Hz or rad/s, optionally in dB, labelled with units.
 
 Every number comes from the receptances of the accurate route (:func:`springchain.frf`, and
-:func:`springchain.numeric.frf.receptance` on the same grid for the other masses a base drives);
+:func:`springchain.numeric.frf.response.receptance` on the same grid for the other masses a base drives);
 :mod:`springchain.numeric.interop.frf_forms` turns them into each form without a subtraction that
 cancels.
 """
@@ -43,7 +43,7 @@ class FrfForm:
     hz, db : bool
         Show frequencies in Hz; magnitudes in dB (re 1 of the unit).
     resonances : list
-        The receptance's resonances (:class:`springchain.numeric.frf.Resonance`).
+        The receptance's resonances (:class:`springchain.numeric.frf.response.Resonance`).
     notes : list of str
     """
 
@@ -162,7 +162,7 @@ class FrfForm:
         """Magnitude (log or dB) and phase against frequency, axes labelled with units (``units``: as
         :meth:`display_unit`, e.g. ``"mm,kN"``)."""
         from .derive.units.output import output_units
-        from .numeric.plots import new_figure
+        from .numeric.plots.figures import new_figure
 
         units = output_units(units)
         fig, (ax, axp) = new_figure(2, 1, figsize=(9, 6.5), sharex=True)
@@ -180,7 +180,7 @@ class FrfForm:
     def save(self, out: str | Path = DEFAULT_OUT, units=None) -> Path:
         """Write the figure as ``OUT/<scene>-frf-<form>-<input>-<output>.png``; returns its path (``units``: as
         :meth:`display_unit`)."""
-        from .numeric import plots
+        from .numeric.plots import figures as plots
 
         path = Path(out) / f"{self.scene.name}-frf-{self.form}-{self.input}-{self.output}.png"
         plots.save(self.plot(units), path)
@@ -224,9 +224,9 @@ def frf_form(source, form: str = "receptance", *, input=None, output=None, hz: b
     from ._frf import FrequencyResponse, frf, mass_index
     from ._modules import system_of
     from ._scenes import load
-    from .numeric.elements import Elements
+    from .numeric.modes.elements import Elements
     from .numeric.errors import RunRefused
-    from .numeric.frf import operator, receptance
+    from .numeric.frf.response import operator, receptance
     from .numeric.interop import frf_forms as ff
 
     name = _form_name(form)

@@ -126,7 +126,7 @@ def state_space(scene: str | Path | Scene, inputs, outputs, *, form: str | None 
     """
     from ._modules import system_of
     from ._scenes import load
-    from .numeric.elements import Elements
+    from .numeric.modes.elements import Elements
     from .numeric.errors import RunRefused
     from .numeric.interop.state_space import state_space as build
 

@@ -82,7 +82,7 @@ def bundled_module(scene: Scene) -> ModuleType | None:
 
 def load_module(scene: Scene) -> tuple[ModuleType, str]:
     """The generated module for a scene, and where it came from ("generated" or "cache")."""
-    from .numeric.files import atomic_write_text
+    from .numeric.io.files import atomic_write_text
 
     module = bundled_module(scene)
     if module is not None:
@@ -124,7 +124,7 @@ def check(scene: Scene, out_dir: Path | None = None) -> tuple[bool, str]:
 
 def write(derivation, out_dir: Path | None = None) -> Path:
     """Write a derivation's module atomically into ``out_dir`` (default: the package's generated/)."""
-    from .numeric.files import atomic_write_text
+    from .numeric.io.files import atomic_write_text
 
     path = module_path(derivation.scene, out_dir)
     atomic_write_text(path, derivation.source)

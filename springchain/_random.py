@@ -163,7 +163,7 @@ class RandomVibration:
 
     def save(self, out: str | Path = DEFAULT_OUT, kind: str = "acceleration", units=None) -> Path:
         """Write the figure as ``OUT/<scene>-psd-<kind>.png``; returns its path (``units`` as :meth:`to_text`)."""
-        from .numeric import plots
+        from .numeric.plots import figures as plots
 
         path = Path(out) / f"{self.scene.name}-psd-{kind.replace(' ', '-')}.png"
         plots.save(self.plot(kind, units), path)
@@ -300,7 +300,7 @@ def random_response(scene: str | Path | Scene, input, on=None, *, interpolation:
     from ._frf import mass_index
     from ._modules import system_of
     from ._scenes import load
-    from .numeric.elements import Elements
+    from .numeric.modes.elements import Elements
     from .numeric.errors import RunRefused
     from .numeric.random.modal_form import pole_residue
     from .numeric.random.psd_input import InputPSD

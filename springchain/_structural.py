@@ -2,7 +2,7 @@
 response-spectrum analysis (SRSS, CQC) and the storey outputs of a time history (drifts, spring
 forces, base shear).
 
-The numbers come from :mod:`springchain.numeric.response_spectrum`, :mod:`springchain.numeric.rsa`
+The numbers come from :mod:`springchain.numeric.structural.response_spectrum`, :mod:`springchain.numeric.structural.rsa`
 and :mod:`springchain.derive.rayleigh_targets`; this module checks inputs, reads files and packages
 results (text, JSON, figures). The command line (``springchain spectrum``, ``springchain rsa``)
 only parses flags, calls these and prints.
@@ -58,7 +58,7 @@ def resolve_csv(path: str | Path) -> Path:
 
 
 def read_record(path: str | Path, key: str = "RECORD"):
-    """An accelerogram CSV (header ``t,a``; seconds, m/s²) as a :class:`numeric.response_spectrum.Record`.
+    """An accelerogram CSV (header ``t,a``; seconds, m/s²) as a :class:`numeric.structural.response_spectrum.Record`.
 
     The rules of ``[ground]`` tables: rows of two finite numbers, times strictly increasing.
 
@@ -68,7 +68,7 @@ def read_record(path: str | Path, key: str = "RECORD"):
         Naming the file, ``key``, the problem and the accepted form.
     """
     from .derive.loads import read_table
-    from .numeric.response_spectrum import Record
+    from .numeric.structural.response_spectrum import Record
 
     p = resolve_csv(path).resolve()
     if not p.exists():  # not a scene's table: say what a RECORD may be (a path, or a bundled record)
@@ -99,7 +99,7 @@ def read_spectrum_file(path: str | Path, key: str = "--spectrum"):
 
 
 def _as_record(record):
-    from .numeric.response_spectrum import Record
+    from .numeric.structural.response_spectrum import Record
 
     if isinstance(record, Record):
         return record
@@ -181,7 +181,7 @@ class SpectrumResult:
 
     Attributes
     ----------
-    spectrum : springchain.numeric.response_spectrum.ResponseSpectrum
+    spectrum : springchain.numeric.structural.response_spectrum.ResponseSpectrum
         ``.periods`` (P, ascending), ``.zeta`` (Z,), ``.sd``, ``.psv``, ``.psa`` (Z, P): SD the peak over
         the record and the free vibration after it; ``.sd_record`` (Z, P) the peak over the record
         alone; ``.notes`` (float64 limits met).
@@ -222,7 +222,7 @@ class SpectrumResult:
         return "\n".join(out) + "\n"
 
     def plot(self):
-        from .numeric import structural_plots
+        from .numeric.plots import structural as structural_plots
 
         s = self.spectrum
         return structural_plots.response_spectrum(s.periods, s.zeta, s.sd, s.psv, s.psa,
@@ -233,8 +233,8 @@ class SpectrumResult:
         """Write ``<record>-spectrum.png`` and ``<record>-spectrum.json`` into ``out``."""
         import json
 
-        from .numeric.files import atomic_path
-        from .numeric.plots import save
+        from .numeric.io.files import atomic_path
+        from .numeric.plots.figures import save
 
         out = Path(out)
         out.mkdir(parents=True, exist_ok=True)
@@ -276,10 +276,10 @@ def response_spectrum(record, zeta=0.05, periods=None) -> SpectrumResult:
     record : str, Path, Record or (t, a)
         A CSV file with the header ``t,a`` (seconds, m/s²; the ``[ground]`` table format) or the
         name of a bundled record (``"quake-record"``), a
-        :class:`~springchain.numeric.response_spectrum.Record`, or two arrays.
+        :class:`~springchain.numeric.structural.response_spectrum.Record`, or two arrays.
     zeta, periods
         Damping ratios and natural periods [s], as
-        :func:`springchain.numeric.response_spectrum.response_spectrum` takes them (default: ζ = 0.05
+        :func:`springchain.numeric.structural.response_spectrum.response_spectrum` takes them (default: ζ = 0.05
         at 100 periods log-spaced from 0.02 to 10 s; periods 1e-150 ... 1e150 s, listed ascending
         in the result).
 
@@ -289,7 +289,7 @@ def response_spectrum(record, zeta=0.05, periods=None) -> SpectrumResult:
     """
     import time
 
-    from .numeric.response_spectrum import response_spectrum as compute
+    from .numeric.structural.response_spectrum import response_spectrum as compute
 
     rec = _as_record(record)
     t0 = time.perf_counter()
@@ -311,7 +311,7 @@ class RSA:
     Attributes
     ----------
     scene : Scene
-    result : springchain.numeric.rsa.RSAResult
+    result : springchain.numeric.structural.rsa.RSAResult
         Peak modal responses (``.displacement`` (J, N), ``.drift``, ``.spring_force`` (J, S),
         ``.base_shear`` (J,)) and ``.combined(Combination)``.
     combination : str
@@ -330,7 +330,7 @@ class RSA:
 
     def combined(self, how: str | None = None) -> dict:
         """``displacement`` (N,), ``drift`` (S,), ``spring_force`` (S,), ``base_shear`` by SRSS or CQC."""
-        from .numeric.rsa import Combination
+        from .numeric.structural.rsa import Combination
 
         return self.result.combined(Combination(how or self.combination))
 
@@ -389,8 +389,8 @@ def rsa(scene, spectrum, combine: str = "cqc") -> RSA:
     from ._modules import system_of as _system
     from ._scenes import load
     from .numeric.errors import RunRefused
-    from .numeric.response_spectrum import PERIOD_RANGE, Record, design_spectrum_sa, spectral_displacement
-    from .numeric.rsa import Combination, ModalProperties, analyse
+    from .numeric.structural.response_spectrum import PERIOD_RANGE, Record, design_spectrum_sa, spectral_displacement
+    from .numeric.structural.rsa import Combination, ModalProperties, analyse
 
     if combine not in {c.value for c in Combination}:
         raise RunRefused(f"combine {combine!r}: accepted: 'srss' or 'cqc'", quantity="combine")
@@ -401,7 +401,7 @@ def rsa(scene, spectrum, combine: str = "cqc") -> RSA:
     if not modes.proportional:
         notes.append("damping is not proportional: each mode's zeta is the diagonal of Phi^T C Phi (an approximation)")
     if modes.exact is None:
-        from .numeric.modal_exact import MP_MAX_MASSES
+        from .numeric.structural.modal_quantities import MP_MAX_MASSES
 
         why = (f"more than {MP_MAX_MASSES} masses" if system.n > MP_MAX_MASSES
                else "repeated frequencies: the per-mode split is not unique")
@@ -457,9 +457,9 @@ def linearisation_note(x_eq) -> str:
 
 def spring_series(scene: Scene, x):
     """Drifts, spring forces and base shear of a trajectory ``x`` (S, N) of ``scene``
-    (:func:`numeric.storeys.spring_series`)."""
+    (:func:`numeric.structural.storeys.spring_series`)."""
     from ._modules import system_of
-    from .numeric.storeys import spring_series as series
+    from .numeric.structural.storeys import spring_series as series
 
     return series(system_of(scene)[0], x)
 

@@ -49,7 +49,7 @@ class SweepResult:
 
     def table(self, columns: list[str] | None = None):
         """The rows as a pyarrow Table (sample order)."""
-        from .numeric.sweep_driver import read
+        from .numeric.sweep.driver import read
 
         return read(self.out, columns)
 
@@ -82,7 +82,7 @@ def _whole(value, flag: str, minimum: int = 1) -> int:
 
 
 def _pairs(items, flag: str, names) -> list[tuple[str, object]]:
-    from .numeric.distributions import Dist, parse, parse_assignment
+    from .numeric.sweep.distributions import Dist, parse, parse_assignment
 
     out = []
     if isinstance(items, dict):
@@ -129,14 +129,14 @@ def _law(scene: Scene, system, disorder, vary) -> dict | None:
 
 def _branches(spec) -> dict | None:
     """Mode branches of a one-parameter grid sweep, followed by MAC (:mod:`numeric.sensitivity.tracking`)."""
-    from .numeric import realisations
+    from .numeric.sweep import realisations
     from .numeric.sensitivity.tracking import grid_branches
 
     return grid_branches(spec, realisations)
 
 
 def _branches_figure(branches: dict, scene: str, out: Path) -> Path:
-    from .numeric import plots
+    from .numeric.plots import figures as plots
     from .numeric.sensitivity.tracking import branches_figure
 
     path = Path(out) / "branches.png"
@@ -190,8 +190,8 @@ def sweep(scene: str | Path | Scene, vary=(), disorder=(), samples: int = 100, *
     """
     from ._modules import system_of as _system
     from ._scenes import load
-    from .numeric import sweep_driver, sweep_summary
-    from .numeric.realisations import SweepSpec
+    from .numeric.sweep import driver as sweep_driver, summary as sweep_summary
+    from .numeric.sweep.realisations import SweepSpec
 
     sc = load(scene)
     samples = _whole(samples, "--samples")

@@ -45,7 +45,7 @@ def write_modes_uff(scene, path: str | Path) -> tuple[Path, list[str]]:
     ASCII datasets 55; returns the path and notes."""
     from ._modules import system_of
     from ._scenes import load
-    from .numeric.elements import Elements, modal_damping
+    from .numeric.modes.elements import Elements, modal_damping
     from .numeric.interop import uff
 
     sc = load(scene)

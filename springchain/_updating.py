@@ -58,7 +58,7 @@ def updated_text(text: str, values: dict[str, float], file: str) -> str:
 def write_updated(scene: Scene, values: dict[str, float], out: Path) -> Path | None:
     """Write ``out/<name>-updated.toml`` atomically, checked by loading it back; None for a scene without a file."""
     from .derive.scene import load_scene
-    from .numeric.files import atomic_write_text
+    from .numeric.io.files import atomic_write_text
 
     src = Path(scene.file)
     if scene.file == DICT_FILE or not src.is_file():
@@ -399,7 +399,7 @@ def update(scene: str | Path | Scene, measured, parameters, bounds=(), modes: in
         else:
             files.append(path)
         if figure:
-            from .numeric import plots
+            from .numeric.plots import figures as plots
             from .numeric.updating.figure import update_figure
 
             w = m.omega
@@ -545,7 +545,7 @@ def reconstruct(spectra: str | Path, total_mass: float | None = None, out: str |
     import numpy as np
 
     from .numeric.errors import RunRefused
-    from .numeric.files import atomic_write_text
+    from .numeric.io.files import atomic_write_text
     from .numeric.updating.reconstruct import reconstruct as rebuild
 
     if not re.fullmatch(r"[A-Za-z][A-Za-z0-9_]{0,63}", str(name)):

@@ -23,7 +23,7 @@ EXIT_USAGE = 2
 
 def _dumps(obj, **kwargs) -> str:
     """Strict JSON (no NaN or Infinity: null), for every ``--json``."""
-    from .numeric.strict_json import dumps
+    from .numeric.io.strict_json import dumps
 
     return dumps(obj, **kwargs)
 
@@ -223,7 +223,7 @@ def cmd_bench(args) -> int:
     .json, a work-precision figure and an error-vs-horizon figure.
     """
     from ._api import bench
-    from .numeric.bench import markdown_table, write_outputs
+    from .numeric.bench.workprecision import markdown_table, write_outputs
 
     result = bench(args.scene or "seed", args.t_end, quick=args.quick, methods=args.method,
                    progress=not args.no_progress, alpha=args.alpha)

@@ -92,9 +92,9 @@ def scaling_cases():
 
     Returns
     -------
-    uniform, random : numeric.scaling.ChainCase
+    uniform, random : numeric.bench.scaling.ChainCase
     """
-    from .numeric.scaling import ChainCase
+    from .numeric.bench.scaling import ChainCase
 
     from ._modules import load_module
     from ._scenes import bundled_scene_dir
@@ -326,8 +326,8 @@ def figure(result: SymbolicResult):
     """Work seconds vs N (log–log), one line per route (and the modes share of [masses])."""
     import matplotlib
 
-    from .numeric import plots
-    from .numeric.plots import new_figure
+    from .numeric.plots import figures as plots
+    from .numeric.plots.figures import new_figure
 
     fig, ax = new_figure(figsize=(8, 5))
     styles = {Route.CHAIN: ("C2", "o-"), Route.ELEMENTS: ("C0", "s-"), Route.LAGRANGE: ("C3", "^-")}
@@ -347,8 +347,8 @@ def figure(result: SymbolicResult):
 
 def write(result: SymbolicResult, out: Path) -> list[Path]:
     """Write symbolic-cost.json, symbolic-cost.md and symbolic-cost.png into ``out``."""
-    from .numeric import plots
-    from .numeric.files import atomic_write_text
+    from .numeric.plots import figures as plots
+    from .numeric.io.files import atomic_write_text
 
     out = Path(out)
     paths = [out / "symbolic-cost.json", out / "symbolic-cost.md", out / "symbolic-cost.png"]

@@ -85,7 +85,7 @@ def _frf_case(tmp_path, case, pick: int = 40):
     assert np.max(err) <= FRF_REL, (float(np.max(err)), float(r.omega[idx][np.argmax(err)]))
     # off the grid: between grid points, through the same operator
     from springchain._api import _system
-    from springchain.numeric.frf import operator, receptance
+    from springchain.numeric.frf.response import operator, receptance
 
     rng = np.random.default_rng(len(text))
     w = np.exp(rng.uniform(np.log(r.omega[0]), np.log(r.omega[-1]), 6))
@@ -212,7 +212,7 @@ def test_damped_modes_of_a_scene_with_an_undamped_piece(tmp_path, capsys):
 # -- static equilibrium ----------------------------------------------------------------------------------
 def test_sag_of_a_tree_is_sums_of_forces_over_spring_constants():
     """A tree of springs under point loads and gravity: x exactly (to rounding) the hand statics."""
-    from springchain.numeric.equilibrium import equilibrium
+    from springchain.numeric.exact.equilibrium import equilibrium
 
     # wall - 0 - 1 - 2, and 1 - 3 (a branch); springs over 24 decades
     ends = np.array([(-1, 0), (0, 1), (1, 2), (1, 3)])
@@ -236,7 +236,7 @@ def test_sag_of_a_ring_and_a_free_piece():
     the rest of its load (checked against mpmath: K x = F − M a on the piece, last mass held)."""
     import mpmath
 
-    from springchain.numeric.equilibrium import equilibrium
+    from springchain.numeric.exact.equilibrium import equilibrium
 
     ends = np.array([(-1, 0), (0, 1), (1, 2), (2, 0), (3, 4), (4, 5)])  # walled ring 0-1-2, free chain 3-4-5
     k = np.array([2.0, 1e-8, 3e8, 5.0, 1e6, 1e-6])
@@ -401,7 +401,7 @@ def test_index_dependent_chain_of_the_issue_full(tmp_path):
 def test_printed_modes_and_the_exact_method_share_their_omega(tmp_path):
     """ω of the exact method's chain modes are the values ``modes`` prints (bisection on the factor)."""
     from springchain._api import _system
-    from springchain.numeric.chain_spectrum import chain_spectrum
+    from springchain.numeric.modes.chain import chain_spectrum
 
     path = _write(tmp_path, _chain_text(30, "wall", "wall", 1e6, 1e8, "0", 0.1, 2), "ichain")
     system = _system(sc.load(path))[0]
@@ -413,7 +413,7 @@ def test_printed_modes_and_the_exact_method_share_their_omega(tmp_path):
 def test_long_chain_json_bisects_only_the_listed_modes(tmp_path, monkeypatch):
     """modes --json of a long index-dependent chain: the 10 lowest and 10 highest, O(n) each (a
     2·10⁵-mass chain took ~9 h: every ω² by bisection)."""
-    import springchain.numeric.chain_spectrum as cs
+    import springchain.numeric.modes.chain as cs
 
     calls = []
     real = cs.singular_values
@@ -470,7 +470,7 @@ def test_ring_frf_matches_60_digit_solve(tmp_path, n, a, b, c, io):
 def test_long_ring_frf_is_certified_or_refused(tmp_path):
     """A ring past RING_DENSE masses: the tridiagonal solve is refined and certified per frequency
     from the elements; at a contrast float64 cannot carry it refuses in one line."""
-    from springchain.numeric.frf import RING_DENSE
+    from springchain.numeric.frf.response import RING_DENSE
 
     n = RING_DENSE + 50
     path = _write(tmp_path, _chain_text(n, "ring", "ring", 1.0, 2.0, "0", 0.1, 2), "lring")
@@ -528,7 +528,7 @@ def test_damped_chain_modes_print_zeta_of_60_digit_eigenvalues(tmp_path, n, ends
 
 
 def test_long_damped_chain_says_zeta_is_not_computed(tmp_path):
-    from springchain.numeric.chain_damped import DENSE_MAX
+    from springchain.numeric.modes.chain_damping import DENSE_MAX
 
     n = DENSE_MAX + 60
     text = _chain_text(n, "wall", "free", 3.0, 2.0, "0", 0.1, 2).replace(
@@ -566,8 +566,8 @@ def test_extended_precision_receptance_with_modal_damping_and_unequal_masses():
     as M^{3/2}e, so H was wrong wherever the fallback ran on such a scene)."""
     import mpmath
 
-    from springchain.numeric.elements import Elements
-    from springchain.numeric.frf_dense import mp_receptance
+    from springchain.numeric.modes.elements import Elements
+    from springchain.numeric.frf.dense import mp_receptance
 
     m, k, zeta = [2.0, 5.0, 0.5], [3.0, 1.5, 40.0], [0.05, 0.1, 0.02]
     ends = np.array([[-1, 0], [0, 1], [1, 2]])

@@ -50,7 +50,7 @@ def test_chain_gif(tmp_path, make_chain_toml, kwargs):
 
 def test_chain_mode_shape_against_closed_form():
     from springchain._api import _system
-    from springchain.numeric.animation import decimate, mode_shape
+    from springchain.numeric.plots.animation import decimate, mode_shape
 
     system, _ = _system(sc.load("chain100k"))
     n = system.n

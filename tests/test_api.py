@@ -153,7 +153,7 @@ def test_import_is_light_and_sets_no_backend():
             "before = matplotlib.get_backend()\n"
             "import springchain, springchain.cli\n"
             "heavy = [m for m in ('sympy', 'scipy', 'numba', 'matplotlib.pyplot') if m in sys.modules]\n"
-            "import springchain.numeric.plots, springchain.numeric.simulate\n"
+            "import springchain.numeric.plots.figures, springchain.numeric.run.simulate\n"
             "print(heavy, matplotlib.get_backend() == before, 'matplotlib.pyplot' in sys.modules)\n")
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120, cwd="/")
     assert out.returncode == 0, out.stderr[-2000:]

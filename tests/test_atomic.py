@@ -18,10 +18,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-import springchain.numeric.files as files
+import springchain.numeric.io.files as files
 from springchain.cli import main
 from springchain.derive.scene import load_scene
-from springchain.numeric.files import atomic_path, atomic_write_bytes, atomic_write_text
+from springchain.numeric.io.files import atomic_path, atomic_write_bytes, atomic_write_text
 
 OLD = "old content\nline 2\n"
 

@@ -13,14 +13,14 @@ import pytest
 
 import springchain.generated.duffing as duffing_module
 import springchain.generated.seed as seed_module
-from springchain.numeric.bench import (BenchConfig, ExtendedModalReference, energy_norm, run_bench, targets,
+from springchain.numeric.bench.workprecision import (BenchConfig, ExtendedModalReference, energy_norm, run_bench, targets,
                            BenchRecord)
 from springchain.numeric.run import registry
 from springchain.numeric.run.protocol import Kind
-from springchain.numeric.modal import ModalSolution
-from springchain.numeric.spectrum import spectrum
+from springchain.numeric.exact.modal import ModalSolution
+from springchain.numeric.modes.spectrum import spectrum
 from springchain.numeric.system import System
-from springchain.numeric.timing import measure, single_threaded_blas
+from springchain.numeric.bench.timing import measure, single_threaded_blas
 
 INTEGRATORS, ADAPTIVE = registry.classes(Kind.STEP), registry.classes(Kind.ADAPTIVE)
 

@@ -20,7 +20,7 @@ from springchain._modules import derive
 from springchain.cli import main
 from springchain.derive.scene import load_scene
 from springchain.numeric import system as system_mod
-from springchain.numeric.simulate import run_methods
+from springchain.numeric.run.simulate import run_methods
 
 ROOT = Path(__file__).resolve().parent.parent
 

@@ -1,8 +1,8 @@
-"""The transform solution of uniform chains (numeric.chain_modal) against the dense modal solution.
+"""The transform solution of uniform chains (numeric.exact.chain) against the dense modal solution.
 
 * for free–free, wall–wall, wall–free, free–wall and ring ends and n in
   {1, 2, 3, 10, 64, 257}: positions and velocities at several times equal
-  :class:`numeric.modal.ModalSolution` on :func:`numeric.spectrum.spectrum`
+  :class:`numeric.exact.modal.ModalSolution` on :func:`numeric.modes.spectrum.spectrum`
   (dense SVD, built here from the module's masses and springs) to 1e-12
   relative, for one state and a batch;
 * the closed-form frequencies equal ``scipy.linalg.eigh_tridiagonal`` of the
@@ -19,10 +19,10 @@ import pytest
 import scipy.linalg
 
 from helpers import chain_toml
-from springchain.numeric.chain_modal import Basis, ChainModal
+from springchain.numeric.exact.chain import Basis, ChainModal
 from springchain.numeric.errors import RunRefused
-from springchain.numeric.modal import ModalSolution
-from springchain.numeric.spectrum import spectrum
+from springchain.numeric.exact.modal import ModalSolution
+from springchain.numeric.modes.spectrum import spectrum
 
 ENDS = [("free", "free"), ("wall", "wall"), ("wall", "free"), ("free", "wall"), ("ring", "ring")]
 SIZES = [1, 2, 3, 10, 64, 257]

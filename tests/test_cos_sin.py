@@ -1,4 +1,4 @@
-"""The split evaluation of cos(ωt) and t·sinc(ωt) on uniform grids (numeric.modal.cos_tsinc) stays
+"""The split evaluation of cos(ωt) and t·sinc(ωt) on uniform grids (numeric.exact.modal.cos_tsinc) stays
 at the rounding level of the direct one, on any grid, with rigid modes (ω = 0) exactly t, and
 falls back on grids that are not uniform."""
 
@@ -9,7 +9,7 @@ import numpy as np
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from springchain.numeric.modal import _uniform_split, cos_tsinc
+from springchain.numeric.exact.modal import _uniform_split, cos_tsinc
 
 EPS = np.finfo(float).eps
 

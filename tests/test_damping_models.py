@@ -20,7 +20,7 @@ from springchain._modules import derive, load_module
 from springchain.cli import main
 from springchain.derive.model import Model
 from springchain.derive.scene import load_scene
-from springchain.numeric.simulate import run_methods
+from springchain.numeric.run.simulate import run_methods
 from springchain.numeric.system import System
 
 ROOT = Path(__file__).resolve().parent.parent

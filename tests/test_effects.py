@@ -19,7 +19,7 @@ import helpers
 from helpers import TomlScene, chain_toml
 from springchain._modules import derive, load_module
 from springchain.derive.scene import load_scene
-from springchain.numeric.simulate import run_methods, stream_methods
+from springchain.numeric.run.simulate import run_methods, stream_methods
 from springchain.numeric.system import System
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -331,7 +331,7 @@ def test_long_chain_streams_with_bounded_memory(tmp_path):
 @pytest.mark.parametrize("ends", [("free", "free"), ("wall", "free"), ("ring", "ring")])
 def test_chain_verlet_fused_kernel_equals_plain_verlet(ends):
     """simulate's chain Verlet (fused kernel) is the same scheme as the reference Verlet."""
-    from springchain.numeric.driver import integrate
+    from springchain.numeric.run.driver import integrate
     from springchain.numeric.integrators import VelocityVerlet
     from springchain.numeric.integrators.base import Problem
     from springchain.numeric.run.step import FusedChainVerlet

@@ -1,4 +1,4 @@
-"""The fused chain step (numeric.fast) against the generated NumPy stencil.
+"""The fused chain step (numeric.compiled.fast) against the generated NumPy stencil.
 
 * one fused velocity-Verlet step equals the reference step built here from the
   module's own ``acceleration`` (x + h v + h²/2 a; a' = a(x'); v + h/2 (a + a'))
@@ -51,7 +51,7 @@ def module_acceleration(module, x, params=None):
 
 
 def reference_step(module, x, v, a, h, params=None):
-    """Velocity Verlet written out on the module's own acceleration (independent of numeric.fast)."""
+    """Velocity Verlet written out on the module's own acceleration (independent of numeric.compiled.fast)."""
     xn = x + h * v + 0.5 * h * h * a
     an = module_acceleration(module, xn, params)
     return xn, v + 0.5 * h * (a + an), an
@@ -208,9 +208,9 @@ def test_available_is_a_bool_and_backend_follows_it():
 
 
 def test_inplace_kernel_runs_in_the_driver(chain_module):
-    """The hook the integrator can use: an in-place fused kernel under numeric.driver.integrate
+    """The hook the integrator can use: an in-place fused kernel under numeric.run.driver.integrate
     records the same trajectory as the NumPy verlet kernel (the driver copies what it records)."""
-    from springchain.numeric.driver import integrate
+    from springchain.numeric.run.driver import integrate
     from springchain.numeric.integrators.base import Problem
     from springchain.numeric.integrators.verlet import VelocityVerlet
 
@@ -232,9 +232,9 @@ def test_inplace_kernel_runs_in_the_driver(chain_module):
 
 
 def test_one_gershgorin_bound_for_stencils_and_spring_lists():
-    """numeric.bounds: the stencil form equals the spring-list form and bounds the true ω²_max."""
-    from springchain.numeric.bounds import chain_omega2_bound, omega2_bound
-    from springchain.numeric.spectrum import spectrum
+    """numeric.modes.bounds: the stencil form equals the spring-list form and bounds the true ω²_max."""
+    from springchain.numeric.modes.bounds import chain_omega2_bound, omega2_bound
+    from springchain.numeric.modes.spectrum import spectrum
 
     rng = np.random.default_rng(5)
     for n in (1, 2, 3, 7, 30):
@@ -261,7 +261,7 @@ def test_one_gershgorin_bound_for_stencils_and_spring_lists():
 def test_driver_runs_the_multi_step_sweep_between_frames(chain_module):
     """With an in-place kernel that has ``advance``, the driver makes one sweep call per recorded
     frame (never a per-step call) and records the per-step kernel's trajectory."""
-    from springchain.numeric.driver import integrate
+    from springchain.numeric.run.driver import integrate
     from springchain.numeric.integrators.base import Problem
     from springchain.numeric.integrators.verlet import VelocityVerlet
 

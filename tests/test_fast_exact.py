@@ -22,7 +22,7 @@ from springchain.numeric import progress
 from springchain.numeric.run import registry
 from springchain.numeric.run.grid import Grid
 from springchain.numeric.run.protocol import Options, record
-from springchain.numeric.spectrum import SMALL_PIECES, rigid_basis
+from springchain.numeric.modes.spectrum import SMALL_PIECES, rigid_basis
 
 EPS = float(np.finfo(float).eps)
 

@@ -50,7 +50,7 @@ def test_frf_matches_independent_solve(repo_root, scene, inp, out):
     idx = np.searchsorted(r.omega, w)
     H = r.magnitude[idx] * np.exp(1j * np.radians(r.phase[idx]))
     assert np.max(np.abs(H - ref) / np.abs(ref)) <= REL
-    from springchain.numeric.frf import operator, receptance
+    from springchain.numeric.frf.response import operator, receptance
     from springchain._api import _system
 
     other = np.geomspace(w[0], w[-1], 200) * (1 + 1e-3 * np.sin(np.arange(200)))  # off the grid too
@@ -75,7 +75,7 @@ def test_default_range_and_undamped_gap():
 def test_damped_peaks_are_exact_local_maxima():
     r = sc.frf("building", input="floor3", output="floor3", transfer=False)
     from springchain._api import _system
-    from springchain.numeric.frf import operator, receptance
+    from springchain.numeric.frf.response import operator, receptance
 
     system, _ = _system(sc.load("building"))
     op = operator(system)
@@ -143,7 +143,7 @@ def test_banded_chain_matches_dense(tmp_path, left, right):
         K[np.ix_([n - 1, 0], [n - 1, 0])] += kk(n - 1) * np.array([[1, -1], [-1, 1]])
     r = sc.frf(path, input=3, output="20")
     from springchain._api import _system
-    from springchain.numeric.frf import operator
+    from springchain.numeric.frf.response import operator
 
     op = operator(_system(sc.load(path))[0])
     assert op.banded and isinstance(op.K, tuple)  # bands, never an N x N matrix
@@ -216,7 +216,7 @@ def test_plot_is_a_figure_without_pyplot():
 @pytest.mark.parametrize("ring", [False, True])
 def test_banded_solver_with_damping_matches_dense(ring):
     """The tridiagonal path with a damping band (and ring corners) against the dense solve."""
-    from springchain.numeric.frf import Operator, receptance
+    from springchain.numeric.frf.response import Operator, receptance
 
     rng = np.random.default_rng(3)
     n = 25

@@ -1,4 +1,4 @@
-"""The integrator family (numeric.integrators) and the driver (numeric.driver) against exact answers.
+"""The integrator family (numeric.integrators) and the driver (numeric.run.driver) against exact answers.
 
 * observed order (least-squares slope of log error against log h) equals the
   declared order, on the seed chain against the exact modal solution and on a
@@ -22,7 +22,7 @@ import pytest
 import scipy.linalg
 from scipy.integrate import solve_ivp
 
-from springchain.numeric.driver import integrate
+from springchain.numeric.run.driver import integrate
 from springchain.numeric.run.grid import record_indices, step_grid
 from springchain.numeric.errors import RunRefused
 from springchain.numeric.integrators import LinearChain, Problem
@@ -31,8 +31,8 @@ from springchain.numeric.run.implicit import ImplicitStep
 from springchain.numeric.run.protocol import Kind
 from springchain.numeric.integrators.chebyshev import ChebyshevCoefficients, ChebyshevPropagator
 from springchain.numeric.integrators.expm import step_matrix
-from springchain.numeric.modal import ModalSolution
-from springchain.numeric.spectrum import incidence, spectrum
+from springchain.numeric.exact.modal import ModalSolution
+from springchain.numeric.modes.spectrum import incidence, spectrum
 
 INTEGRATORS, ADAPTIVE = registry.classes(Kind.STEP), registry.classes(Kind.ADAPTIVE)
 FINITE_ORDER = [name for name, cls in INTEGRATORS.items() if math.isfinite(cls.order)]

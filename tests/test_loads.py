@@ -24,7 +24,7 @@ from springchain.cli import main
 from springchain.derive.errors import SceneError
 from springchain.derive.model import Effect, Model
 from springchain.derive.scene import load_scene
-from springchain.numeric.simulate import run_methods
+from springchain.numeric.run.simulate import run_methods
 from springchain.numeric.system import System
 
 ROOT = Path(__file__).resolve().parent.parent

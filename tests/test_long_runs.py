@@ -19,12 +19,12 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from springchain.numeric.driver import integrate
+from springchain.numeric.run.driver import integrate
 from springchain.numeric.integrators import VelocityVerlet
 from springchain.numeric.integrators.base import Problem
 from springchain.numeric.integrators.verlet_compensated import CompensatedVerlet
-from springchain.numeric.modal import ModalSolution
-from springchain.numeric.spectrum import free_pieces, spectrum, stiffness_matrix
+from springchain.numeric.exact.modal import ModalSolution
+from springchain.numeric.modes.spectrum import free_pieces, spectrum, stiffness_matrix
 
 EPS = np.finfo(float).eps
 from helpers import SLOW_BUDGET as BUDGET  # noqa: E402

@@ -1,4 +1,4 @@
-"""The exact modal solution (numeric.modal): rigid-body drift, conservation, the ODE itself,
+"""The exact modal solution (numeric.exact.modal): rigid-body drift, conservation, the ODE itself,
 and the naive divide-by-ω formula going wrong where ours does not."""
 
 from __future__ import annotations
@@ -8,9 +8,9 @@ import warnings
 import numpy as np
 import pytest
 
-from springchain.numeric.modal import ModalSolution, tsinc
+from springchain.numeric.exact.modal import ModalSolution, tsinc
 from springchain.numeric.run.exact import spectrum_of as system_spectrum
-from springchain.numeric.spectrum import spectrum
+from springchain.numeric.modes.spectrum import spectrum
 from springchain.numeric.system import System
 
 
@@ -196,7 +196,7 @@ def test_naive_formula_fails_for_every_roundoff_of_the_zero(seed_system, seed_mo
 def test_one_product_trajectory_equals_the_general_route(seed_system):
     """ModalSolution.at on a 1-D grid (one exp and one matrix product) equals the per-mode route
     to rounding, and keeps the rigid drift exact at t = 1e6."""
-    from springchain.numeric.modal import ModalSolution
+    from springchain.numeric.exact.modal import ModalSolution
     from springchain.numeric.run.exact import spectrum_of as system_spectrum
 
     spec = system_spectrum(seed_system)

@@ -12,7 +12,7 @@ import pytest
 from scipy.integrate import solve_ivp
 
 import springchain as sc
-from springchain.numeric.driver import integrate
+from springchain.numeric.run.driver import integrate
 from springchain.numeric.integrators.base import LinearChain, Problem
 from springchain.numeric.integrators.newmark import HHTAlpha, NewmarkAverage, NewmarkLinear, NewmarkParameters
 from springchain.numeric.run import registry

@@ -163,8 +163,8 @@ def test_convergence_slope_nonlinear(name):
 def test_adaptive_accuracy_on_the_seed_scene(name):
     """Against the exact modal solution: error within a small factor of the tolerance, and smaller at a tighter one."""
     import springchain.generated.seed as seed_module
-    from springchain.numeric.modal import ModalSolution
-    from springchain.numeric.spectrum import spectrum
+    from springchain.numeric.exact.modal import ModalSolution
+    from springchain.numeric.modes.spectrum import spectrum
     from springchain.numeric.system import System
 
     system = System.from_module(seed_module)
@@ -241,7 +241,7 @@ def test_simulate_refuses_the_pairs_on_damped_scenes(tmp_path):
 
 def test_plan_covers_the_pairs():
     import springchain.generated.seed as seed_module
-    from springchain.numeric.plan import Planner
+    from springchain.numeric.plan.planner import Planner
     from springchain.numeric.system import System
 
     system = System.from_module(seed_module)

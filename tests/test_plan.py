@@ -19,16 +19,16 @@ import numpy as np
 import pytest
 
 import springchain.generated.seed as seed_module
-from springchain.numeric.bench import ExtendedModalReference
-from springchain.numeric.driver import integrate
+from springchain.numeric.bench.workprecision import ExtendedModalReference
+from springchain.numeric.run.driver import integrate
 from springchain.numeric.run.grid import step_grid
-from springchain.numeric.error_models import LinearChainModel, OscillatorResponse, PowerLaw
+from springchain.numeric.plan.error_models import LinearChainModel, OscillatorResponse, PowerLaw
 from springchain.numeric.run import registry
 from springchain.numeric.run.protocol import Kind
 from springchain.numeric.integrators.base import Problem
 from springchain.numeric.integrators.verlet import VelocityVerlet
-from springchain.numeric.plan import Planner
-from springchain.numeric.spectrum import spectrum
+from springchain.numeric.plan.planner import Planner
+from springchain.numeric.modes.spectrum import spectrum
 from springchain.numeric.system import System
 
 INTEGRATORS = registry.classes(Kind.STEP)

@@ -19,8 +19,8 @@ import helpers
 import springchain as sc
 from springchain.cli import main
 from springchain.derive.scene import load_scene
-from springchain.numeric.linear_exact import AugmentedLinear
-from springchain.numeric.simulate import run_methods
+from springchain.numeric.exact.linear import AugmentedLinear
+from springchain.numeric.run.simulate import run_methods
 
 ROOT = Path(__file__).resolve().parent.parent
 #: Largest force evaluations of one contract run (costlier candidates are skipped: not a timing test).

@@ -89,7 +89,7 @@ def chain_module(scene_from_text, import_source, name, pot, params, n, left, rig
 @pytest.mark.parametrize("law", sorted(LAWS))
 def test_law_kernel_equals_numpy_stencil(law, scene_from_text, import_source, monkeypatch):
     from springchain.numeric import fast as fast_module
-    from springchain.numeric.fast import Backend, FusedVerlet, available
+    from springchain.numeric.compiled.fast import Backend, FusedVerlet, available
 
     monkeypatch.setattr(fast_module, "COMPILED_FORCE_MIN_N", 1)  # the other step methods' force, at n = 9
 
@@ -139,7 +139,7 @@ def test_law_kernels_are_cached_on_disk_once_per_law():
 _LAW_CHILD = """
 import json
 import numpy as np
-from springchain.numeric.fast import Backend, FusedVerlet
+from springchain.numeric.compiled.fast import Backend, FusedVerlet
 from springchain._modules import load_module
 from springchain._scenes import resolve
 from springchain.derive.scene import load_scene
@@ -164,7 +164,7 @@ print(json.dumps({"misses": sum(sum(s.cache_misses.values()) for s in stats),
 def test_energy_bounded_over_a_million_steps(scene_from_text, import_source):
     """Verlet (the fused law kernel) on an FPUT-α chain of 8 masses: 10⁶ steps, energy error bounded
     at the h² level and not growing (the last tenth's largest error within 1.5 x the first tenth's)."""
-    from springchain.numeric.fast import Backend, FusedVerlet, available
+    from springchain.numeric.compiled.fast import Backend, FusedVerlet, available
 
     pot, params = LAWS["fput_a"]
     mod = chain_module(scene_from_text, import_source, "e_fput_a", pot, params, 8, "wall", "wall")
@@ -239,7 +239,7 @@ def test_plan_predicts_the_soliton_error(tmp_path):
         if name not in ("verlet", "yoshida4", "blanes-moan6", "kahan-li8", "dop853", "dprkn8"):
             continue
         if cand.rtol is not None:
-            from springchain.numeric.plan import adaptive_atol
+            from springchain.numeric.plan.planner import adaptive_atol
 
             scene = sc.load(path)
             run = sc.simulate(path, methods=[name], dt=t_end / 160, steps=160, out=tmp_path, progress=False,
@@ -258,9 +258,9 @@ def test_plan_predicts_the_soliton_error(tmp_path):
 @pytest.mark.parametrize("n", [7, 8])
 def test_modal_energy_transform_equals_eigenvectors(ends, n, scene_from_text, import_source):
     from springchain._modules import derive
-    from springchain.numeric.chain_modal import Basis
-    from springchain.numeric.modal_energy import ModalEnergy
-    from springchain.numeric.spectrum import spectrum
+    from springchain.numeric.exact.chain import Basis
+    from springchain.numeric.exact.modal_energy import ModalEnergy
+    from springchain.numeric.modes.spectrum import spectrum
     from springchain.numeric.system import System
 
     left, right = ends
@@ -297,7 +297,7 @@ def test_modal_energy_constant_under_the_exact_linear_solution(tmp_path):
 
 
 def test_modal_energy_about_the_sag_of_a_linear_scene(tmp_path):
-    """hanging (gravity from a wall): modes about x_eq = K⁻¹Mg (numeric.equilibrium); under the exact
+    """hanging (gravity from a wall): modes about x_eq = K⁻¹Mg (numeric.exact.equilibrium); under the exact
     solution every E_j is constant."""
     import springchain as sc
 
@@ -343,8 +343,8 @@ def test_a_tension_that_calls_a_helper_compiles_with_its_scalar_form(import_sour
     scalar form the module carries: the compiled force equals the NumPy formula on a free chain."""
     from springchain.derive.law_helpers import helper_source
     from springchain.generated.contract import End
-    from springchain.numeric.fast_kernels import available
-    from springchain.numeric.potential_law import compiled_law
+    from springchain.numeric.compiled.fast_kernels import available
+    from springchain.numeric.compiled.potential_law import compiled_law
 
     if not available():
         pytest.skip("numba is not installed")

@@ -16,12 +16,12 @@ import numpy as np
 from hypothesis import assume, example, given, settings
 from hypothesis import strategies as st
 
-from springchain.numeric.driver import integrate
+from springchain.numeric.run.driver import integrate
 from helpers import free_pieces
 from springchain.numeric.integrators import VelocityVerlet
 from springchain.numeric.integrators.base import Problem
-from springchain.numeric.modal import ModalSolution
-from springchain.numeric.spectrum import incidence, spectrum, stiffness_matrix
+from springchain.numeric.exact.modal import ModalSolution
+from springchain.numeric.modes.spectrum import incidence, spectrum, stiffness_matrix
 
 EPS = np.finfo(float).eps
 

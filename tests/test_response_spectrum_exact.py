@@ -26,7 +26,7 @@ import springchain as sc
 from springchain.cli import main
 from springchain.numeric import response_spectrum as rsmod
 from springchain.numeric.errors import RunRefused
-from springchain.numeric.sdof_peak import free_peak
+from springchain.numeric.structural.sdof_peak import free_peak
 
 #: A 16-row record with unequal rows up to t = 2 s (as in the issue): at T = 1.7 s, ζ = 0.05 its peak
 #: is in the free vibration after the last row, 6.5 % above the peak inside the record.

@@ -154,14 +154,14 @@ def test_ctrl_c_prints_one_line_and_exits_130(delay, tmp_path):
 # -- matplotlib backend ---------------------------------------------------------------------------
 def test_importing_plots_and_simulate_leaves_the_backend_alone():
     code = ("import matplotlib; before = matplotlib.get_backend(); "
-            "import springchain.numeric.plots, springchain.numeric.simulate, springchain.cli; "
+            "import springchain.numeric.plots.figures, springchain.numeric.run.simulate, springchain.cli; "
             "after = matplotlib.get_backend(); print(before == after, before, after)")
     env = {k: v for k, v in os.environ.items() if k != "MPLBACKEND"}
     proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120, env=env)
     assert proc.returncode == 0, proc.stderr
     assert proc.stdout.split()[0] == "True", proc.stdout
-    code2 = ("import matplotlib; matplotlib.use('svg'); import springchain.numeric.plots, "
-             "springchain.numeric.simulate; print(matplotlib.get_backend())")
+    code2 = ("import matplotlib; matplotlib.use('svg'); import springchain.numeric.plots.figures, "
+             "springchain.numeric.run.simulate; print(matplotlib.get_backend())")
     proc = subprocess.run([sys.executable, "-c", code2], capture_output=True, text=True, timeout=120, env=env)
     assert proc.stdout.strip() == "svg", proc.stderr
 

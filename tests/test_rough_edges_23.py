@@ -133,14 +133,14 @@ def test_every_json_output_is_strict(tmp_path, capsys):
                  "--json", "--out", str(tmp_path)]) == 0
     data = _strict_json(capsys.readouterr().out)
     assert any(r["zeta"] is None for r in data["resonances"])  # ζ not computed on a damped chain: null
-    from springchain.numeric.strict_json import dumps
+    from springchain.numeric.io.strict_json import dumps
 
     assert dumps({"a": float("nan"), "b": [np.float64(np.inf), np.int64(3)]}) == '{"a": null, "b": [null, 3]}'
 
 
 # -- pieces drawn as they are connected ------------------------------------------------------------------
 def test_animation_layout_draws_each_piece_apart():
-    from springchain.numeric.animation import layout
+    from springchain.numeric.plots.animation import layout
 
     # masses 0-1 joined, 2-3 joined with a wall at mass 2, mass 4 alone between two walls, mass 5 free;
     # a wall spring in the middle of piece 6-7-8 (mass 7)
@@ -178,7 +178,7 @@ def test_narrow_pulse_on_a_long_chain_keeps_its_height_and_gets_a_zoom():
     from matplotlib.collections import PolyCollection
 
     from springchain.numeric import plots
-    from springchain.numeric.animation import profile_envelopes
+    from springchain.numeric.plots.animation import profile_envelopes
 
     n = 200_000
     i = np.arange(n)
@@ -272,7 +272,7 @@ def test_bench_prints_no_project_targets(tmp_path, capsys):
     assert "required" not in out and "| NO |" not in out and "met" not in out.split("## Cheapest")[1]
     md = next(tmp_path.glob("bench-seed.md")).read_text()
     assert "required" not in md
-    from springchain.numeric.bench import markdown_table
+    from springchain.numeric.bench.workprecision import markdown_table
 
     result = sc.bench("seed", 5.0, quick=True, methods=["verlet"])
     assert "required" in markdown_table(result, targets=True) and "required" not in markdown_table(result)

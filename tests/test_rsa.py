@@ -99,7 +99,7 @@ def _rho_equal_damping(r, z):
 
 
 def test_cqc_correlation_formula():
-    from springchain.numeric.rsa import cqc_correlation
+    from springchain.numeric.structural.rsa import cqc_correlation
 
     w = np.array([1.0, 1.05, 3.0, 20.0])
     rho = cqc_correlation(w, np.full(4, 0.05))
@@ -117,7 +117,7 @@ def test_cqc_reduces_to_srss_for_separated_modes_and_differs_for_close_ones(tmp_
     r = sc.rsa(str(sep), spectrum=str(tmp_path / "rec.csv")).result
     rho12 = r.rho[0, 1]
     assert rho12 < 0.01
-    from springchain.numeric.rsa import Combination
+    from springchain.numeric.structural.rsa import Combination
 
     srss, cqc = r.combined(Combination.SRSS), r.combined(Combination.CQC)
     R = r.base_shear

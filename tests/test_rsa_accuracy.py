@@ -148,7 +148,7 @@ def test_random_wall_chains(tmp_path, n, data):
 def test_long_chain_notes_float_route(tmp_path):
     """Past the mpmath limit the float route says which numbers are not certified; the storey shears
     of the wall-hung chain (inertia sums) and the base shear still match the reference."""
-    from springchain.numeric.modal_exact import MP_MAX_MASSES
+    from springchain.numeric.structural.modal_quantities import MP_MAX_MASSES
 
     n = MP_MAX_MASSES + 1
     rng = np.random.default_rng(7)

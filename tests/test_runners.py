@@ -64,7 +64,7 @@ def test_each_kind_runs_into_a_memory_recorder(seed_system, name):
 def test_streamed_and_kept_frames_agree_on_a_chain(tmp_path):
     """A short [chain] run streamed to the NPZ (API) equals the same run kept in memory."""
     from springchain._modules import load_module
-    from springchain.numeric.simulate import run_methods
+    from springchain.numeric.run.simulate import run_methods
     from springchain.numeric.system import System
 
     text = Path(springchain.load("chain100k").file).read_text(encoding="utf-8")

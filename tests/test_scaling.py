@@ -1,4 +1,4 @@
-"""The scaling benchmark (numeric.scaling) and the symbolic cost (derive.symbolic_cost): correctness only.
+"""The scaling benchmark (numeric.bench.scaling) and the symbolic cost (derive.symbolic_cost): correctness only.
 
 No timing is asserted. Checked here:
 
@@ -29,7 +29,7 @@ from springchain.derive.chain import ChainModel
 from springchain.derive.chain_codegen import render_chain_module
 from springchain.derive.scene import load_scene
 from springchain.numeric import fast, scaling, scaling_report
-from springchain.numeric.chain_modal import ChainModal
+from springchain.numeric.exact.chain import ChainModal
 
 
 @pytest.fixture(scope="module")

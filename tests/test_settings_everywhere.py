@@ -38,7 +38,7 @@ def test_plan_measures_hht_at_the_given_alpha():
     """The plan's hht candidate is the method with that alpha: more numerical damping (a more negative
     alpha) predicts a larger error at the same step."""
     from springchain import _api
-    from springchain.numeric.plan import Planner
+    from springchain.numeric.plan.planner import Planner
     from springchain.numeric.run import registry
     from springchain._modules import system_of
 

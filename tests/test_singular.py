@@ -1,4 +1,4 @@
-"""Singular points of the one-mode closed forms (numeric.special), against mpmath at 60 digits.
+"""Singular points of the one-mode closed forms (numeric.exact.special), against mpmath at 60 digits.
 
 Tolerances. The inputs (ω, Ω or ζ, t) are floats that mpmath takes as exact,
 so the only error measured is the kernel's own rounding. A kernel that is
@@ -21,7 +21,7 @@ import mpmath as mp
 import numpy as np
 import pytest
 
-from springchain.numeric.special import (FreeResponse, damped_free, damped_free_rate, omega_from_omega2, sinc, sinhc, tsinc,
+from springchain.numeric.exact.special import (FreeResponse, damped_free, damped_free_rate, omega_from_omega2, sinc, sinhc, tsinc,
                              undamped_forced_cos, undamped_forced_sin)
 
 EPS = np.finfo(float).eps

@@ -1,4 +1,4 @@
-"""Frequencies to the accuracy float64 allows (numeric.spectrum), against mpmath.
+"""Frequencies to the accuracy float64 allows (numeric.modes.spectrum), against mpmath.
 
 The reference is ``mpmath.eigsy`` of ``D = M^-1/2 K M^-1/2`` built in mpmath
 from the same float inputs (taken as exact) at enough digits to cover the
@@ -24,8 +24,8 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from helpers import free_pieces, mp_dynamical_matrix
-from springchain.numeric.modal import ModalSolution
-from springchain.numeric.spectrum import rigid_basis, spectrum, stiffness_matrix
+from springchain.numeric.exact.modal import ModalSolution
+from springchain.numeric.modes.spectrum import rigid_basis, spectrum, stiffness_matrix
 
 EPS = np.finfo(float).eps
 OMEGA_RTOL = 1e-12
@@ -45,7 +45,7 @@ def mp_omega(masses, ends, k, dps):
 
 
 def pieces_without_wall(n, ends):
-    """Free connected pieces by a union-find independent of numeric.spectrum."""
+    """Free connected pieces by a union-find independent of numeric.modes.spectrum."""
     return free_pieces(n, np.asarray(ends).reshape(-1, 2))
 
 

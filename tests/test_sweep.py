@@ -16,9 +16,9 @@ import pytest
 import springchain
 from springchain.cli import main
 from springchain.numeric import sweep_driver
-from springchain.numeric.distributions import Dist, parse, parse_assignment
+from springchain.numeric.sweep.distributions import Dist, parse, parse_assignment
 from springchain.numeric.errors import RunRefused
-from springchain.numeric.realisations import SweepSpec, compute_batch
+from springchain.numeric.sweep.realisations import SweepSpec, compute_batch
 
 from helpers import chain_toml, one_line_error, run_cli, write_scene  # noqa: E402
 
@@ -194,7 +194,7 @@ def test_resume_skips_finished_batches_and_completes_partial(tmp_path, client2):
 def test_killed_worker_loses_no_sample(tmp_path):
     """Kill a worker process of a real LocalCluster mid-run: every sample exactly once."""
     from springchain._sweep import sweep as api_sweep  # noqa: F401  (the same code path below)
-    from springchain.numeric.realisations import SweepSpec as Spec
+    from springchain.numeric.sweep.realisations import SweepSpec as Spec
 
     spec = _spec(tmp_path, n=500, disorder=(("mass", "uniform(0.5, 1.5)"),), samples=40, seed=9)
     assert isinstance(spec, Spec)
@@ -242,7 +242,7 @@ def transfer_matrix_gamma(masses, k, omegas):
 
 
 def test_matsuda_ishii_constant_against_transfer_matrix():
-    from springchain.numeric.sweep_summary import matsuda_ishii
+    from springchain.numeric.sweep.summary import matsuda_ishii
 
     rng = np.random.default_rng(2024)
     masses = rng.uniform(0.5, 1.5, 60_000)
@@ -349,8 +349,8 @@ def test_worker_side_needs_no_sympy(repo_root):
             "from pathlib import Path\n"
             "import springchain.generated.seed as g\n"
             "from springchain.numeric import sweep_driver, sweep_summary\n"
-            "from springchain.numeric.distributions import parse\n"
-            "from springchain.numeric.realisations import SweepSpec, compute_batch\n"
+            "from springchain.numeric.sweep.distributions import parse\n"
+            "from springchain.numeric.sweep.realisations import SweepSpec, compute_batch\n"
             "spec = SweepSpec('seed', Path(g.__file__).read_text(), tuple(sorted(g.DEFAULTS.items())),\n"
             "                 (('k', parse('uniform(1, 2)')),), (), 3, 0)\n"
             "print(compute_batch(spec, 0, 3)['omega2'].shape)\n")

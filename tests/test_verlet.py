@@ -1,4 +1,4 @@
-"""Velocity Verlet (numeric.integrators.verlet) and the driver (numeric.driver) against exact answers.
+"""Velocity Verlet (numeric.integrators.verlet) and the driver (numeric.run.driver) against exact answers.
 
 For a linear chain, Verlet is itself exactly solvable mode by mode: in mass-weighted
 modal coordinates the positions obey ``q_{n+1} = 2 q_n - q_{n-1} - h²ω² q_n``, so
@@ -12,16 +12,16 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from springchain.numeric.driver import integrate
+from springchain.numeric.run.driver import integrate
 from springchain.numeric.integrators import Problem, VelocityVerlet
 from springchain.numeric.run import registry
 from springchain.numeric.run.protocol import Kind
-from springchain.numeric.modal import ModalSolution
-from springchain.numeric.spectrum import incidence
-from springchain.numeric.compare import compare
+from springchain.numeric.exact.modal import ModalSolution
+from springchain.numeric.modes.spectrum import incidence
+from springchain.numeric.run.compare import compare
 from springchain.numeric.run.exact import spectrum_of as system_spectrum
 from springchain.numeric.run.step import stability_refusal
-from springchain.numeric.simulate import run_methods
+from springchain.numeric.run.simulate import run_methods
 from springchain.numeric.errors import RunRefused
 
 INTEGRATORS = registry.classes(Kind.STEP)

@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..array_record import array_record
+from ..io.array_record import array_record
 
 
 @array_record

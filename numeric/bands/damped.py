@@ -14,7 +14,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..array_record import array_record
+from ..io.array_record import array_record
 from .cell import Cell
 from .spectrum import Spectrum
 

@@ -32,7 +32,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..array_record import array_record
+from ..io.array_record import array_record
 from .cell import Cell
 
 #: q-points eliminated at once.

@@ -74,7 +74,7 @@ def _jacobi_impl(X, V, tol, max_sweeps):  # pragma: no cover - compiled by numba
 
 @functools.lru_cache(maxsize=1)
 def _kernel():
-    from ..fast_kernels import available
+    from ..compiled.fast_kernels import available
 
     if available():
         import numba

@@ -3,14 +3,14 @@
 The centre panel draws each branch ω_j(q) over q ∈ [−π, π], shades the gaps, and puts the finite chain's modes
 at ±q of their band (gap modes on the axis q = 0 with their own marker); the left panel the attenuation per
 cell Im q(ω) (zero inside the bands); the right the density of states of each band (van Hove peaks at the band
-edges, clipped to the panel). Made without pyplot (:func:`springchain.numeric.plots.new_figure`).
+edges, clipped to the panel). Made without pyplot (:func:`springchain.numeric.plots.figures.new_figure`).
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-from ..plots import new_figure
+from ..plots.figures import new_figure
 
 
 def band_figure(q: np.ndarray, omega: np.ndarray, gaps: list[tuple[float, float]], title: str, *,

@@ -17,7 +17,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..array_record import array_record
+from ..io.array_record import array_record
 from .cell import Cell
 from .factor import factor
 from .jacobi import jacobi

@@ -62,7 +62,7 @@ force = _numba.cfunc({signature!r}, cache=True, error_model="numpy")(scalar_forc
 
 def available() -> bool:
     """Whether numba loads (else every run takes the NumPy path)."""
-    from ..fast_kernels import available as numba_available
+    from .fast_kernels import available as numba_available
 
     return numba_available()
 

@@ -10,7 +10,7 @@ Conventions of every loop
 -------------------------
 ``force(x, t, out, p)`` (float64 arrays, C-contiguous) writes ``a(x) + a_ext(t)`` into ``out`` (N,).
 ``Ad`` is ``-M⁻¹C`` (N, N), or shape (0, 0) without dampers; ``E = exp(Ad h/2)`` is the half damping flow of the
-Strang splitting the fixed-step loops use (as :class:`numeric.effects.EffectSplitting`).
+Strang splitting the fixed-step loops use (as :class:`numeric.run.effects.EffectSplitting`).
 Frames are written into the preallocated ``xs``, ``vs`` (F, N) at the step indices ``rec``
 (increasing, ``rec[0] = 0``); time is ``t = i·h`` at step i.
 Integer constants handed to a helper, and counters that start from one, are ``np.intp(...)``:

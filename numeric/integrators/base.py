@@ -3,7 +3,7 @@
 An integrator is a pair of pure functions over a small immutable state:
 ``init(problem, x0, v0) -> State`` and ``step(problem, state, h) -> State``.
 It declares its ``name``, ``order``, whether it is ``symplectic`` and its
-``evals_per_step``; the driver (:mod:`numeric.driver`) owns the loop, the
+``evals_per_step``; the driver (:mod:`numeric.run.driver`) owns the loop, the
 time grid ``t = i·h`` and recording.
 
 The hot loop does not build a :class:`State` per step: every integrator
@@ -25,7 +25,7 @@ import numpy as np
 from ..errors import RunRefused
 
 if TYPE_CHECKING:  # pragma: no cover
-    from ..spectrum import Spectrum
+    from ..modes.spectrum import Spectrum
     from ..system import System
 
 #: ``kernel(x, v, a, i) -> (x, v, a)``: one step from the state at ``t = i·h``; arrays shape (N, B).
@@ -72,14 +72,14 @@ class LinearChain:
         return int(self.masses.shape[0])
 
     def spectrum(self) -> "Spectrum":
-        """Frequencies and modes by the accurate SVD route (:func:`numeric.spectrum.spectrum`)."""
-        from ..spectrum import spectrum
+        """Frequencies and modes by the accurate SVD route (:func:`numeric.modes.spectrum.spectrum`)."""
+        from ..modes.spectrum import spectrum
 
         return spectrum(self.masses, self.spring_ends, self.stiffness)
 
     def omega2_bound(self) -> float:
-        """A rigorous upper bound on ω²_max (:func:`numeric.bounds.omega2_bound`)."""
-        from ..bounds import omega2_bound
+        """A rigorous upper bound on ω²_max (:func:`numeric.modes.bounds.omega2_bound`)."""
+        from ..modes.bounds import omega2_bound
 
         return omega2_bound(self.masses, self.spring_ends, self.stiffness)
 
@@ -113,7 +113,7 @@ class Problem:
         chain = None
         if system.linear and system.effects <= frozenset({"spring", "potential"}):  # a quadratic potential is linear
             chain = LinearChain(system.masses, system.spring_ends, system.stiffness)
-        from ..fast import acceleration_of  # a long potential chain: its compiled law
+        from ..compiled.fast import acceleration_of  # a long potential chain: its compiled law
 
         return cls(acceleration_of(system), linear=chain)
 

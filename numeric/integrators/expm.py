@@ -5,7 +5,7 @@ In mass-weighted modal coordinates the step is a rotation per mode,
 ``h·sinc(ωh)``, exact for the rigid modes). Transformed back to physical
 coordinates this is the matrix exponential of the first-order system for the
 step ``h``, accurate to roundoff even for stiff chains because the
-frequencies come from the SVD of the spring factor (:mod:`numeric.spectrum`),
+frequencies come from the SVD of the spring factor (:mod:`numeric.modes.spectrum`),
 not from an eigen-solve of ``M⁻¹K``. Set-up ``O(N³)`` (once per run), then one
 ``(2N × 2N)`` matrix product per step; no force evaluations.
 """
@@ -14,7 +14,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..modal import tsinc
+from ..exact.modal import tsinc
 from .base import Problem, StepKernel, finite_positive
 from .propagator import LinearPropagator
 

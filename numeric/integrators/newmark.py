@@ -420,7 +420,7 @@ class NewmarkFamily(Integrator):
 class NewmarkResponse:
     """The per-mode closed-form response of a Newmark/HHT step on ``q̈ = −ω²q``, for the planner.
 
-    The same interface as :class:`numeric.error_models.OscillatorResponse` (whose propagators are
+    The same interface as :class:`numeric.plan.error_models.OscillatorResponse` (whose propagators are
     polynomials in z = ωh; an implicit step's are rational): per step the principal root
     ``ρ e^{iθ}`` of the one-step matrix (:meth:`NewmarkParameters.amplification`), the phase
     defect ``δ = θ − z`` and the shape distortion of the (x, v) map with ``a = −ω²x``.

@@ -1,6 +1,6 @@
 """The forms of a frequency response engineers read, from receptances of the accurate route.
 
-Given receptances ``H(out, in)`` [m/N] of :mod:`numeric.frf` on a grid ω [rad/s]:
+Given receptances ``H(out, in)`` [m/N] of :mod:`numeric.frf.response` on a grid ω [rad/s]:
 
 =========================  ==================================  ============
 form                        value                               SI unit

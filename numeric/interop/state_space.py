@@ -22,7 +22,7 @@ from dataclasses import dataclass, field
 import numpy as np
 import scipy.sparse
 
-from ..elements import Elements
+from ..modes.elements import Elements
 
 #: Element contrast (largest over smallest mass, spring or dashpot) above which a note is given.
 CONTRAST_NOTE = 1e6
@@ -82,7 +82,7 @@ class StateSpaceModel:
 
 
 def contrast(el: Elements) -> float:
-    """Largest over smallest nonzero mass, spring and dashpot (each kind apart), as :mod:`numeric.frf` counts."""
+    """Largest over smallest nonzero mass, spring and dashpot (each kind apart), as :mod:`numeric.frf.response` counts."""
     out = 1.0
     for v in (el.stiffness, el.damping, el.masses):
         v = np.abs(np.asarray(v, dtype=float))
@@ -124,7 +124,7 @@ def _damping(el: Elements, K):
         a, b = el.rayleigh
         C = C + a * scipy.sparse.diags(el.masses) + b * K
     if el.modal_zeta is not None:
-        from ..spectrum import spectrum
+        from ..modes.spectrum import spectrum
 
         spec = spectrum(el.masses, el.spring_ends, el.stiffness)
         MPhi = el.masses[:, None] * spec.shapes

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..plots import new_figure
+from ..plots.figures import new_figure
 
 
 def psd_figure(f: np.ndarray, input_psd: np.ndarray, input_label: str, curves: list[tuple[str, np.ndarray, float]],

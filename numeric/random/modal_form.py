@@ -1,7 +1,7 @@
 """A linear scene's responses in pole–residue form, ``H_y(s) = D_y + Σ_r R_yr / (s − λ_r)``.
 
 Built in the accurate undamped modal basis (ω and M-orthonormal Φ of the spring-factor SVD,
-:mod:`numeric.spectrum`; ``G = ΦᵀCΦ`` from the elements, :func:`numeric.elements.modal_damping`):
+:mod:`numeric.modes.spectrum`; ``G = ΦᵀCΦ`` from the elements, :func:`numeric.modes.elements.modal_damping`):
 
 * **proportional damping** (G diagonal by construction: Rayleigh, modal): each mode's two poles
   in closed form, ``λ = −g/2 ± i√((ω − g/2)(ω + g/2))`` (overdamped: ``λ₁ = −(g + √(g² − 4ω²))/2``,
@@ -21,9 +21,9 @@ from dataclasses import dataclass, field
 import numpy as np
 import scipy.linalg
 
-from ..elements import Elements, incidence, modal_damping
+from ..modes.elements import Elements, incidence, modal_damping
 from ..errors import RunRefused
-from ..spectrum import spectrum
+from ..modes.spectrum import spectrum
 
 #: Largest scene whose random response is computed (the modal basis is dense N × N).
 MAX_MASSES = 400

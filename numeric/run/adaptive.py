@@ -23,7 +23,7 @@ from .protocol import Kind, Method
 def full_problem(system: System) -> Problem:
     """``ẍ = a(x) − M⁻¹C ẋ + a_ext(t)``: everything the system has, for methods that integrate it whole."""
     Ad = system.damping_rate_matrix()
-    from ..fast import acceleration_of  # a long potential chain: its compiled law
+    from ..compiled.fast import acceleration_of  # a long potential chain: its compiled law
 
     return Problem(acceleration_of(system), damping=None if Ad is None else (lambda v: Ad @ v),
                    external=system.external_fn)

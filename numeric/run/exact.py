@@ -4,10 +4,10 @@
 
 * springs only, ``[chain]``: the chain's sine/cosine/Fourier transform (uniform chains, O(N log N)
   per output time, no N × N) or its eigenvectors (index-dependent, up to ``MAX_DENSE`` masses),
-  :mod:`numeric.chain_modal`;
-* springs only, ``[masses]``: the modal solution (:mod:`numeric.modal`) from the accurate spectrum
+  :mod:`numeric.exact.chain`;
+* springs only, ``[masses]``: the modal solution (:mod:`numeric.exact.modal`) from the accurate spectrum
   (the spring-factor SVD) or the generated closed forms;
-* dampers, forces, gravity, ground: the augmented matrix exponential (:mod:`numeric.linear_exact`).
+* dampers, forces, gravity, ground: the augmented matrix exponential (:mod:`numeric.exact.linear`).
 
 Whether one applies at all, and why not, is :attr:`System.no_exact_solution`. Plan and bench
 time and measure against these same solutions.
@@ -23,7 +23,7 @@ import numpy as np
 
 from ..errors import RunRefused
 from ..progress import Reporter, phase
-from ..spectrum import Spectrum, spectrum_from_closed_form
+from ..modes.spectrum import Spectrum, spectrum_from_closed_form
 from ..system import System
 from .grid import Grid
 from .protocol import Kind, Method, SpectrumSource, Traits
@@ -118,23 +118,23 @@ def solve(system: System, x0: np.ndarray, v0: np.ndarray,
         raise RunRefused(f"no exact solution applies ({why})", quantity="method")
     x0, v0 = np.asarray(x0, dtype=float), np.asarray(v0, dtype=float)
     if system.springs_only and system.chain:
-        from ..chain_modal import ChainModal
+        from ..exact.chain import ChainModal
 
         sol = ChainModal.from_module(system.module, system.params, x0, v0)
-        return Solution("exact: the chain's transform solution (numeric.chain_modal), float64", sol.at, True)
+        return Solution("exact: the chain's transform solution (numeric.exact.chain), float64", sol.at, True)
     if system.springs_only:
-        from ..modal import ModalSolution
+        from ..exact.modal import ModalSolution
 
         modal = ModalSolution.from_initial(spectrum_of(system, source), x0, v0)
         return Solution(f"exact: modal solution ({SpectrumSource(source).value} spectrum), float64", modal.at)
-    from ..linear_exact import AugmentedLinear
+    from ..exact.linear import AugmentedLinear
 
     aug = AugmentedLinear.from_system(system)
 
     def evaluate(t):  # a uniform grid, possibly with a shorter last interval
         return aug.solve_grid(x0, v0, t)
 
-    return Solution("exact: augmented matrix exponential (numeric.linear_exact), float64", evaluate, whole=True)
+    return Solution("exact: augmented matrix exponential (numeric.exact.linear), float64", evaluate, whole=True)
 
 
 @dataclass(frozen=True)

@@ -38,7 +38,7 @@ class MemoryRecorder:
 
 
 class StreamRecorder:
-    """Writes one method's frames into a :class:`~numeric.chunked.ChunkedNPZ` (with the absolute
+    """Writes one method's frames into a :class:`~numeric.io.chunked.ChunkedNPZ` (with the absolute
     motion of a scene with ``[ground]``); keeps per frame only the energy, the kinetic energy and,
     at the rows in ``keep``, a profile snapshot.
 
@@ -58,7 +58,7 @@ class StreamRecorder:
         self.snapshots: dict[float, np.ndarray] = {}
 
     def frames(self, start: int, x: np.ndarray, v: np.ndarray) -> None:
-        from ..absolute import absolute_motion
+        from ..exact.absolute import absolute_motion
 
         for r in range(x.shape[0]):
             row = start + r

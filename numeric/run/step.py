@@ -2,9 +2,9 @@
 
 :meth:`StepMethod.integrator` wraps the registered :class:`~numeric.integrators.base.Integrator`
 for what the system has — a Strang splitting for dampers and time as a coordinate for forces
-(:class:`~numeric.effects.EffectSplitting`) — and chooses the loop: plain ``[chain]`` Verlet runs
-the fused single-pass kernel (:mod:`numeric.fast`, numba when installed), everything else the
-NumPy driver (:func:`numeric.driver.integrate`). :func:`stability_refusal` is the one stability
+(:class:`~numeric.run.effects.EffectSplitting`) — and chooses the loop: plain ``[chain]`` Verlet runs
+the fused single-pass kernel (:mod:`numeric.compiled.fast`, numba when installed), everything else the
+NumPy driver (:func:`numeric.run.driver.integrate`). :func:`stability_refusal` is the one stability
 check (``ω_max·h`` below the method's limit, ``ω_max`` from :attr:`System.omega_max`).
 
 Small ``[masses]`` scenes run their whole loop compiled (:mod:`numeric.compiled`: the module's
@@ -21,7 +21,7 @@ from typing import ClassVar
 
 import numpy as np
 
-from ..driver import integrate
+from .driver import integrate
 from ..integrators.base import Integrator, Problem
 from ..integrators.verlet import VelocityVerlet
 from ..progress import Reporter
@@ -45,14 +45,14 @@ def stability_refusal(system: System, h: float, name: str, limit: float) -> str 
 
 class FusedChainVerlet(VelocityVerlet):
     """Velocity Verlet on a ``[chain]`` scene through the fused single-pass kernel
-    (:mod:`numeric.fast`: numba when installed, else the NumPy stencil). Same scheme,
+    (:mod:`numeric.compiled.fast`: numba when installed, else the NumPy stencil). Same scheme,
     same name; frames are copied by the recorder, so the in-place kernel is safe."""
 
     def __init__(self, system: System):
         self.system = system
 
     def kernel(self, problem: Problem, h: float):
-        from ..fast import chain_verlet_kernel
+        from ..compiled.fast import chain_verlet_kernel
 
         return chain_verlet_kernel(self.system.module, self.system.params, self.system.n, h, inplace=True)
 
@@ -78,7 +78,7 @@ class StepMethod(Method):
             return FusedChainVerlet(system)
         integ = self.integrator_class()
         if system.damped or system.forced:
-            from ..effects import EffectSplitting
+            from .effects import EffectSplitting
 
             integ = EffectSplitting(integ, system.damping_rate_matrix(), system.external_fn)
         return integ
@@ -86,15 +86,15 @@ class StepMethod(Method):
     def splits(self, system: System) -> bool:
         """Whether the integrator runs inside the damping/forcing splitting on ``system`` (an
         implicit step integrates damping and loads in its step instead)."""
-        from ..effects import EffectSplitting
+        from .effects import EffectSplitting
 
         return isinstance(self.integrator(system), EffectSplitting)
 
     def response(self):
         """The one-step response on a mode ``q̈ = −ω²q`` that plan's error models read (amplitude,
-        phase defect, shape distortion per ``z = ωh``): an :class:`~numeric.error_models.OscillatorResponse`
+        phase defect, shape distortion per ``z = ωh``): an :class:`~numeric.plan.error_models.OscillatorResponse`
         from the integrator's step."""
-        from ..error_models import OscillatorResponse
+        from ..plan.error_models import OscillatorResponse
 
         return OscillatorResponse.from_integrator(self.integrator_class())
 

@@ -1,7 +1,7 @@
 """Refined modes of an open chain, O(n) per mode: bisection, inverse iteration, Newton in double-double.
 
 1. ω_j by bisection on the Golub–Kahan form of the bidiagonal spring factor
-   (:func:`numeric.chain_spectrum`: relatively accurate, O(n) per value, the values ``modes`` prints);
+   (:func:`numeric.modes.chain`: relatively accurate, O(n) per value, the values ``modes`` prints);
 2. a first shape from the twisted factorisation of ``K − λ_j M`` (stationary qd transforms of the
    subtraction-free ``LDLᵀ`` of K from both ends, :class:`.solvers.ChainSolver`);
 3. Newton's correction with double-double residuals from the elements (:func:`.refine.refine_cluster`)
@@ -16,7 +16,7 @@ from __future__ import annotations
 import numpy as np
 import scipy.linalg
 
-from ..chain_spectrum import _golub_kahan, _positions, bidiagonal_factor
+from ..modes.chain import _golub_kahan, _positions, bidiagonal_factor
 from . import double_double as ddm
 from .refine import _assemble, refine_cluster, rigid_shape
 from .solvers import ChainSolver

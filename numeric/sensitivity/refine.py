@@ -191,7 +191,7 @@ def rigid_shape(stencil: ddm.Stencil, piece_vector: np.ndarray):
 
 
 def dense_modes(stencil: ddm.Stencil, k: np.ndarray, spectrum, wanted: np.ndarray | None = None):
-    """Refined modes of any scene from its accurate float64 spectrum (:class:`numeric.spectrum.Spectrum`).
+    """Refined modes of any scene from its accurate float64 spectrum (:class:`numeric.modes.spectrum.Spectrum`).
 
     Parameters
     ----------

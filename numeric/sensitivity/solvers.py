@@ -5,7 +5,7 @@ residual computed from the elements in double-double (:mod:`.double_double`), so
 rounding never reaches a result; they must only be close enough to contract.
 
 * :class:`ModalSolver` — any scene whose modes fit in memory: the accurate spring-factor modes
-  (:mod:`numeric.spectrum`) give ``(K − λM)`` on the M-orthogonal complement of the cluster
+  (:mod:`numeric.modes.spectrum`) give ``(K − λM)`` on the M-orthogonal complement of the cluster
   ``C`` of λ_j: ``v = M^-1/2 Σ_{k∉C} u_k (u_kᵀ M^-1/2 r) / (λ_k − λ_j)`` (O(N²) per solve).
 * :class:`ChainSolver` — an open chain: Nelson's own system, the tridiagonal ``K − λ_j M`` with
   the row and column of the twist index ``t`` (the largest mass-weighted component of mode j)

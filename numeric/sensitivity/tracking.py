@@ -83,11 +83,11 @@ def grid_branches(spec, realisations, max_masses: int = 400) -> dict | None:
 
     Parameters
     ----------
-    spec : numeric.realisations.SweepSpec
+    spec : numeric.sweep.realisations.SweepSpec
     realisations : module
-        :mod:`numeric.realisations` (``realise``), passed in by the caller.
+        :mod:`numeric.sweep.realisations` (``realise``), passed in by the caller.
     """
-    from ..spectrum import spectrum
+    from ..modes.spectrum import spectrum
 
     grids = spec.grids
     if len(grids) != 1 or len(spec.vary) != 1 or spec.disorder:
@@ -116,7 +116,7 @@ def grid_branches(spec, realisations, max_masses: int = 400) -> dict | None:
 
 def branches_figure(branches: dict, scene: str):
     """ω² of each branch against the grid parameter, crossings and veerings marked."""
-    from .. import plots
+    from ..plots import figures as plots
 
     x = np.array(branches["values"])
     w = np.array(branches["omega2"])

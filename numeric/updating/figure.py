@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .. import plots
+from ..plots import figures as plots
 
 
 def update_figure(title: str, labels: list[str], before: np.ndarray, after: np.ndarray,

@@ -169,7 +169,7 @@ def _fractions(m, k, clamped: bool):
 
     from ..sensitivity import double_double as ddm
     from ..sensitivity.refine import dense_modes
-    from ..spectrum import spectrum
+    from ..modes.spectrum import spectrum
 
     n = len(m)
     size = n - 1 if clamped else n

@@ -1,0 +1,1 @@
+"""Files out: atomic writes, NPZ, chunked trajectories, strict JSON and array records."""

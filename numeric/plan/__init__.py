@@ -1,0 +1,1 @@
+"""Choosing a method: the planner, its pilot runs and the error models it predicts with."""

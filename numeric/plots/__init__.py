@@ -1,0 +1,1 @@
+"""Figures: trajectories, energies, mode shapes, structural plots, animation and the HTML report."""
