@@ -318,7 +318,7 @@ class Model:
         the generalized forces :attr:`terms` on coordinate ``i`` (spring ``-k d``,
         cubic ``-k3 d³``, damper ``-c ḋ``, gravity ``m g``, forces, tables, ground),
         each traced to its scene entry. The result is the same SymPy expression as
-        differentiating ``L`` and ``R`` term by term (``tests/test_symbolic.py``
+        differentiating ``L`` and ``R`` term by term (``tests/symbolic/test_symbolic.py``
         checks it against a hand derivation) at a cost linear in the number of entries.
         """
         lhs = [m * a for m, a in zip(self.masses, self.a)]

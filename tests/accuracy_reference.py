@@ -1,7 +1,7 @@
 """Extended-precision references for the accurate-route tests, built from a scene's TOML text.
 
 Nothing here calls springchain: a scene is read with ``tomllib`` (the tests write numbers, parameter
-names and the few expression shapes listed in :func:`scene_text`), every parameter becomes an exact
+names and the few expression shapes listed in :func:`accuracy_scene_text`), every parameter becomes an exact
 binary fraction, and K, C, M are assembled element by element in mpmath (never summed in float64).
 Each reference is computed at ``dps`` and ``2·dps`` digits and the two must agree.
 """
@@ -23,7 +23,7 @@ def mpf(v) -> mpmath.mpf:
 
 
 # -- scene text ----------------------------------------------------------------------------------------
-def scene_text(name: str, masses: list[float], springs: list[tuple], dampers: list[tuple] = (), *,
+def accuracy_scene_text(name: str, masses: list[float], springs: list[tuple], dampers: list[tuple] = (), *,
                gravity: float | None = None, force: tuple | None = None, ground: tuple | None = None,
                rayleigh: tuple | None = None, modal: float | None = None, x0=None, v0=None,
                dt: float = 0.1, steps: int = 10) -> str:

@@ -15,7 +15,7 @@ import numpy as np
 from helpers import scene_toml
 
 
-def scene_text(name: str, masses: list[tuple[str, float]], stiff: list[tuple[str, float]],
+def modes_scene_text(name: str, masses: list[tuple[str, float]], stiff: list[tuple[str, float]],
                mass_of: list[str], springs: list[tuple[str, str, str]], x0=None, v0=None,
                dt: float = 0.01, steps: int = 10) -> str:
     """TOML of a scene: mass parameters, stiffness parameters, masses and springs.

@@ -12,7 +12,7 @@ Nothing here is a copy of the code's lists, so the reference pages cannot drift 
   no longer exists is caught.
 
 ``springchain_sphinx`` writes these as MyST pages when the site is built and reports every problem
-as a Sphinx warning (the docs build runs with ``-W``); the tests (``tests/test_docs_reference.py``)
+as a Sphinx warning (the docs build runs with ``-W``); the tests (``tests/project/test_docs_reference.py``)
 call the same functions without Sphinx. A key or command added to the code appears in the
 reference on the next build, marked "not described yet", and makes the build and the test fail
 until its meaning is written down. Nothing here needs Sphinx.

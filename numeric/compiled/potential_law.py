@@ -54,10 +54,14 @@ class CompiledLaw:
 
 
 def _absolute_imports(text: str, package: str) -> str:
-    """``from .x`` / ``from ..x`` of a module of ``package`` written as absolute imports."""
-    parent = package.rsplit(".", 1)[0]
-    text = re.sub(r"^(\s*)from \.\.(\w)", lambda m: f"{m.group(1)}from {parent}.{m.group(2)}", text, flags=re.M)
-    return re.sub(r"^(\s*)from \.(\w)", lambda m: f"{m.group(1)}from {package}.{m.group(2)}", text, flags=re.M)
+    """``from .x`` / ``from ..x`` / ``from ...x`` of a module of ``package`` written as absolute imports."""
+    parts = package.split(".")
+
+    def absolute(m: re.Match) -> str:
+        up = len(m.group(2)) - 1
+        return f"{m.group(1)}from {'.'.join(parts[:len(parts) - up])}.{m.group(3)}"
+
+    return re.sub(r"^(\s*)from (\.+)(\w)", absolute, text, flags=re.M)
 
 
 def law_source(module: ModuleType) -> str:

@@ -3,7 +3,7 @@
 The Matsuda–Ishii low-frequency law for a chain of springs k and independent random
 masses (mean m̄, variance σ²): inverse localisation length ``γ(ω) ≈ σ² ω² / (8 k m̄)``
 (H. Matsuda and K. Ishii, Prog. Theor. Phys. Suppl. 45, 56 (1970)). Its constant is
-checked against a transfer-matrix computation in tests/test_sweep.py.
+checked against a transfer-matrix computation in tests/sweep/test_sweep.py.
 """
 
 from __future__ import annotations
