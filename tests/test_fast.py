@@ -19,7 +19,7 @@ import numpy as np
 import pytest
 
 from helpers import chain_toml
-from springchain.numeric import fast
+from springchain.numeric.compiled import fast
 from springchain.numeric.errors import RunRefused
 
 ENDS = [("free", "free"), ("wall", "wall"), ("wall", "free"), ("free", "wall"), ("ring", "ring")]

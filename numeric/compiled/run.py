@@ -84,10 +84,9 @@ def min_evals(system: System, loop: str) -> float:
 
 
 def _force_loaded(system: System) -> bool:
-    from .cache import _BY_MODULE
+    from .cache import force_loaded
 
-    known = _BY_MODULE.get(id(system.module))
-    return bool(known and known[0] is system.module)
+    return force_loaded(system)
 
 
 def worth_compiling(system: System, loop: str, evals: float) -> bool:
@@ -109,7 +108,7 @@ def route(system: System, integrator: Integrator, frames: int, evals: float = fl
 
 def parameter_vector(system: System) -> np.ndarray:
     """The parameter values in the module's PARAMETERS order (``scalar_force``'s ``p``)."""
-    return np.array([float(system.params[q]) for q in system.module.PARAMETERS], dtype=np.float64)
+    return system.parameter_vector()
 
 
 def _half_flow(system: System, h: float) -> np.ndarray:
@@ -137,7 +136,7 @@ def run_steps(system: System, integrator: Integrator, name: str, x0: np.ndarray,
     xs, vs : ndarray, shape (F, N)
     """
     n = system.n
-    c = compiled(system.module)
+    c = compiled(system)
     x0 = np.ascontiguousarray(x0, dtype=np.float64).reshape(n)
     v0 = np.ascontiguousarray(v0, dtype=np.float64).reshape(n)
     rec = np.ascontiguousarray(rec, dtype=np.int64)
@@ -183,7 +182,7 @@ def dop853(system: System, x0: np.ndarray, v0: np.ndarray, t_end: float, rtol: f
         raise RunRefused("the compiled DOP853 needs a [masses] scene of at most 12 masses without tables",
                          quantity="method")
     n = system.n
-    c = compiled(system.module)
+    c = compiled(system)
     Ad = system.damping_rate_matrix()
     Ad = np.zeros((0, 0)) if Ad is None else np.ascontiguousarray(Ad, dtype=float)
     ts = np.empty(max(int(max_steps), 1))
@@ -216,7 +215,7 @@ def rkn(system: System, table, x0: np.ndarray, v0: np.ndarray, t_eval: np.ndarra
     from ..integrators.ivp import AdaptiveResult
 
     n = system.n
-    c = compiled(system.module)
+    c = compiled(system)
     tab = table.arrays
     t_eval = np.ascontiguousarray(t_eval, dtype=np.float64)
     xs = np.empty((t_eval.shape[0], n))

@@ -48,7 +48,7 @@ import numpy as np
 import scipy.fft
 
 from ...generated.contract import MAX_DENSE, End
-from ..system import interface
+from ..system import System, interface
 from ..errors import RunRefused
 from .modal import tsinc
 from .sine_transform import dst1
@@ -185,32 +185,42 @@ class ChainModal:
         if not facts.linear:
             raise RunRefused("no exact solution: this chain has cubic springs or spring potentials "
                              "(use an integrator, e.g. verlet)")
-        values = dict(facts.defaults)
-        values.update(params or {})
+        x0, v0 = _initial(x0, v0)
+        return cls.from_system(System.from_module(module, params, n=x0.shape[0]), x0, v0)
+
+    @classmethod
+    def from_system(cls, system: System, x0: np.ndarray, v0: np.ndarray) -> "ChainModal":
+        """The exact solution of a linear ``[chain]`` :class:`System` of len(x0) masses (see :meth:`from_module`)."""
+        if not system.chain:
+            raise RunRefused("ChainModal needs a [chain] scene's generated module; use numeric.exact.modal for others")
+        if not system.linear:
+            raise RunRefused("no exact solution: this chain has cubic springs or spring potentials "
+                             "(use an integrator, e.g. verlet)")
         x0, v0 = _initial(x0, v0)
         n = x0.shape[0]
-        if facts.has("mode_omega"):
-            return cls.transform(module.mode_omega(**values, n=n), facts.left, facts.right, x0, v0)
-        masses = np.asarray(module.masses(**values, n=n), dtype=float)
-        ks = np.asarray(module.spring_constants(**values, n=n), dtype=float)
+        system = system.with_n(n)
+        if system.has("mode_omega"):
+            left, right = system.ends
+            return cls.transform(system.mode_omega(), left, right, x0, v0)
         if n > MAX_FALLBACK:
             raise RunRefused(f"index-dependent chain of n = {n} masses: no closed-form modes, and the "
                              f"eigenvector fallback is limited to n <= {MAX_FALLBACK}; use method 'verlet'", quantity="method")
-        return cls._eigenvectors(module, facts, values, masses, ks, x0, v0)
+        return cls._eigenvectors(system, x0, v0)
 
     @classmethod
-    def _eigenvectors(cls, module, facts, values, masses, ks, x0, v0) -> "ChainModal":
+    def _eigenvectors(cls, system: System, x0, v0) -> "ChainModal":
+        masses, ends, ks = system.masses, system.spring_ends, system.stiffness
         n = masses.shape[0]
         r = np.sqrt(masses)
-        if facts.left is End.RING:
+        if system.ends[0] is End.RING:
             from ..modes.spectrum import spectrum
 
-            spec = spectrum(masses, module.spring_ends(n=n), ks)
+            spec = spectrum(masses, ends, ks)
             omega, E = spec.omega, spec.vectors
         else:  # the bidiagonal spring factor: ω by bisection (the printed values), vectors by dbdsqr
             from ..modes.chain import chain_spectrum
 
-            spec = chain_spectrum(masses, module.spring_ends(n=n), ks)
+            spec = chain_spectrum(masses, ends, ks)
             omega, E = spec.omega, spec.vectors
         shape = (-1,) + (1,) * (x0.ndim - 1)
         rr = r.reshape(shape)

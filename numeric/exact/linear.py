@@ -186,7 +186,6 @@ class AugmentedLinear:
         from .equilibrium import equilibrium
         from ..modes.spectrum import spectrum
 
-        mod, p = system.module, system.params
         n = system.n
         m = system.masses
         el = Elements.from_system(system)
@@ -197,19 +196,18 @@ class AugmentedLinear:
         omegas, fc, fs = np.zeros(0), np.zeros((0, n)), np.zeros((0, n))
         loads = []  # constant forces, kept apart (their signs are summed separately)
         if system.has("gravity_forces"):
-            loads.append(np.asarray(mod.gravity_forces(**p), dtype=float))
+            loads.append(system.gravity_forces())
         if system.has("external_acceleration"):
             if not system.harmonic_forcing:
                 raise ValueError("external forces are not constant + harmonic: no exact solution")
-            omegas, fc, fs, c0 = (np.asarray(a, dtype=float) for a in mod.forcing_harmonics(**p))
+            omegas, fc, fs, c0 = system.forcing_harmonics()
             loads.append(c0)
         if system.ground == "expression":  # every mass feels -m_i a_g(t): acceleration -a_g(t)
-            wg, gc, gs, g0 = mod.ground_harmonics(**p)
-            wg = np.asarray(wg, dtype=float)
+            wg, gc, gs, g0 = system.ground_harmonics()
             omegas = np.concatenate([omegas, wg])
-            fc = np.vstack([fc, -np.outer(np.asarray(gc, dtype=float), m)])
-            fs = np.vstack([fs, -np.outer(np.asarray(gs, dtype=float), m)])
-            loads.append(-float(g0) * m)
+            fc = np.vstack([fc, -np.outer(gc, m)])
+            fs = np.vstack([fs, -np.outer(gs, m)])
+            loads.append(-g0 * m)
         static = equilibrium(m, system.spring_ends, system.stiffness, loads) if loads else None
         inputs = []
         for (tt, ff), on in zip(system.tables, system.provided.table_force_on):
@@ -502,10 +500,9 @@ def frequency_response(system: System, drive: np.ndarray, force: np.ndarray) -> 
     -------
     ndarray, shape (W, N), complex (inf where an undamped mode is hit exactly)
     """
-    mod, p = system.module, system.params
-    K = np.asarray(mod.stiffness_matrix(**p), dtype=float)
+    K = system.stiffness_matrix()
     M = np.diag(system.masses)
-    C = np.asarray(mod.damping_matrix(**p), dtype=float) if system.damped else 0 * K
+    C = system.damping_matrix() if system.damped else 0 * K
     Z = K[None] - (drive**2)[:, None, None] * M[None] + 1j * drive[:, None, None] * C[None]
     with np.errstate(all="ignore"):
         return np.linalg.solve(Z, np.broadcast_to(force.astype(complex), (drive.shape[0], force.shape[0]))[..., None])[..., 0]

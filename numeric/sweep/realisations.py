@@ -34,7 +34,8 @@ import scipy.linalg
 
 from .distributions import Dist
 from ..errors import RunRefused
-from ..system import interface
+from ..system import System, interface
+from ...generated.contract import Ground
 
 _MODULES: dict[str, types.ModuleType] = {}
 
@@ -94,13 +95,25 @@ def _import_generated(source: str, key: str) -> types.ModuleType:
     return mod
 
 
+def system_of(source: str, params: dict[str, float]) -> System:
+    """The generated module of ``source`` (:func:`module_of`) bound to ``params``.
+
+    A sweep draws masses and springs only: a scene's force or ground tables never enter a realisation,
+    so they are bound as empty stand-ins (one sample at t = 0) to satisfy :meth:`System.from_module`.
+    """
+    mod = module_of(source)
+    facts = interface(mod)
+    blank = (np.zeros(1), np.zeros(1))
+    return System.from_module(mod, params, tables=tuple(blank for _ in facts.table_force_on),
+                              ground_table=blank if facts.ground is Ground.TABLE else None)
+
+
 def _describe(dist_owner: str, dist: Dist) -> str:
     return f"{dist_owner}={dist.text}"
 
 
 def realise(spec: SweepSpec, s: int):
     """Sample ``s``: (varied values dict, masses, spring_ends, stiffness)."""
-    mod = module_of(spec.source)
     rng = np.random.default_rng(np.random.SeedSequence(spec.seed, spawn_key=(int(s),)))
     params = dict(spec.params)
     varied = {}
@@ -111,16 +124,8 @@ def realise(spec: SweepSpec, s: int):
         value = float(dist.grid_values()[idx.pop(0)]) if dist.is_grid else float(dist.draw(rng))
         params[name] = value
         varied[name] = value
-    facts = interface(mod)
-    if facts.chain:
-        n = facts.n
-        masses = np.array(mod.masses(**params, n=n), dtype=float)
-        ends = np.asarray(mod.spring_ends(n), dtype=np.intp).reshape(-1, 2)
-        k = np.array(mod.spring_constants(**params, n=n), dtype=float)
-    else:
-        masses = np.array(mod.masses(**params), dtype=float)
-        ends = np.asarray(mod.SPRING_ENDS, dtype=np.intp).reshape(-1, 2)
-        k = np.array(mod.spring_constants(**params), dtype=float)
+    system = system_of(spec.source, params)
+    masses, ends, k = system.masses.copy(), system.spring_ends, system.stiffness.copy()
     for what, dist in spec.disorder:
         target = masses if what == "mass" else k
         factors = dist.draw(rng, target.shape[0])
@@ -238,8 +243,7 @@ def compute_batch(spec: SweepSpec, start: int, stop: int) -> dict:
     """Samples ``start ... stop-1``: a dict of columns (NumPy arrays; list columns as 2-D arrays)."""
     from threadpoolctl import threadpool_limits
 
-    mod = module_of(spec.source)
-    facts = interface(mod)
+    facts = interface(module_of(spec.source))
     chain = facts.chain
     rigid = facts.rigid_modes if chain else 0
     names = [n for n, _ in spec.vary]
@@ -267,4 +271,4 @@ def compute_batch(spec: SweepSpec, start: int, stop: int) -> dict:
     return out
 
 
-__all__ = ["SweepSpec", "realise", "compute_batch", "solve_chain", "lyapunov", "module_of", "chain_bands"]
+__all__ = ["SweepSpec", "realise", "compute_batch", "solve_chain", "lyapunov", "module_of", "system_of", "chain_bands"]
