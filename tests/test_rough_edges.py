@@ -262,9 +262,9 @@ def test_numba_compile_note(monkeypatch, capsys):
 
     if not fast_kernels.available():
         pytest.skip("numba not installed")
-    fast_kernels._compiled.cache_clear()
+    fast_kernels.compiled_kernels.cache_clear()
     monkeypatch.setattr(fast_kernels, "_numba_cache_present", lambda: False)
-    fast_kernels._compiled()
+    fast_kernels.compiled_kernels()
     assert fast_kernels.COMPILE_NOTE in capsys.readouterr().err
 
 

@@ -15,7 +15,7 @@ import pytest
 
 import springchain
 from springchain.cli import main
-from springchain.numeric import sweep_driver
+from springchain.numeric.sweep import driver as sweep_driver
 from springchain.numeric.sweep.distributions import Dist, parse, parse_assignment
 from springchain.numeric.errors import RunRefused
 from springchain.numeric.sweep.realisations import SweepSpec, compute_batch

@@ -190,6 +190,11 @@ def force_loaded(system: System) -> bool:
     return system.per_module(PER_MODULE_KEY) is not None
 
 
+def compile_seconds() -> float:
+    """Seconds this process spent compiling (or loading) compiled loops, over all modules."""
+    return sum(c.compile_seconds for c in _LOADED.values())
+
+
 def _load_force(text: str) -> Compiled:
     key = hashlib.sha256(text.encode()).hexdigest()[:20]
     if key not in _LOADED:
@@ -233,5 +238,5 @@ def timed_first_call(c: Compiled, name: str, *args):
     return disp(*args)
 
 
-__all__ = ["Compiled", "FORCE_SIGNATURE", "compiled", "available", "cache_root", "load_text", "loops_module",
+__all__ = ["Compiled", "FORCE_SIGNATURE", "PER_MODULE_KEY", "compiled", "compile_seconds", "force_loaded", "available", "cache_root", "load_text", "loops_module",
            "loop_on_hand", "loops_source", "source_of", "timed_first_call"]

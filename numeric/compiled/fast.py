@@ -47,7 +47,7 @@ from ...generated.contract import End
 from ..system import System, interface
 from ..errors import RunRefused
 from .fast_coefficients import ChainCoefficients
-from .fast_kernels import BLOCK_ELEMENTS, _compiled, _Mode, available, stream_update
+from .fast_kernels import BLOCK_ELEMENTS, compiled_kernels, SweepMode, available, stream_update
 
 
 class Backend(enum.Enum):
@@ -138,7 +138,7 @@ class FusedVerlet:
 
     def _kernels(self):
         law = self.coefficients.law
-        k = _compiled() if law is None else law.kernels
+        k = compiled_kernels() if law is None else law.kernels
         return k.force, k.sweep, k.half_kick
 
     # -- building blocks ------------------------------------------------------------------
@@ -191,7 +191,7 @@ class FusedVerlet:
             xo, vo, ao = np.empty_like(x), np.empty_like(v), np.empty_like(a)
             xof, vof, aof = xo.reshape(-1), vo.reshape(-1), ao.reshape(-1)
         self._kernels()[1](xf, vf, af, xof, vof, aof, inplace, nb, *self.coefficients.kernel_args(), h,
-                           int(_Mode.VERLET), 1, False)
+                           int(SweepMode.VERLET), 1, False)
         return xo, vo, ao
 
     def advance(self, x: np.ndarray, v: np.ndarray, a: np.ndarray, steps: int, *,
@@ -223,7 +223,7 @@ class FusedVerlet:
         force, sweep, half_kick = self._kernels()
         args = self.coefficients.kernel_args()
         half_kick(vf, af, 0.5 * h)
-        sweep(xf, vf, af, xf, vf, af, True, nb, *args, h, int(_Mode.LEAPFROG), steps, bool(two_step_sweeps))
+        sweep(xf, vf, af, xf, vf, af, True, nb, *args, h, int(SweepMode.LEAPFROG), steps, bool(two_step_sweeps))
         force(xf, af, nb, *args)
         half_kick(vf, af, -0.5 * h)
         return x, v, a

@@ -103,7 +103,7 @@ def _load_law(text: str) -> tuple:
         from .cache import load_text
 
         law_file, path = load_text(text, f"law_{key}")
-        _LAWS[key] = (law_file._compiled(), str(path))
+        _LAWS[key] = (law_file.compiled_kernels(), str(path))
     return _LAWS[key]
 
 

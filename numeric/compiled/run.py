@@ -17,7 +17,7 @@ from ..integrators.splitting import SplittingMethod
 from ..integrators.verlet import VelocityVerlet
 from ..integrators.verlet_compensated import CompensatedVerlet
 from ..system import System
-from .cache import available, compiled, timed_first_call
+from .cache import available, compile_seconds, compiled, force_loaded, loop_on_hand, timed_first_call
 
 #: Frames × masses kept in memory by one compiled run (beyond it the NumPy driver streams).
 MAX_FRAME_VALUES = 50_000_000
@@ -67,32 +67,22 @@ def eager(enabled: bool = True):
 def ready(system: System, loop: str) -> bool:
     """Whether a run of ``loop`` on ``system`` compiles nothing: the system's force is loaded in this process
     and the loop is loaded or in numba's disk cache (:func:`.cache.loop_on_hand`)."""
-    from .cache import loop_on_hand
-
-    return _force_loaded(system) and loop_on_hand(loop)
+    return force_loaded(system) and loop_on_hand(loop)
 
 
 def min_evals(system: System, loop: str) -> float:
     """Force evaluations from which a run of ``loop`` on ``system`` takes the compiled loop: 0 when nothing
     must compile (:func:`ready`); :data:`FORCE_MIN_EVALS` when only the force must (the loop is loaded or
     on disk); else :data:`COMPILE_MIN_EVALS` (within :func:`eager`: 0)."""
-    from .cache import loop_on_hand
-
     if not loop_on_hand(loop):
         return float(COMPILE_MIN_EVALS)
-    return 0.0 if _force_loaded(system) else float(min(COMPILE_MIN_EVALS, FORCE_MIN_EVALS))
-
-
-def _force_loaded(system: System) -> bool:
-    from .cache import force_loaded
-
-    return force_loaded(system)
+    return 0.0 if force_loaded(system) else float(min(COMPILE_MIN_EVALS, FORCE_MIN_EVALS))
 
 
 def worth_compiling(system: System, loop: str, evals: float) -> bool:
     """Take the compiled loop for a run of ``evals`` force evaluations (:func:`min_evals`). A run shorter
     than both thresholds on a system whose force is not loaded is refused first, without importing numba."""
-    if evals < min(COMPILE_MIN_EVALS, FORCE_MIN_EVALS) and not _force_loaded(system):
+    if evals < min(COMPILE_MIN_EVALS, FORCE_MIN_EVALS) and not force_loaded(system):
         return False
     return evals >= min_evals(system, loop)
 
@@ -155,13 +145,6 @@ def run_steps(system: System, integrator: Integrator, name: str, x0: np.ndarray,
         args += (np.zeros((0, 0)),)
     timed_first_call(c, name, *args)
     return xs, vs
-
-
-def compile_seconds() -> float:
-    """Seconds this process spent compiling (or loading) compiled loops, over all modules."""
-    from .cache import _LOADED
-
-    return sum(c.compile_seconds for c in _LOADED.values())
 
 
 def dop853(system: System, x0: np.ndarray, v0: np.ndarray, t_end: float, rtol: float, atol: float,

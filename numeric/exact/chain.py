@@ -72,7 +72,7 @@ class Basis(enum.Enum):
         return self is not Basis.EIGENVECTORS
 
 
-def _basis_of(left: End, right: End) -> Basis:
+def basis_of(left: End, right: End) -> Basis:
     """The transform that diagonalises a uniform chain with these ends (free–wall: reversed wall–free)."""
     if left is End.RING:
         return Basis.FFT
@@ -83,7 +83,7 @@ def _basis_of(left: End, right: End) -> Basis:
     return Basis.DST_ODD
 
 
-def _forward(basis: Basis, x: np.ndarray) -> np.ndarray:
+def forward_transform(basis: Basis, x: np.ndarray) -> np.ndarray:
     """Modal coordinates of x (axis 0)."""
     n = x.shape[0]
     if basis is Basis.DCT:
@@ -162,13 +162,13 @@ class ChainModal:
         omega = np.asarray(mode_omega, dtype=float)
         if omega.shape != (n,):
             raise ValueError(f"mode_omega: need shape ({n},), got {omega.shape}")
-        basis = _basis_of(left, right)
+        basis = basis_of(left, right)
         if basis is Basis.FFT:
             omega = omega[: n // 2 + 1]  # one frequency per rFFT coefficient (j and n - j coincide)
         reverse = left is End.FREE and right is End.WALL
         if reverse:
             x0, v0 = x0[::-1], v0[::-1]
-        return cls(basis, n, omega, _forward(basis, x0), _forward(basis, v0), reverse)
+        return cls(basis, n, omega, forward_transform(basis, x0), forward_transform(basis, v0), reverse)
 
     @classmethod
     def from_module(cls, module: ModuleType, params: dict[str, float] | None, x0: np.ndarray,

@@ -57,7 +57,7 @@ EIG_COND = 1e3
 STIFF_DAMPING = 1e-13
 #: Largest state (2N + 2H + 1) decomposed in mpmath, and its working precision.
 MP_MAX_STATES = 64
-#: Largest state whose every eigenpair is refined (:func:`_refine_small`): beside the slow ones, the
+#: Largest state whose every eigenpair is refined (:func:`refine_small`): beside the slow ones, the
 #: eigenvectors of weakly damped modes near the forcing's frequencies (2.9e-9 of the amplitude on a
 #: 4-mass scene with gravity, a force and ground motion at 1e10 mass contrast; 1.4e-13 refined).
 REFINE_ALL_STATES = 16
@@ -89,7 +89,7 @@ def _phi(z: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 SNAP = 1e-13
 
 
-def _refine_small(A: np.ndarray, lam: np.ndarray, V: np.ndarray, threshold: float = STIFF_DAMPING) -> tuple[np.ndarray, np.ndarray]:
+def refine_small(A: np.ndarray, lam: np.ndarray, V: np.ndarray, threshold: float = STIFF_DAMPING) -> tuple[np.ndarray, np.ndarray]:
     """Eigenpairs of A whose float64 eigenvalue errs by more than ``threshold`` of itself (LAPACK's
     error is ε·‖A‖, so these are the slow ones: |λ| < ε‖A‖/threshold; every pair for a negative
     threshold), refined by
@@ -342,7 +342,7 @@ class AugmentedLinear:
                 V = np.array([[complex(Vm[i, j]) for j in range(size)] for i in range(size)])
                 return lam, V, np.array([[complex(Wm[i, j]) for j in range(size)] for i in range(size)])
         if self.A.shape[0] <= MP_MAX_STATES:  # every pair of a small state, the slow ones up to MP_MAX_STATES
-            lam, V = _refine_small(self.A, lam, V, -1.0 if self.A.shape[0] <= REFINE_ALL_STATES else STIFF_DAMPING)
+            lam, V = refine_small(self.A, lam, V, -1.0 if self.A.shape[0] <= REFINE_ALL_STATES else STIFF_DAMPING)
         return lam, V, np.linalg.inv(V)
 
     @cached_property

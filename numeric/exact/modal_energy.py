@@ -26,7 +26,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ...generated.contract import MAX_DENSE, End
-from .chain import Basis, _basis_of, _forward
+from .chain import Basis, basis_of, forward_transform
 from ..errors import RunRefused
 from ..system import System
 
@@ -64,7 +64,7 @@ class ModalEnergy:
         sqrt_m = np.sqrt(system.masses)
         if system.chain and system.uniform and system.has("mode_omega"):
             left, right = system.ends
-            basis = _basis_of(left, right)
+            basis = basis_of(left, right)
             omega_index = system.mode_omega()
             if basis is Basis.FFT:  # real coefficients: cos_j (j = 0 … n/2) then sin_j (0 < j < n/2)
                 j = np.arange(n // 2 + 1)
@@ -88,7 +88,7 @@ class ModalEnergy:
             return np.tensordot(self.vectors.T, y, axes=1)
         if self.reverse:
             y = y[::-1]
-        c = _forward(self.basis, y)
+        c = forward_transform(self.basis, y)
         if self.basis is Basis.FFT:
             n = y.shape[0]
             scale = np.full(n // 2 + 1, np.sqrt(2.0 / n))

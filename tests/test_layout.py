@@ -1,0 +1,208 @@
+"""The source tree's layout rules, read with :mod:`ast` (nothing is imported but the contract's list).
+
+**Only ``numeric/system.py`` touches a generated module.** "Touch" means: call one of its functions or
+read one of its attributes. Everywhere else in ``springchain/``, ``derive/`` and ``numeric/`` (the
+contract's own reader ``generated/contract.py``, which :func:`numeric.system.interface` calls, excepted):
+
+1. no attribute read ``X.module`` on anything: ``module`` is the :class:`~numeric.system.System` field
+   that holds the generated module, and no other object of the project has an attribute of that name
+   (the compiled force file is ``Compiled.kernels``);
+2. no attribute read, ``getattr`` or ``hasattr`` on a *name bound to a module* — a parameter annotated
+   ``ModuleType``, a parameter or assigned name spelt ``module`` or ``mod`` (the project's names for a
+   generated module), or a name assigned from a loader (``load_module``, ``bundled_module``,
+   ``module_of``, ``import_file``, ``importlib.import_module``), also as the first item of a tuple — of a
+   contract item (:data:`springchain.generated.contract.ITEMS`), ``__file__``, or a private name a
+   checked-in generated module binds at its top level (its helpers, e.g. ``_scalar_force_terms``);
+3. no import of a generated scene module (``springchain.generated.<scene>``; the contract is not one).
+
+A module may be *held* (loaded, passed on, handed to ``System.from_module`` or ``interface``): that
+touches nothing.
+
+**No private name crosses a module boundary**: no ``from M import _name`` where ``M`` is another
+module of the project (``_name`` a function, class or constant; dunders such as ``__version__``
+allowed; importing a private *module* such as ``springchain._api`` is not a private name).
+"""
+
+from __future__ import annotations
+
+import ast
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parent.parent
+#: Folder -> package, as pyproject.toml installs them.
+PACKAGES = {"springchain": "springchain", "derive": "springchain.derive", "numeric": "springchain.numeric",
+            "generated": "springchain.generated"}
+#: The one reader of generated modules, and the contract's own reader that it calls.
+READERS = {ROOT / "numeric" / "system.py", ROOT / "generated" / "contract.py"}
+#: The project's names for a generated module.
+MODULE_NAMES = {"module", "mod"}
+#: Calls that return a generated module (or ``(module, origin)``).
+LOADERS = {"load_module", "bundled_module", "module_of", "import_file", "_import_file", "import_module"}
+
+
+def _files() -> dict[str, Path]:
+    """Dotted name -> path of every project module (generated scene modules included)."""
+    out = {}
+    for folder, package in PACKAGES.items():
+        for path in sorted((ROOT / folder).rglob("*.py")):
+            parts = list(path.relative_to(ROOT / folder).with_suffix("").parts)
+            if parts[-1] == "__init__":
+                parts = parts[:-1]
+            out[".".join([package, *parts])] = path
+    return out
+
+
+FILES = _files()
+GENERATED = {name for name, path in FILES.items() if path.parent == ROOT / "generated"
+             and path.stem not in ("__init__", "contract")}
+
+
+def _generated_private_names() -> set[str]:
+    """Private (single underscore) names bound at the top level of the checked-in generated modules."""
+    out = set()
+    for name in GENERATED:
+        for node in ast.parse(FILES[name].read_text(encoding="utf-8")).body:
+            if isinstance(node, (ast.FunctionDef, ast.ClassDef)):
+                out.add(node.name)
+            elif isinstance(node, ast.Assign):
+                out |= {t.id for t in node.targets if isinstance(t, ast.Name)}
+    return {n for n in out if n.startswith("_") and not n.startswith("__")}
+
+
+def _forbidden() -> set[str]:
+    from springchain.generated import contract
+
+    return {item.name for item in contract.ITEMS} | {"__file__"} | _generated_private_names()
+
+
+def _is_module_annotation(node: ast.AST | None) -> bool:
+    return node is not None and "ModuleType" in ast.unparse(node)
+
+
+def _loader_call(value: ast.AST) -> bool:
+    if isinstance(value, ast.Subscript):  # load_module(scene)[0]
+        value = value.value
+    if not isinstance(value, ast.Call):
+        return False
+    f = value.func
+    return (isinstance(f, ast.Name) and f.id in LOADERS) or (isinstance(f, ast.Attribute) and f.attr in LOADERS)
+
+
+def _module_names(scope: ast.AST) -> set[str]:
+    """Names bound to a module in one function (or a module body): see the module docstring, rule 2."""
+    names = set(MODULE_NAMES)
+    if isinstance(scope, (ast.FunctionDef, ast.AsyncFunctionDef, ast.Lambda)):
+        a = scope.args
+        for arg in a.posonlyargs + a.args + a.kwonlyargs:
+            if _is_module_annotation(arg.annotation):
+                names.add(arg.arg)
+    for node in ast.walk(scope):
+        if isinstance(node, ast.Assign) and _loader_call(node.value):
+            for t in node.targets:
+                if isinstance(t, ast.Name):
+                    names.add(t.id)
+                elif isinstance(t, ast.Tuple) and t.elts and isinstance(t.elts[0], ast.Name):
+                    names.add(t.elts[0].id)
+        elif isinstance(node, ast.AnnAssign) and isinstance(node.target, ast.Name) \
+                and _is_module_annotation(node.annotation):
+            names.add(node.target.id)
+    return names
+
+
+def _touches(path: Path, forbidden: set[str], root: Path = ROOT) -> list[str]:
+    """Every access to a generated module in one source file (rules 1-3), as ``path:line: what``."""
+    tree = ast.parse(path.read_text(encoding="utf-8"))
+    rel = path.relative_to(root)
+    out = []
+    scopes = [tree] + [n for n in ast.walk(tree) if isinstance(n, (ast.FunctionDef, ast.AsyncFunctionDef))]
+    for scope in scopes:
+        bound = _module_names(scope)
+        for node in ast.walk(scope):
+            if isinstance(node, ast.Attribute) and isinstance(node.ctx, ast.Load):
+                if node.attr == "module":
+                    out.append(f"{rel}:{node.lineno}: {ast.unparse(node)} (rule 1)")
+                elif isinstance(node.value, ast.Name) and node.value.id in bound and node.attr in forbidden:
+                    out.append(f"{rel}:{node.lineno}: {ast.unparse(node)} (rule 2)")
+            elif isinstance(node, ast.Call) and isinstance(node.func, ast.Name) \
+                    and node.func.id in ("getattr", "hasattr") and len(node.args) >= 2 \
+                    and isinstance(node.args[0], ast.Name) and node.args[0].id in bound:
+                key = node.args[1]
+                if not (isinstance(key, ast.Constant) and key.value not in forbidden):
+                    out.append(f"{rel}:{node.lineno}: {ast.unparse(node)} (rule 2)")
+    for node in ast.walk(tree):
+        if isinstance(node, ast.ImportFrom):
+            mods = [node.module or ""] + [f"{node.module or ''}.{a.name}" for a in node.names]
+        elif isinstance(node, ast.Import):
+            mods = [a.name for a in node.names]
+        else:
+            continue
+        for m in mods:
+            if any(m == g or m.endswith("generated." + g.rsplit(".", 1)[1]) for g in GENERATED):
+                out.append(f"{rel}:{node.lineno}: imports {m} (rule 3)")
+    return sorted(set(out))
+
+
+def _checked() -> list[Path]:
+    return [path for name, path in FILES.items() if name not in GENERATED and path not in READERS]
+
+
+def test_only_system_touches_a_generated_module():
+    forbidden = _forbidden()
+    assert {"masses", "damping_matrix", "PARAMETERS", "SCENE", "DEFAULTS", "SPRING_ENDS", "DAMPER_ENDS",
+            "__file__", "_scalar_force_terms"} <= forbidden
+    bad = [line for path in _checked() for line in _touches(path, forbidden)]
+    assert not bad, "generated modules touched outside numeric/system.py (ask the System):\n" + "\n".join(bad)
+
+
+def test_the_rule_catches_what_it_names(tmp_path):
+    """The reader is not vacuous: each rule fires on a file that breaks it, and not on one that holds a
+    module only."""
+    forbidden = _forbidden()
+    broken = tmp_path / "broken.py"
+    broken.write_text(
+        "from types import ModuleType\nfrom springchain.generated import duffing\n\n"
+        "def a(system):\n    return system.module.masses(**system.params)\n\n"
+        "def b(gen: ModuleType, p):\n    return gen.damping_matrix(**p)\n\n"
+        "def c(scene):\n    m, _ = load_module(scene)\n    return m.PARAMETERS, getattr(m, 'SCENE')\n\n"
+        "def d(mod):\n    return mod.__file__, mod._scalar_force_terms\n", encoding="utf-8")
+    held = tmp_path / "held.py"
+    held.write_text("def e(scene):\n    module, origin = load_module(scene)\n"
+                    "    return System.from_module(module, scene.parameters), interface(module).n\n",
+                    encoding="utf-8")
+    found = _touches(broken, forbidden, tmp_path)
+    assert _touches(held, forbidden, tmp_path) == []
+    rules = [line.rsplit("(", 1)[1] for line in found]
+    assert rules.count("rule 1)") == 1 and rules.count("rule 2)") == 5 and rules.count("rule 3)") >= 1, found
+
+
+# -- no private name imported across modules --------------------------------------------------------
+def _private_imports() -> list[str]:
+    """``from M import _name`` where M is another project module (see the module docstring)."""
+    out = []
+    for name, path in FILES.items():
+        if name in GENERATED:
+            continue
+        package = name if path.name == "__init__.py" else name.rpartition(".")[0]
+        for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+            if not isinstance(node, ast.ImportFrom):
+                continue
+            if node.level:
+                base = package.split(".")[: len(package.split(".")) - (node.level - 1)]
+                target = ".".join(base + ([node.module] if node.module else []))
+            else:
+                target = node.module or ""
+            if not target.startswith("springchain"):
+                continue
+            for a in node.names:
+                private = a.name.startswith("_") and not (a.name.startswith("__") and a.name.endswith("__"))
+                if private and f"{target}.{a.name}" not in FILES and target != name:
+                    out.append(f"{path.relative_to(ROOT)}:{node.lineno}: from {target} import {a.name}")
+    return sorted(out)
+
+
+def test_no_private_name_crosses_a_module_boundary():
+    bad = _private_imports()
+    assert not bad, "private names imported from another module (make them public or move them):\n" + \
+        "\n".join(bad)
