@@ -20,17 +20,16 @@ from __future__ import annotations
 
 import functools
 import hashlib
-import importlib.util
 import inspect
 import os
-import sys
-import tempfile
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
 from types import ModuleType
 
 from ...generated.contract import SCALAR_HELPERS
+from ..io.files import atomic_write_text
+from ..io.imports import import_file
 from ..system import System
 from . import implicit_loops as _implicit
 from . import loops as _template
@@ -210,20 +209,10 @@ def load_text(text: str, stem: str) -> tuple[ModuleType, Path]:
 
     ``stem`` must name the text's content (a hash of it): a file is never rewritten.
     """
-    root = cache_root()
-    root.mkdir(parents=True, exist_ok=True)
-    path = root / f"{stem}.py"
+    path = cache_root() / f"{stem}.py"
     if not path.exists():
-        fd, tmp = tempfile.mkstemp(dir=root, suffix=".tmp")
-        with os.fdopen(fd, "w") as fh:
-            fh.write(text)
-        os.replace(tmp, path)
-    name = f"_springchain_compiled_{stem}"
-    spec = importlib.util.spec_from_file_location(name, path)
-    mod = importlib.util.module_from_spec(spec)
-    sys.modules[name] = mod
-    spec.loader.exec_module(mod)
-    return mod, path
+        atomic_write_text(path, text)
+    return import_file(path, f"_springchain_compiled_{stem}", register=True), path
 
 
 def timed_first_call(c: Compiled, name: str, *args):

@@ -78,21 +78,17 @@ def module_of(source: str) -> types.ModuleType:
 def _import_generated(source: str, key: str) -> types.ModuleType:
     """Import generated source through a content-addressed file (written atomically once per machine),
     so a worker on another host loads the very module the client derived, by the import system."""
-    import importlib.util
     import tempfile
     from pathlib import Path
 
     from ..io.files import atomic_write_text
+    from ..io.imports import import_file
 
     path = Path(tempfile.gettempdir()) / f"springchain-sweep-{os.getuid() if hasattr(os, 'getuid') else 0}" / f"m_{key[:32]}.py"
     if not path.exists() or hashlib.sha256(path.read_bytes()).hexdigest() != key:
         path.parent.mkdir(mode=0o700, parents=True, exist_ok=True)
         atomic_write_text(path, source)
-    name = f"springchain_sweep_{key[:12]}"
-    spec = importlib.util.spec_from_file_location(name, path)
-    mod = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(mod)
-    return mod
+    return import_file(path, f"springchain_sweep_{key[:12]}")
 
 
 def system_of(source: str, params: dict[str, float]) -> System:
