@@ -206,3 +206,47 @@ def test_no_private_name_crosses_a_module_boundary():
     bad = _private_imports()
     assert not bad, "private names imported from another module (make them public or move them):\n" + \
         "\n".join(bad)
+
+
+# -- each fact once ------------------------------------------------------------------------------------
+#: Calls that only the one import-from-path and the one atomic write make.
+ONE_PLACE = {"spec_from_file_location": ROOT / "numeric" / "io" / "imports.py",
+             "mkstemp": ROOT / "numeric" / "io" / "files.py", "replace": ROOT / "numeric" / "io" / "files.py",
+             "rename": ROOT / "numeric" / "io" / "files.py"}
+
+
+def test_one_import_from_path_and_one_atomic_write():
+    """``importlib.util.spec_from_file_location`` only in ``numeric/io/imports.py``; ``tempfile.mkstemp``
+    and ``os.replace``/``os.rename`` only in ``numeric/io/files.py`` (everyone else calls them)."""
+    bad = []
+    for name, path in FILES.items():
+        if name in GENERATED:
+            continue
+        for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+            if isinstance(node, ast.Call) and isinstance(node.func, ast.Attribute):
+                f = node.func
+                owner = ast.unparse(f.value)
+                if f.attr in ONE_PLACE and (f.attr not in ("replace", "rename") or owner == "os") \
+                        and path != ONE_PLACE[f.attr]:
+                    bad.append(f"{path.relative_to(ROOT)}:{node.lineno}: {ast.unparse(f)}")
+    assert not bad, "\n".join(bad)
+
+
+def test_the_integrator_list_is_the_registry():
+    """The package :mod:`numeric.integrators` exports every integrator of the registry's table (and the
+    names it exported before), and the horizon study's methods are read from the table."""
+    import springchain.numeric.integrators as integrators
+    from springchain.numeric.bench import workprecision
+    from springchain.numeric.run import registry
+
+    before = {"Integrator", "Problem", "State", "LinearChain", "VelocityVerlet", "CompensatedVerlet", "Yoshida4",
+              "BlanesMoan4", "BlanesMoan6", "KahanLi8", "RK4", "MatrixExponential", "ChebyshevPropagator",
+              "AdaptiveMethod", "AdaptiveResult", "RK45", "DOP853", "LSODA", "DPRKN6", "DPRKN8", "DPRKN12"}
+    assert before <= set(integrators.__all__)
+    for name in registry.names():
+        cls = registry.implementation(name)
+        if cls.__module__.startswith("springchain.numeric.integrators."):
+            assert getattr(integrators, cls.__name__) is cls, name
+    assert all(getattr(integrators, n) is not None for n in integrators.__all__)
+    assert workprecision.HORIZON_METHODS == ("verlet", "yoshida4", "blanes-moan4", "blanes-moan6", "kahan-li8",
+                                             "rk4")

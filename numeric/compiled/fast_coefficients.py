@@ -65,9 +65,9 @@ class ChainCoefficients:
         module : module
             A generated chain module (``CHAIN = True``).
         params : dict, optional
-            Parameter values overriding ``module.DEFAULTS``.
+            Parameter values overriding the module's defaults.
         n : int, optional
-            Number of masses (default ``module.N``).
+            Number of masses (default the module's N).
         """
         if n is not None and int(n) < 1:
             raise ValueError(f"a chain needs n >= 1 masses, got {n}")
