@@ -250,3 +250,98 @@ def test_the_integrator_list_is_the_registry():
     assert all(getattr(integrators, n) is not None for n in integrators.__all__)
     assert workprecision.HORIZON_METHODS == ("verlet", "yoshida4", "blanes-moan4", "blanes-moan6", "kahan-li8",
                                              "rk4")
+
+
+# -- no import circle at import time -------------------------------------------------------------------
+def _run_at_import(node: ast.AST):
+    """The nodes under ``node`` that run when the module is imported (not inside a function's body)."""
+    if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef, ast.Lambda)):
+        return
+    yield node
+    for child in ast.iter_child_nodes(node):
+        if not isinstance(child, (ast.FunctionDef, ast.AsyncFunctionDef, ast.Lambda)):
+            yield from _run_at_import(child)
+
+
+def _import_time_graph() -> dict[str, set[str]]:
+    """Module -> the project modules its module-level imports run (``TYPE_CHECKING`` blocks left out),
+    with the packages on the way: importing ``a.b.c`` runs ``a/__init__`` and ``a/b/__init__`` first.
+    (tests/test_imports.py checks the graph of every import, functions included, without package edges.)"""
+    graph = {}
+    for name, path in FILES.items():
+        tree = ast.parse(path.read_text(encoding="utf-8"))
+        package = name if path.name == "__init__.py" else name.rpartition(".")[0]
+        targets: set[str] = set()
+        for statement in tree.body:
+            if isinstance(statement, ast.If) and "TYPE_CHECKING" in ast.unparse(statement.test):
+                continue
+            for node in _run_at_import(statement):
+                if isinstance(node, ast.Import):
+                    found = [a.name for a in node.names]
+                elif isinstance(node, ast.ImportFrom):
+                    if node.level:
+                        parts = package.split(".")
+                        base = ".".join(parts[: len(parts) - (node.level - 1)] + ([node.module] if node.module else []))
+                    else:
+                        base = node.module or ""
+                    found = [base] + [f"{base}.{a.name}" for a in node.names]
+                else:
+                    continue
+                for t in found:
+                    bits = t.split(".")
+                    for i in range(1, len(bits) + 1):
+                        p = ".".join(bits[:i])
+                        if p in FILES and p != name and not name.startswith(p + "."):
+                            targets.add(p)
+        graph[name] = targets
+    return graph
+
+
+def _cycles(graph: dict[str, set[str]]) -> list[list[str]]:
+    """Strongly connected components of more than one module (iterative Tarjan)."""
+    index, low, on, stack, out, counter = {}, {}, set(), [], [], 0
+    for root in sorted(graph):
+        if root in index:
+            continue
+        work = [(root, iter(sorted(graph[root])))]
+        index[root] = low[root] = counter
+        counter += 1
+        stack.append(root)
+        on.add(root)
+        while work:
+            v, it = work[-1]
+            w = next(it, None)
+            if w is not None:
+                if w not in graph:
+                    continue
+                if w not in index:
+                    index[w] = low[w] = counter
+                    counter += 1
+                    stack.append(w)
+                    on.add(w)
+                    work.append((w, iter(sorted(graph[w]))))
+                elif w in on:
+                    low[v] = min(low[v], index[w])
+                continue
+            work.pop()
+            if work:
+                low[work[-1][0]] = min(low[work[-1][0]], low[v])
+            if low[v] == index[v]:
+                comp = []
+                while True:
+                    w = stack.pop()
+                    on.discard(w)
+                    comp.append(w)
+                    if w == v:
+                        break
+                if len(comp) > 1:
+                    out.append(sorted(comp))
+    return out
+
+
+def test_no_import_circle_at_import_time():
+    graph = _import_time_graph()
+    assert "springchain.numeric.run.registry" in graph["springchain.numeric.integrators"]  # edges are read
+    assert _cycles({"a": {"b"}, "b": {"c"}, "c": {"a"}, "d": {"a"}}) == [["a", "b", "c"]]  # and circles found
+    circles = _cycles(graph)
+    assert not circles, f"import circles at import time: {circles}"
