@@ -87,7 +87,7 @@ def test_success_replaces_and_keeps_the_mode(old_file, tmp_path):
 
 
 def test_npz_failure_keeps_the_old_output(tmp_path, monkeypatch):
-    from springchain.numeric import npz as simulate  # the NPZ writer of `springchain simulate`
+    from springchain.numeric.io import npz as simulate  # the NPZ writer of `springchain simulate`
 
     path = tmp_path / "scene.npz"
     np.savez(path, t=np.arange(3.0))

@@ -383,7 +383,8 @@ def test_free_chain_with_ground_rigid_mode_carries_all_mass(tmp_path):
 def test_numba_import_is_outside_the_method_clock(monkeypatch):
     """`springchain run` printed `verlet 574-1015 ms` (README: 6.56 ms): the first compiled method's clock
     included importing numba (about 1 s). The import now happens before any method's clock starts."""
-    from springchain.numeric import fast_kernels, simulate as sim
+    from springchain.numeric.compiled import fast_kernels
+    from springchain.numeric.run import simulate as sim
 
     events = []
     real_available, real_clock = fast_kernels.available, sim.time.perf_counter

@@ -24,7 +24,7 @@ import sdof_reference as ref
 
 import springchain as sc
 from springchain.cli import main
-from springchain.numeric import response_spectrum as rsmod
+from springchain.numeric.structural import response_spectrum as rsmod
 from springchain.numeric.errors import RunRefused
 from springchain.numeric.structural.sdof_peak import free_peak
 

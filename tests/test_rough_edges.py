@@ -248,7 +248,10 @@ def test_progress_is_silent_for_short_phases_and_reports_long_ones(monkeypatch):
 
 
 def test_the_reporters_share_one_module():
-    from springchain.numeric import bench_runs, chunked, driver, scaling, sweep_driver
+    from springchain.numeric.bench import runs as bench_runs, scaling
+    from springchain.numeric.io import chunked
+    from springchain.numeric.run import driver
+    from springchain.numeric.sweep import driver as sweep_driver
     from springchain.numeric.progress import Reporter
 
     assert issubclass(sweep_driver.Progress, Reporter) and not hasattr(driver, "Progress")
@@ -258,7 +261,7 @@ def test_the_reporters_share_one_module():
 
 
 def test_numba_compile_note(monkeypatch, capsys):
-    from springchain.numeric import fast_kernels
+    from springchain.numeric.compiled import fast_kernels
 
     if not fast_kernels.available():
         pytest.skip("numba not installed")

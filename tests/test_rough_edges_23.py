@@ -26,7 +26,7 @@ def _strict_json(text: str):
 @pytest.fixture()
 def capture_figures(monkeypatch):
     """Figures handed to ``plots.save`` (labels can be read; nothing is drawn to disk)."""
-    from springchain.numeric import plots
+    from springchain.numeric.plots import figures as plots
 
     figures = {}
     monkeypatch.setattr(plots, "save", lambda fig, path: figures.__setitem__(Path(path).name, fig))
@@ -177,7 +177,7 @@ def test_animation_of_two_pieces_writes(tmp_path):
 def test_narrow_pulse_on_a_long_chain_keeps_its_height_and_gets_a_zoom():
     from matplotlib.collections import PolyCollection
 
-    from springchain.numeric import plots
+    from springchain.numeric.plots import figures as plots
     from springchain.numeric.plots.animation import profile_envelopes
 
     n = 200_000

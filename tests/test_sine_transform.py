@@ -13,7 +13,7 @@ import scipy.fft
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from springchain.numeric import sine_transform as stf
+from springchain.numeric.exact import sine_transform as stf
 
 
 def dense_dst1(x: np.ndarray) -> np.ndarray:
