@@ -15,6 +15,7 @@ import math
 import weakref
 from dataclasses import dataclass, field, replace
 from functools import cached_property, lru_cache
+from pathlib import Path
 from types import ModuleType
 from typing import Callable
 
@@ -146,8 +147,6 @@ class System:
     @property
     def source_text(self) -> str:
         """The generated module's source text (the file it was imported from)."""
-        from pathlib import Path
-
         return Path(self.module.__file__).read_text(encoding="utf-8")
 
     def source(self, name: str) -> str:

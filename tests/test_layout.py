@@ -345,3 +345,36 @@ def test_no_import_circle_at_import_time():
     assert _cycles({"a": {"b"}, "b": {"c"}, "c": {"a"}, "d": {"a"}}) == [["a", "b", "c"]]  # and circles found
     circles = _cycles(graph)
     assert not circles, f"import circles at import time: {circles}"
+
+
+# -- what the System answers instead ---------------------------------------------------------------
+def test_the_system_answers_for_the_module():
+    """The System's methods pass the parameter values (and a chain's n) and return the hand-written
+    matrices and closed forms: the building (three storeys k, a dashpot c at the ground floor) and the
+    free uniform chain (ω_j = 2√(k/m)·sin(jπ/2n), j = 0 … n-1) at a size other than the module's."""
+    import importlib
+    import math
+
+    import numpy as np
+
+    from springchain.numeric.system import System
+
+    b = System.from_module(importlib.import_module("springchain.generated.building"), {"k": 3.0, "c": 0.5})
+    k = 3.0
+    assert np.allclose(b.stiffness_matrix(), [[2 * k, -k, 0], [-k, 2 * k, -k], [0, -k, k]], rtol=1e-15, atol=0)
+    assert np.allclose(b.damping_matrix(), [[0.5, 0, 0], [0, 0, 0], [0, 0, 0]], rtol=1e-15, atol=0)
+    ends, c = b.dampers()
+    assert ends.tolist() == [[0, -1]] and np.allclose(c, [0.5], rtol=1e-15)
+    assert b.rayleigh_coefficients() is None and b.modal_damping_ratios() is None
+    assert b.with_params({"k": 5.0}).stiffness_matrix()[2, 2] == pytest.approx(5.0, rel=1e-15)
+
+    chain = System.from_module(importlib.import_module("springchain.generated.chain100k"), {"k": 4.0, "m": 1.0})
+    assert chain.n == 100000
+    short = chain.with_n(7)
+    assert short.n == 7 and short.masses.shape == (7,) and short.spring_ends.shape == (6, 2)
+    diag, off = short.stiffness_bands()
+    assert np.allclose(diag, [4, 8, 8, 8, 8, 8, 4], rtol=1e-15) and np.allclose(off, -4.0, rtol=1e-15)
+    expected = sorted(2 * math.sqrt(4.0) * math.sin(j * math.pi / 14) for j in range(7))
+    assert np.allclose(np.sort(short.mode_omega()), expected, rtol=1e-14, atol=1e-15)
+    assert short.make_acceleration()(np.arange(7.0)).shape == (7,)
+    assert len(short.parameter_vector()) == 2 and short.scene_name == "chain100k"
