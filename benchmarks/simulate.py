@@ -60,7 +60,7 @@ def _scenes(n: int, folder: Path) -> dict[str, Path]:
 def measure(n: int = 1_000_000, rounds: int = 5, short: int = 200, long: int = 2200) -> dict:
     """Per-step seconds of ``simulate`` and the floor, median and minimum over interleaved rounds."""
     from springchain import _api
-    from springchain.numeric import fast
+    from springchain.numeric.compiled import fast
     from springchain.numeric.bench.timing import single_threaded_blas
 
     out: dict = {"n": n, "rounds": rounds, "steps": [short, long], "numba": fast.available()}

@@ -38,7 +38,7 @@ if _spec.name not in sys.modules:
 
 
 def measure(n: int, rounds: int) -> dict:
-    from springchain.numeric import sine_transform as stf
+    from springchain.numeric.exact import sine_transform as stf
 
     x = np.random.default_rng(0).standard_normal(n)
     routes = {"pocketfft": lambda: scipy.fft.dst(x, type=1, norm="ortho", workers=1),

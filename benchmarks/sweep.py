@@ -68,7 +68,7 @@ def main(argv=None) -> int:
         from dask.distributed import Client, LocalCluster
 
         from springchain._modules import load_module
-        from springchain.numeric import sweep_driver
+        from springchain.numeric.sweep import driver as sweep_driver
         from springchain.numeric.sweep.distributions import parse
         from springchain.numeric.sweep.realisations import SweepSpec, compute_batch
         from springchain.numeric.bench.timing import single_threaded_blas
