@@ -218,19 +218,19 @@ def omega2_value(mode, subs: dict) -> float:
 
 
 
-def _mp(e: sp.Expr, dps: int):
+def mp_value(e: sp.Expr, dps: int):
     """An exact SymPy number as an mpmath value at the current working precision."""
     if isinstance(e, sp.Rational):
         return mpmath.mpf(e.p) / e.q
     return mpmath.mpf(sp.N(e, dps + 10)._mpf_)
 
 
-def _eig_dynamical(masses: list, springs: list, n: int, dps: int):
+def eig_dynamical(masses: list, springs: list, n: int, dps: int):
     with mpmath.workdps(dps):
-        r = [1 / mpmath.sqrt(_mp(m, dps)) for m in masses]
+        r = [1 / mpmath.sqrt(mp_value(m, dps)) for m in masses]
         D = mpmath.zeros(n, n)
         for a, b, k in springs:
-            kv = _mp(k, dps)
+            kv = mp_value(k, dps)
             for i, si in ((a, 1), (b, -1)):
                 for j, sj in ((a, 1), (b, -1)):
                     if i >= 0 and j >= 0:
@@ -251,8 +251,8 @@ def dynamical_bound(masses: list, springs: list):
     Each spring adds the rank-one ``k v vᵀ`` with ``‖v‖² = 1/m_a + 1/m_b`` (a wall end adds nothing).
     """
     with mpmath.workdps(30):
-        inv = [1 / _mp(m, 30) for m in masses]
-        return mpmath.fsum(_mp(k, 30) * ((inv[a] if a >= 0 else 0) + (inv[b] if b >= 0 else 0))
+        inv = [1 / mp_value(m, 30) for m in masses]
+        return mpmath.fsum(mp_value(k, 30) * ((inv[a] if a >= 0 else 0) + (inv[b] if b >= 0 else 0))
                            for a, b, k in springs)
 
 
@@ -323,7 +323,7 @@ def numeric_modes(masses: list, springs: list, n_rigid: int) -> list[tuple[float
     bound = dynamical_bound(masses, springs)
     dps = 40
     while dps <= MAX_DPS:
-        w, shapes = _eig_dynamical(masses, springs, n, dps)
+        w, shapes = eig_dynamical(masses, springs, n, dps)
         if certified(w, n_rigid, bound, dps):
             cur = w[n_rigid:]
             for x in cur:

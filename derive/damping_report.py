@@ -6,7 +6,7 @@ values and at high precision (mpmath, successive precisions until float64 is set
 the spring-factor route, :func:`_rows_float`):
 
 * Φ, ω² — M-orthonormal modes from the exactly assembled dynamical matrix
-  (:func:`accurate._eig_dynamical`; rigid-body modes are the lowest ``RIGID_MODES``, set to 0
+  (:func:`accurate.eig_dynamical`; rigid-body modes are the lowest ``RIGID_MODES``, set to 0
   by structure);
 * G = ΦᵀCΦ for the dashpots and Rayleigh damping, plus diag(2ζⱼωⱼ) for modal damping
   (which *is* diagonal in these coordinates by definition).
@@ -26,7 +26,7 @@ import mpmath
 import sympy as sp
 
 from .printing import closed, latex, sstr
-from .accurate import (MAX_DPS, MAX_MPMATH_MODES, NotAccurate, _eig_dynamical, _mp, certified, dynamical_bound,
+from .accurate import (MAX_DPS, MAX_MPMATH_MODES, NotAccurate, eig_dynamical, mp_value, certified, dynamical_bound,
                        exact_values, omega2_value, value)
 from .model import Model
 from .model_cache import cached_on
@@ -83,7 +83,7 @@ def _pieces(model: Model) -> list[list[int]]:
 
 
 def _eig_by_piece(masses: list, springs: list, pieces: list[list[int]], dps: int):
-    """``_eig_dynamical`` piece by piece: ω² ascending and shapes that are exactly zero outside
+    """``eig_dynamical`` piece by piece: ω² ascending and shapes that are exactly zero outside
     their piece, so a piece without damping has exactly zero rows in G = ΦᵀCΦ (its modes are
     undamped by structure, not by a value that shrinks with the precision)."""
     n = len(masses)
@@ -92,7 +92,7 @@ def _eig_by_piece(masses: list, springs: list, pieces: list[list[int]], dps: int
     for p, piece in enumerate(pieces):
         local = [(where[a][1] if a >= 0 else -1, where[b][1] if b >= 0 else -1, k)
                  for a, b, k in springs if (a >= 0 and where[a][0] == p) or (b >= 0 and where[b][0] == p)]
-        w, shapes = _eig_dynamical([masses[i] for i in piece], local, len(piece), dps)
+        w, shapes = eig_dynamical([masses[i] for i in piece], local, len(piece), dps)
         with mpmath.workdps(dps):
             for wj, sj in zip(w, shapes):
                 full = [mpmath.mpf(0)] * n
@@ -119,11 +119,11 @@ def _modal_damping(model: Model, dps: int):
                 Phi[i, j] = s[i]
         G = mpmath.zeros(n, n)
         if model.C is not None:
-            C = mpmath.matrix([[_mp(model.C[i, j].subs(subs), dps) for j in range(n)] for i in range(n)])
+            C = mpmath.matrix([[mp_value(model.C[i, j].subs(subs), dps) for j in range(n)] for i in range(n)])
             G = Phi.T * C * Phi
         if model.modal_zeta is not None:
             for j in range(n):
-                G[j, j] += 2 * _mp(model.modal_zeta[j].subs(subs), dps) * mpmath.sqrt(max(w2[j], 0))  # ω² noise < 0
+                G[j, j] += 2 * mp_value(model.modal_zeta[j].subs(subs), dps) * mpmath.sqrt(max(w2[j], 0))  # ω² noise < 0
         return w2, G
 
 

@@ -42,7 +42,7 @@ import mpmath
 import sympy as sp
 
 from .accurate import exact_values
-from .equilibrium_path import FIRST_STEP, MAX_DPS, _mpv, _PathEnd, _Problem, descent, path, refine
+from .equilibrium_path import FIRST_STEP, MAX_DPS, mp_vector, PathEnd, PathProblem, descent, path, refine
 from .equilibrium_tree import Ended, solve_tree, tree
 from .errors import SceneError
 from .scene_loader import MAX_MAGNITUDE, MIN_MAGNITUDE
@@ -102,7 +102,7 @@ def _at_rest_finite(file: str, law: SpringLaw, subs: dict) -> None:
         for name, expr in (("V", law.energy), ("V'", law.force), ("V''", law.stiffness)):
             f = mp_function(expr, (law.d, *subs))
             try:
-                v = f(mpmath.mpf(0), *[_mpv(r, 30) for r in subs.values()])
+                v = f(mpmath.mpf(0), *[mp_vector(r, 30) for r in subs.values()])
             except (ZeroDivisionError, ValueError, OverflowError, TypeError, NameError):
                 v = mpmath.nan
             if isinstance(v, mpmath.mpc) and v.imag == 0:
@@ -131,7 +131,7 @@ def check_law(file: str, law: SpringLaw, d_value, subs: dict, *, closed_form: sp
     """
     dps = max(40, dps)
     with mpmath.workdps(dps):
-        dv = _mpv(d_value, dps)
+        dv = mp_vector(d_value, dps)
         if any(e.has(sp.DiracDelta, sp.Heaviside, sp.sign) for e in (law.force, law.stiffness)):
             raise _refuse_value(file, law, "V'' has a kink or a jump (Abs, sign)", dv,
                                 "not twice differentiable there",
@@ -140,7 +140,7 @@ def check_law(file: str, law: SpringLaw, d_value, subs: dict, *, closed_form: sp
         for name, expr in (("V", law.energy), ("V'", law.force), ("V''", law.stiffness)):
             f = mp_function(expr, (law.d, *subs))
             try:
-                v = f(dv, *[_mpv(r, dps) for r in subs.values()])
+                v = f(dv, *[mp_vector(r, dps) for r in subs.values()])
             except (ZeroDivisionError, ValueError, OverflowError, TypeError, NameError):
                 v = mpmath.nan
             if isinstance(v, mpmath.mpc) and abs(v.imag) <= mpmath.mpf(10) ** (-dps + 5) * max(abs(v.real), 1):
@@ -213,7 +213,7 @@ def solve(file: str, n: int, springs, loads, params: dict, values: dict, pieces,
         return Equilibrium(tuple(sp.Integer(0) for _ in range(n)), ext, stiff, True,
                            "x = 0: every spring at rest balances (V'(0) = 0 or balanced tensions); "
                            + _stable(pieces))
-    problem = _Problem(n, springs, [ld.subs(subs) for ld in loads], subs,
+    problem = PathProblem(n, springs, [ld.subs(subs) for ld in loads], subs,
                        [(piece, [float(m.subs(subs)) for m in masses]) for piece, masses in pieces])
     where = springs[0][2].where if springs else None
     shape = tree(n, [(a, b) for a, b, _ in springs])
@@ -234,18 +234,18 @@ def solve(file: str, n: int, springs, loads, params: dict, values: dict, pieces,
     return _result(file, springs, subs, xs, ext, how, dps)
 
 
-def _followed(file: str, problem: "_Problem", where) -> tuple:
+def _followed(file: str, problem: "PathProblem", where) -> tuple:
     """``(x, how)``: the equilibrium followed from rest by :func:`path` (or found by :func:`descent` where x = 0
     is not stable), in float64, with the words saying how; refusals where neither reaches the loads."""
     found = path(problem)
-    if isinstance(found, _PathEnd) and problem.float64_limited:
+    if isinstance(found, PathEnd) and problem.float64_limited:
         raise SceneError(file, where, f"no static equilibrium found in float64: applying the constant loads and "
                          f"pre-stress gradually from rest was followed up to {found.fraction} of them; beyond, float64 "
                          "cannot follow it (the path turns within float64's resolution of the loads, or an extension, "
                          "e.g. the distance to a potential's pole, falls below its resolution of x); accepted: springs "
                          "and loads whose equilibrium float64 can hold, or springs forming a tree with the ground "
                          "(solved spring by spring in extended precision)")
-    if isinstance(found, _PathEnd):
+    if isinstance(found, PathEnd):
         reach = (f"a stable equilibrium exists only up to {found.fraction} of them" if found.reached > 0 else
                  f"no stable equilibrium exists even at {FIRST_STEP:.0e} of them")
         raise SceneError(file, where, f"no static equilibrium found: applying the constant loads and pre-stress "
@@ -275,7 +275,7 @@ def _result(file: str, springs, subs: dict, xs: list, ext: list, how: str, dps: 
                        tuple(sp.Float(mpmath.nstr(dv, 25), 17) for dv in ext), stiff, False, how)
 
 
-def _on_tree(file: str, problem: _Problem, shape, springs, loads, subs: dict, pieces, where) -> Equilibrium:
+def _on_tree(file: str, problem: PathProblem, shape, springs, loads, subs: dict, pieces, where) -> Equilibrium:
     """The equilibrium of springs that form a tree with the ground, spring by spring (:mod:`derive.equilibrium_tree`)."""
     masses = [sp.Integer(0)] * problem.n  # only the free pieces' are needed (their centres of mass)
     for piece, ms in pieces:
@@ -283,9 +283,9 @@ def _on_tree(file: str, problem: _Problem, shape, springs, loads, subs: dict, pi
             masses[i] = sp.sympify(m).subs(subs)
     exact_loads = [sp.sympify(ld).subs(subs) for ld in loads]
     found = solve_tree(shape, problem.n, [(F, S) for (_, _, F), (_, _, S) in zip(problem.fmp, problem.smp)],
-                       lambda dps: [_mpv(r, dps) for r in problem.values],
-                       lambda dps: [_mpv(v, dps) for v in exact_loads],
-                       lambda dps: [_mpv(m, dps) for m in masses],
+                       lambda dps: [mp_vector(r, dps) for r in problem.values],
+                       lambda dps: [mp_vector(v, dps) for v in exact_loads],
+                       lambda dps: [mp_vector(m, dps) for m in masses],
                        list(zip(problem.lo, problem.hi)))
     if isinstance(found, Ended) and found.spring == -2:
         raise SceneError(file, where, "no static equilibrium found: the springs' extensions do not settle in extended "
@@ -293,7 +293,7 @@ def _on_tree(file: str, problem: _Problem, shape, springs, loads, subs: dict, pi
                          "stable equilibrium (V''(d) > 0 there)")
     if isinstance(found, Ended):
         law = springs[found.spring][2]
-        reach = (f"a stable equilibrium exists only up to {_PathEnd(found.reached, '').fraction} of them"
+        reach = (f"a stable equilibrium exists only up to {PathEnd(found.reached, '').fraction} of them"
                  if found.reached > 0 else f"no stable equilibrium exists even at {FIRST_STEP:.0e} of them")
         raise SceneError(file, law.where, f"no static equilibrium found: applying the constant loads and pre-stress "
                          f"gradually from rest, {reach} (the springs form a tree with the ground, so each one's "

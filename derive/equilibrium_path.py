@@ -1,6 +1,6 @@
 """The loading path of :mod:`derive.equilibrium` in the positions x: continuation for springs that close loops.
 
-``U(x) = Σ_s V_s(d_s) − Σ_i F_i x_i`` at the scene's values (:class:`_Problem`: gradient and Hessian spring by
+``U(x) = Σ_s V_s(d_s) − Σ_i F_i x_i`` at the scene's values (:class:`PathProblem`: gradient and Hessian spring by
 spring, in float64 and in mpmath). The out-of-balance force at rest G(0) is applied as λ G(0), λ: 0 → 1,
 following ``Σ_s (V_s'(d_s) − V_s'(0)) b_s + λ G(0) = 0`` from x = 0 (:func:`path`): tangent predictor
 ``dx/dλ = −K⁻¹ G(0)``, Newton correctors that must contract (each step or else each residual at most
@@ -8,7 +8,7 @@ following ``Σ_s (V_s'(d_s) − V_s'(0)) b_s + λ G(0) = 0`` from x = 0 (:func:`
 definite at every accepted point. Float64 first; the residual and K in mpmath (:data:`CORRECT_DPS` digits
 beyond log10 of the spread of the springs' stiffnesses) where K is ill-conditioned beyond
 :data:`ILL_CONDITIONED` or float64 does not contract. A residual counts as converged at its floor: the forces at
-play, the rounding of the extensions formed from x (:meth:`_Problem.floor`), or the evaluation's own noise
+play, the rounding of the extensions formed from x (:meth:`PathProblem.floor`), or the evaluation's own noise
 (the residual 20 digits finer). Each extension stays inside its potential's domain (:func:`domain`). Then
 :func:`refine` in mpmath to float64's last bit; :func:`descent` where x = 0 itself is not stable.
 """
@@ -46,7 +46,7 @@ CONTRACTION = 0.75
 CORRECT_TOL = 1e-13
 RESIDUAL_NOISE = 1e-10
 #: A step below CORRECT_TOL converges only with the residual below this of the forces at play (or float64's
-#: floor, :meth:`_Problem.floor`, at FLOAT_DIGITS).
+#: floor, :meth:`PathProblem.floor`, at FLOAT_DIGITS).
 RESIDUAL_SETTLED = 1e-6
 FLOAT_DIGITS = 16
 #: The descent's stopping rule: a step below CORRECT_TOL of x, or one that no longer contracts below this.
@@ -73,7 +73,7 @@ MAX_CORRECT_DPS = 330
 ILL_CONDITIONED = 1e10
 
 
-def _mpv(v, dps: int):
+def mp_vector(v, dps: int):
     """A SymPy number (exact where it is rational) or an mpf as an mpmath value at ``dps`` digits."""
     if isinstance(v, mpmath.mpf):
         return v
@@ -118,7 +118,7 @@ def _domain(energy: sp.Expr, d: sp.Symbol) -> tuple[float, float]:
     return -np.inf, np.inf
 
 
-class _Problem:
+class PathProblem:
     """The gradient and Hessian of U at the scene's values, in float64 and in mpmath."""
 
     def __init__(self, n: int, springs, loads, subs: dict, pieces):
@@ -138,7 +138,7 @@ class _Problem:
         #: The third and fourth derivatives of V at d = 0 of every spring (the reach of the linearisation at
         #: rest, for the first load step).
         with mpmath.workdps(30):
-            rest_vals = [_mpv(v, 30) for v in self.values]
+            rest_vals = [mp_vector(v, 30) for v in self.values]
             self.rest_derivatives = [
                 tuple(_float(mp_function(sp.diff(law.stiffness, law.d, k), (law.d, *syms)), rest_vals) for k in (1, 2))
                 for _, _, law in springs]
@@ -247,7 +247,7 @@ class _Problem:
     def residual_mp(self, x, lam: float, r0: np.ndarray, dps: int) -> list:
         """:meth:`residual` in mpmath at ``dps`` digits (λ and G(0) as the float64 numbers they are)."""
         with mpmath.workdps(dps):
-            vals = [_mpv(r, dps) for r in self.values]
+            vals = [mp_vector(r, dps) for r in self.values]
             g = [mpmath.mpf(float(lam)) * mpmath.mpf(float(v)) for v in r0]
             for (a, b, F), t0 in zip(self.fmp, self.rest_mp(dps)):
                 t = F(self._mp_ext(x, a, b), *vals) - t0
@@ -261,7 +261,7 @@ class _Problem:
         """V'(0) of every spring in mpmath (cached per precision)."""
         if dps not in self._rest_mp:
             with mpmath.workdps(dps):
-                vals = [_mpv(r, dps) for r in self.values]
+                vals = [mp_vector(r, dps) for r in self.values]
                 self._rest_mp[dps] = [F(mpmath.mpf(0), *vals) for _, _, F in self.fmp]
         return self._rest_mp[dps]
 
@@ -291,8 +291,8 @@ class _Problem:
 
     def gradient_mp(self, x, dps: int):
         with mpmath.workdps(dps):
-            vals = [_mpv(r, dps) for r in self.values]
-            g = [-_mpv(v, dps) for v in self.loads]
+            vals = [mp_vector(r, dps) for r in self.values]
+            g = [-mp_vector(v, dps) for v in self.loads]
             for a, b, F in self.fmp:
                 t = F(self._mp_ext(x, a, b), *vals)
                 if a >= 0:
@@ -304,13 +304,13 @@ class _Problem:
     def stiffness_mp(self, x, dps: int) -> list:
         """V''(d) of every spring at the mpmath positions x, as floats (evaluated at ``dps`` digits)."""
         with mpmath.workdps(dps):
-            vals = [_mpv(r, dps) for r in self.values]
+            vals = [mp_vector(r, dps) for r in self.values]
             return [float(S(self._mp_ext(x, a, b), *vals)) for a, b, S in self.smp]
 
     def hessian_mp(self, x, dps: int):
         """The augmented Hessian in mpmath, an ``mpmath.matrix`` (n, n)."""
         with mpmath.workdps(dps):
-            vals = [_mpv(r, dps) for r in self.values]
+            vals = [mp_vector(r, dps) for r in self.values]
             H = mpmath.matrix(self.n, self.n)
             for a, b, S in self.smp:
                 _add(H, a, b, S(self._mp_ext(x, a, b), *vals))
@@ -341,7 +341,7 @@ def _cholesky(H: np.ndarray):
 
 
 @dataclass(frozen=True)
-class _PathEnd:
+class PathEnd:
     """Where the loading path stopped short of the full loads: ``reached`` of them, and why."""
 
     reached: float
@@ -353,7 +353,7 @@ class _PathEnd:
         return f"{self.reached:.6g}" if self.reached < 0.999 else f"1 - {1.0 - self.reached:.2g}"
 
 
-def _stopped(problem: _Problem, x: np.ndarray, lam: float) -> _PathEnd:
+def _stopped(problem: PathProblem, x: np.ndarray, lam: float) -> PathEnd:
     """Why the path ends at x: K's smallest eigenvalue there relative to K's largest at rest, and |x|."""
     size = float(np.max(np.abs(x), initial=0.0))
     with np.errstate(all="ignore"):
@@ -361,13 +361,13 @@ def _stopped(problem: _Problem, x: np.ndarray, lam: float) -> _PathEnd:
         H0 = problem.augmented(problem.hessian(np.zeros(problem.n)))
         fine = np.all(np.isfinite(H)) and np.all(np.isfinite(H0))
         ratio = float(np.linalg.eigvalsh(H)[0] / np.linalg.eigvalsh(H0)[-1]) if fine else float("nan")
-    return _PathEnd(lam, f"there |x| = {size:.3g} and K's smallest eigenvalue is {ratio:.2g} of K's largest at rest: "
+    return PathEnd(lam, f"there |x| = {size:.3g} and K's smallest eigenvalue is {ratio:.2g} of K's largest at rest: "
                          "beyond, the springs cannot hold the load")
 
 
-def _beyond(problem: _Problem, x: np.ndarray, lam: float, r0: np.ndarray) -> bool:
+def _beyond(problem: PathProblem, x: np.ndarray, lam: float, r0: np.ndarray) -> bool:
     """Whether the loading path goes on past where float64 stopped: followed in mpmath alone (positions, load
-    fraction, K and residual at :meth:`_Problem.digits` + 20 digits; steps down to 1e-40 of the loads) from
+    fraction, K and residual at :meth:`PathProblem.digits` + 20 digits; steps down to 1e-40 of the loads) from
     (x, λ) to λ·(1 + 1e-6). A genuine fold stops it again; a spring giving way to a much softer one within
     float64's resolution of λ (a Toda spring saturating at a relative 1e-15 of the loads) does not."""
     dps = problem.digits(x) + 20
@@ -425,8 +425,8 @@ def _beyond(problem: _Problem, x: np.ndarray, lam: float, r0: np.ndarray) -> boo
     return False
 
 
-def _correct(problem: _Problem, x: np.ndarray, lam: float, r0: np.ndarray, scale: float) -> np.ndarray | None:
-    """Newton on the loading path's equation at λ (:meth:`_Problem.residual`) from the predictor ``x``; None
+def _correct(problem: PathProblem, x: np.ndarray, lam: float, r0: np.ndarray, scale: float) -> np.ndarray | None:
+    """Newton on the loading path's equation at λ (:meth:`PathProblem.residual`) from the predictor ``x``; None
     unless it contracts (each step, or else each residual, at most :data:`CONTRACTION` of the last) and stays
     in the domain.
 
@@ -465,7 +465,7 @@ def _correct(problem: _Problem, x: np.ndarray, lam: float, r0: np.ndarray, scale
     return _correct_mp(problem, start, lam, r0, scale)
 
 
-def _inside_mp(problem: _Problem, xs: list) -> bool:
+def _inside_mp(problem: PathProblem, xs: list) -> bool:
     """Every extension of the mpmath positions xs inside its potential's domain."""
     for a, b, lo, hi in zip(problem.a, problem.b, problem.lo, problem.hi):
         d = (xs[b] if b >= 0 else 0) - (xs[a] if a >= 0 else 0)
@@ -474,7 +474,7 @@ def _inside_mp(problem: _Problem, xs: list) -> bool:
     return True
 
 
-def _noise(problem: _Problem, xs: list, lam: float, r0: np.ndarray, dps: int):
+def _noise(problem: PathProblem, xs: list, lam: float, r0: np.ndarray, dps: int):
     """How far the residual as evaluated at ``dps`` digits is from its value: the difference to an evaluation
     20 digits finer (a tension written as a difference, a·(1 − exp(−b d)), loses a·10^-digits)."""
     coarse = problem.residual_mp(xs, lam, r0, dps)
@@ -489,9 +489,9 @@ def _settled(g, bound) -> bool:
     return all(abs(v) <= bv for v, bv in zip(g, np.broadcast_to(bound, (len(g),))))
 
 
-def _correct_mp(problem: _Problem, x: np.ndarray, lam: float, r0: np.ndarray, scale: float, *,
+def _correct_mp(problem: PathProblem, x: np.ndarray, lam: float, r0: np.ndarray, scale: float, *,
                 float_hessian: bool = True) -> np.ndarray | None:
-    """The corrector with the residual at :meth:`_Problem.digits` digits, the step from the float64 Hessian
+    """The corrector with the residual at :meth:`PathProblem.digits` digits, the step from the float64 Hessian
     (``float_hessian``) or, where that does not contract or K is ill-conditioned beyond float64, from the
     Hessian in mpmath. Converged at a step below ``CORRECT_TOL·scale``, or where the steps stop contracting
     with the residual below ``10^(8 − digits)`` of the forces at play."""
@@ -533,7 +533,7 @@ def _correct_mp(problem: _Problem, x: np.ndarray, lam: float, r0: np.ndarray, sc
     return None
 
 
-def _tangent(problem: _Problem, x: np.ndarray, r0: np.ndarray) -> tuple[np.ndarray, bool] | None:
+def _tangent(problem: PathProblem, x: np.ndarray, r0: np.ndarray) -> tuple[np.ndarray, bool] | None:
     """``dx/dλ = −K⁻¹ G(0)`` at x and whether K is too ill-conditioned for float64 (then it comes from the
     Hessian in mpmath, as the corrector's steps will); None where K is not positive definite.
 
@@ -568,7 +568,7 @@ def _float(f, values) -> float:
     return float(v)
 
 
-def _first_step(problem: _Problem, tangent: np.ndarray) -> float:
+def _first_step(problem: PathProblem, tangent: np.ndarray) -> float:
     """The load step over which every spring stays within the reach of its linearisation at rest: the predicted
     change of its extension at most 0.1 |k2/k3| (or the square root of 0.1 |k2/k4|), k2, k3, k4 the second,
     third and fourth derivatives of V at d = 0; 1 when that reaches the full loads. (A wall spring with
@@ -585,9 +585,9 @@ def _first_step(problem: _Problem, tangent: np.ndarray) -> float:
     return max(h, FIRST_STEP) if np.isfinite(h) else 1.0
 
 
-def _smallest(problem: _Problem, x: np.ndarray) -> float:
+def _smallest(problem: PathProblem, x: np.ndarray) -> float:
     """K's smallest eigenvalue at x (the augmented K: free pieces' rigid translations lifted): float64's where
-    it is resolved (above 1e-8 of the largest), else mpmath's at :meth:`_Problem.digits`."""
+    it is resolved (above 1e-8 of the largest), else mpmath's at :meth:`PathProblem.digits`."""
     with np.errstate(all="ignore"):
         H = problem.augmented(problem.hessian(x))
         ev = np.linalg.eigvalsh(H) if np.all(np.isfinite(H)) else np.array([np.nan])
@@ -599,7 +599,7 @@ def _smallest(problem: _Problem, x: np.ndarray) -> float:
         return float(min(mev[i] for i in range(problem.n)))
 
 
-def _predicted(problem: _Problem, x: np.ndarray, lam_x: float, pred: np.ndarray, nxt: np.ndarray, lam: float,
+def _predicted(problem: PathProblem, x: np.ndarray, lam_x: float, pred: np.ndarray, nxt: np.ndarray, lam: float,
                r0: np.ndarray) -> bool:
     """The corrector's point agrees with the predictor spring by spring: each extension's correction at most
     :data:`BRANCH` of its predicted change (or of :data:`BRANCH_SHARE` of the largest one), beyond
@@ -623,7 +623,7 @@ def _predicted(problem: _Problem, x: np.ndarray, lam_x: float, pred: np.ndarray,
     return bool(np.all(np.abs(dn - dp) <= allowed))
 
 
-def _positive(problem: _Problem, x: np.ndarray, ill: bool) -> bool:
+def _positive(problem: PathProblem, x: np.ndarray, ill: bool) -> bool:
     """K positive definite at x (Cholesky in float64, or in mpmath where K is ill-conditioned for it)."""
     if not problem.inside(x):
         return False
@@ -638,7 +638,7 @@ def _positive(problem: _Problem, x: np.ndarray, ill: bool) -> bool:
     return True
 
 
-def _lu(problem: _Problem, x: np.ndarray):
+def _lu(problem: PathProblem, x: np.ndarray):
     """LU factors of the float64 augmented Hessian at x, or None where it is singular or not finite."""
     with np.errstate(all="ignore"):
         try:
@@ -649,7 +649,7 @@ def _lu(problem: _Problem, x: np.ndarray):
     return lu if np.all(np.isfinite(lu[0])) and np.all(np.diag(lu[0]) != 0) else None
 
 
-def _solve_mp(problem: _Problem, lu, xs: list, g: list, dps: int) -> list | None:
+def _solve_mp(problem: PathProblem, lu, xs: list, g: list, dps: int) -> list | None:
     """The Newton correction ``H⁻¹ g`` for the mpmath residual g: by the float64 LU factors ``lu`` (g scaled
     to avoid underflow), or by the mpmath Hessian at xs when ``lu`` is None."""
     gmax = max(abs(v) for v in g)
@@ -665,14 +665,14 @@ def _solve_mp(problem: _Problem, lu, xs: list, g: list, dps: int) -> list | None
     return [gmax * mpmath.mpf(float(ci)) for ci in c]
 
 
-def path(problem: _Problem) -> tuple[np.ndarray, int] | _PathEnd | None:
+def path(problem: PathProblem) -> tuple[np.ndarray, int] | PathEnd | None:
     """The stable equilibrium reached by applying ``G(0)`` gradually from rest (module docstring, 2).
 
     Returns
     -------
     (x, steps)
         The float64 equilibrium at the full loads and the number of load steps taken;
-    _PathEnd
+    PathEnd
         where the path ends short of them (K singular, or x running off);
     None
         when x = 0 itself is not stable (K(0) not positive definite): no path starts.
@@ -680,7 +680,7 @@ def path(problem: _Problem) -> tuple[np.ndarray, int] | _PathEnd | None:
     x = np.zeros(problem.n)
     r0 = problem.gradient(x)
     if not np.all(np.isfinite(r0)):
-        return _PathEnd(0.0, "the forces at rest are not finite")  # guarded by _at_rest_finite
+        return PathEnd(0.0, "the forces at rest are not finite")  # guarded by _at_rest_finite
     found = _tangent(problem, x, r0)
     if found is None:
         return None
@@ -711,10 +711,10 @@ def path(problem: _Problem) -> tuple[np.ndarray, int] | _PathEnd | None:
             continue
         x, lam, steps, (tangent, ill), softest = nxt, target, steps + 1, ahead, now
         h = min(1.0, 2.0 * h)
-    return _PathEnd(lam, f"{MAX_PATH} load steps did not reach the full loads")
+    return PathEnd(lam, f"{MAX_PATH} load steps did not reach the full loads")
 
 
-def descent(problem: _Problem) -> np.ndarray | None:
+def descent(problem: PathProblem) -> np.ndarray | None:
     """A minimum of U by Newton from x = 0 with a Levenberg–Marquardt safeguard (for a scene whose rest
     configuration is not stable); None if it finds none."""
     n = problem.n
@@ -753,7 +753,7 @@ def descent(problem: _Problem) -> np.ndarray | None:
     return None
 
 
-def refine(problem: _Problem, x: np.ndarray) -> tuple[list, int] | None:
+def refine(problem: PathProblem, x: np.ndarray) -> tuple[list, int] | None:
     """x_eq in mpmath, correct to float64, from a float64 approximation: Newton with the residual at
     40, 80, … digits until two precisions agree to :data:`AGREE` per coordinate (relative, or
     absolutely below 1e-40 of the largest) and per spring stiffness V''(d). The correction is solved with

@@ -29,7 +29,7 @@ import sympy as sp
 
 from .printing import closed, latex
 
-from .accurate import (MAX_DPS, MAX_MPMATH_MODES, NotAccurate, _eig_dynamical, certified, clusters, dynamical_bound,
+from .accurate import (MAX_DPS, MAX_MPMATH_MODES, NotAccurate, eig_dynamical, certified, clusters, dynamical_bound,
                        exact_values, omega2_value, value)
 from .model import Model
 from .model_cache import cached_on
@@ -146,7 +146,7 @@ def _values_mp(model: Model, dps: int, n_rigid: int, bound):
     n = model.scene.n
     masses = [m.subs(subs) for m in model.masses]
     springs = [(a, b, k.subs(subs)) for a, b, k, _, _ in model.springs]
-    w2, shapes = _eig_dynamical(masses, springs, n, dps)
+    w2, shapes = eig_dynamical(masses, springs, n, dps)
     with mpmath.workdps(dps):
         w2 = [mpmath.mpf(0) if j < n_rigid else w for j, w in enumerate(w2)]
         m = [mpmath.mpf(x.p) / x.q if isinstance(x, sp.Rational) else mpmath.mpf(str(sp.N(x, dps + 10)))

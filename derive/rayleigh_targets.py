@@ -30,7 +30,7 @@ import sympy as sp
 
 from .printing import closed, latex
 
-from .accurate import (MAX_DPS, MAX_MPMATH_MODES, _eig_dynamical, certified, dynamical_bound, exact_values,
+from .accurate import (MAX_DPS, MAX_MPMATH_MODES, eig_dynamical, certified, dynamical_bound, exact_values,
                        omega2_value, value)
 from .errors import SceneError
 from .model_cache import cached_on
@@ -97,7 +97,7 @@ def _elastic_mp(model, dps: int):
     springs = [(a, b, k.subs(subs)) for a, b, k, _, _ in model.springs]
     rigid, bound = len(model.free_components), dynamical_bound(masses, springs)
     while True:
-        w2, _ = _eig_dynamical(masses, springs, model.scene.n, dps)
+        w2, _ = eig_dynamical(masses, springs, model.scene.n, dps)
         if certified(w2, rigid, bound, dps) or dps >= MAX_DPS:
             return w2[rigid:]
         dps *= 2

@@ -31,7 +31,7 @@ from .errors import SceneError
 from .expr import CONSTANTS, Expr, Num, accepted_form
 from .expr_tree import RESERVED_FUNCTIONS
 from .expr import parse_expression
-from .scene_loader import _CHUNK, Loader, did_you_mean
+from .scene_loader import INDEX_CHUNK, Loader, did_you_mean
 from .pieces import pieces
 from .damping import DampingModel, parse_damping
 from .loads import FORCE_KEYS, Force, Ground, TableForce, parse_forces, parse_ground  # noqa: F401
@@ -649,8 +649,8 @@ def _initial(ld: Loader, key: str, value, n: int, chain: bool, pnames, env) -> n
         allowed = pnames | {"i", "n"}
         expr = ld.expression(key, value, allowed, env={**env, "n": float(n)}, index_range=range(n))
         out = np.empty(n)
-        for s in range(0, n, _CHUNK):
-            i = np.arange(s, min(s + _CHUNK, n), dtype=float)
+        for s in range(0, n, INDEX_CHUNK):
+            i = np.arange(s, min(s + INDEX_CHUNK, n), dtype=float)
             out[s:s + len(i)] = np.broadcast_to(expr.evaluate({**env, "n": float(n), "i": i}), i.shape)
         return out
     accepted = f"a list of {n} numbers" + (f" or an expression of {accepted_form(pnames | {'i', 'n'})}"

@@ -27,7 +27,7 @@ MIN_MAGNITUDE, MAX_MAGNITUDE = 1e-150, 1e150
 #: What the range check says is accepted.
 IN_RANGE = f"0 or numbers of size {MIN_MAGNITUDE:g} to {MAX_MAGNITUDE:g}"
 #: Index values evaluated at once when checking [chain] expressions.
-_CHUNK = 1 << 16
+INDEX_CHUNK = 1 << 16
 
 
 #: Words people write for each key, tried after spelling mistakes for "did you mean".
@@ -188,8 +188,8 @@ class Loader:
         expr = parse_expression(text, allowed, file=self.file, key=key)
         self.units.check(key, text, expr)
         env = dict(env or {})
-        chunks = [None] if index_range is None else [index_range[s:s + _CHUNK]
-                                                    for s in range(0, len(index_range), _CHUNK)]
+        chunks = [None] if index_range is None else [index_range[s:s + INDEX_CHUNK]
+                                                    for s in range(0, len(index_range), INDEX_CHUNK)]
         for chunk in chunks:
             if chunk is not None:
                 env["i"] = np.asarray(chunk, dtype=float)

@@ -10,9 +10,12 @@ on the module. The facts numeric code decides by are written here once: what mak
 
 from __future__ import annotations
 
+import inspect
 import math
+import weakref
 from dataclasses import dataclass, field, replace
-from functools import cached_property
+from functools import cached_property, lru_cache
+from pathlib import Path
 from types import ModuleType
 from typing import Callable
 
@@ -26,9 +29,19 @@ from ..generated.contract import MAX_DENSE, End, Ground, Provided
 LOADED_CHAIN_EXACT_MAX = 400
 
 
+#: Values computed once per generated module object (not per parameter values): see :meth:`System.per_module`.
+_PER_MODULE: "weakref.WeakKeyDictionary[ModuleType, dict]" = weakref.WeakKeyDictionary()
+
+
 def interface(module: ModuleType) -> Provided:
     """What a generated module provides (:func:`springchain.generated.contract.read`)."""
     return contract.read(module)
+
+
+@lru_cache(maxsize=4096)
+def _takes_n(function: Callable) -> bool:
+    """Whether a generated function takes the chain length ``n=`` (``[chain]`` functions of per-mass arrays)."""
+    return "n" in inspect.signature(function).parameters
 
 
 def _provided(name: str, doc: str) -> property:
@@ -59,12 +72,31 @@ class System:
 
     @classmethod
     def from_module(cls, module: ModuleType, params: dict[str, float] | None = None, *,
-                    tables: tuple = (), ground_table: tuple | None = None) -> "System":
+                    tables: tuple = (), ground_table: tuple | None = None, n: int | None = None) -> "System":
+        """Bind a generated module to parameter values (the module's ``DEFAULTS`` where not given).
+
+        Parameters
+        ----------
+        module : module
+            A generated module (checked against :mod:`springchain.generated.contract`).
+        params : dict of str to float, optional
+        tables, ground_table : tuple, optional
+            The scene's force tables and ground table (data, see :class:`System`).
+        n : int, optional
+            ``[chain]`` scenes only: the number of masses (default the module's ``N``).
+        """
         facts = interface(module)
         values = dict(facts.defaults)
         values.update(params or {})
+        size = {}
+        if n is not None:
+            if not facts.chain:
+                raise ValueError("System.from_module: n is a [chain] scene's length; a [masses] scene has fixed N")
+            if int(n) < 1:
+                raise ValueError(f"a chain needs n >= 1 masses, got {n}")
+            size = {"n": int(n)}
         if facts.chain:
-            ends = np.asarray(module.spring_ends(), dtype=np.intp).reshape(-1, 2)
+            ends = np.asarray(module.spring_ends(**size), dtype=np.intp).reshape(-1, 2)
         else:
             ends = np.asarray(module.SPRING_ENDS, dtype=np.intp).reshape(-1, 2)
         wanted, table_ground = len(facts.table_force_on), facts.ground is Ground.TABLE
@@ -72,8 +104,8 @@ class System:
             raise ValueError(f"System.from_module: the module takes {wanted} force tables"
                              + (" and a ground table" if table_ground else "")
                              + f"; got {len(tables)}" + (" and a ground table" if ground_table is not None else ""))
-        return cls(module, values, np.asarray(module.masses(**values), dtype=float),
-                   ends, np.asarray(module.spring_constants(**values), dtype=float),
+        return cls(module, values, np.asarray(module.masses(**values, **size), dtype=float),
+                   ends, np.asarray(module.spring_constants(**values, **size), dtype=float),
                    tuple((np.asarray(a, dtype=float), np.asarray(b, dtype=float)) for a, b in tables),
                    None if ground_table is None else tuple(np.asarray(a, dtype=float) for a in ground_table),
                    facts)
@@ -86,6 +118,135 @@ class System:
         """The same system without the results it has cached (spectrum, ω_max): for timing a run
         with its own set-up."""
         return replace(self)
+
+    def with_params(self, params: dict[str, float]) -> "System":
+        """The same module, tables and size at other parameter values (``params`` override the current ones)."""
+        return System.from_module(self.module, {**self.params, **params}, tables=self.tables,
+                                  ground_table=self.ground_table, n=self.n if self.chain else None)
+
+    def with_n(self, n: int) -> "System":
+        """The same ``[chain]`` at ``n`` masses (itself when ``n`` is its size)."""
+        if int(n) == self.n:
+            return self
+        return System.from_module(self.module, self.params, tables=self.tables, ground_table=self.ground_table,
+                                  n=int(n))
+
+    # -- the generated module, asked through the System only ----------------------------------------
+    def _call(self, name: str, *args):
+        """The module's function ``name`` at ``args``, the parameter values and, for chains, ``n``."""
+        function = getattr(self.module, name)
+        if self.chain and _takes_n(function):
+            return function(*args, **self.params, n=self.n)
+        return function(*args, **self.params)
+
+    @property
+    def scene_name(self) -> str:
+        """The scene's name (the module's ``SCENE``)."""
+        return self.provided.scene
+
+    @property
+    def source_text(self) -> str:
+        """The generated module's source text (the file it was imported from)."""
+        return Path(self.module.__file__).read_text(encoding="utf-8")
+
+    def source(self, name: str) -> str:
+        """The source of the module's function or constant ``name`` (compiled kernels are built from it).
+
+        Functions give their definition (:func:`inspect.getsource`); other bindings their ``repr``.
+        """
+        value = getattr(self.module, name)
+        return inspect.getsource(value) if callable(value) else repr(value)
+
+    def binds(self, name: str) -> bool:
+        """Whether the module binds ``name`` (also its private helpers, e.g. a potential's scalar law helpers)."""
+        return hasattr(self.module, name)
+
+    def per_module(self, key: str, make: Callable[[], object] | None = None):
+        """A value computed once per generated module object, whatever the parameter values (compiled
+        kernels built from its sources): ``make()`` on the first call with ``key``, the same value after;
+        with ``make=None`` the value if made already, else None. Held as long as the module lives."""
+        memo = _PER_MODULE.setdefault(self.module, {})
+        if key not in memo and make is not None:
+            memo[key] = make()
+        return memo.get(key)
+
+    def value(self, name: str):
+        """The module's binding ``name`` (a private helper constant of a compiled section, e.g. a
+        coefficient table); compiled code reads these through the System only."""
+        return getattr(self.module, name)
+
+    def parameter_vector(self) -> np.ndarray:
+        """The parameter values in the module's ``PARAMETERS`` order, float64, shape (P,) (the compiled
+        kernels' argument)."""
+        return np.array([float(self.params[q]) for q in self.provided.parameters], dtype=np.float64)
+
+    def stiffness_matrix(self) -> np.ndarray:
+        """K, shape (N, N) (chains: N ≤ ``MAX_DENSE``)."""
+        return np.asarray(self._call("stiffness_matrix"), dtype=float)
+
+    def damping_matrix(self) -> np.ndarray:
+        """C, shape (N, N) (damped scenes; chains: N ≤ ``MAX_DENSE``)."""
+        return np.asarray(self._call("damping_matrix"), dtype=float)
+
+    def stiffness_bands(self) -> tuple[np.ndarray, np.ndarray]:
+        """``(diag (n,), off (n-1,))`` of a ``[chain]``'s K."""
+        diag, off = self._call("stiffness_bands")
+        return np.asarray(diag, dtype=float), np.asarray(off, dtype=float)
+
+    def mode_omega(self) -> np.ndarray:
+        """Closed-form ω of mode j = 0 … n-1 of a uniform ``[chain]`` (index order, not sorted), shape (n,)."""
+        return np.asarray(self._call("mode_omega"), dtype=float)
+
+    def omega2(self) -> np.ndarray:
+        """The module's ω², shape (N,) (closed forms where it has them)."""
+        return np.asarray(self._call("omega2"), dtype=float)
+
+    def mode_shapes(self) -> np.ndarray:
+        """The module's mode shapes as columns in :meth:`omega2` order, shape (N, N) (``[masses]``)."""
+        return np.asarray(self._call("mode_shapes"), dtype=float)
+
+    def gravity_forces(self) -> np.ndarray:
+        """m_i g, shape (N,) (``[gravity]``)."""
+        return np.asarray(self._call("gravity_forces"), dtype=float)
+
+    def forcing_harmonics(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """``(omega (H,), cos_amp (H, N), sin_amp (H, N), const (N,))`` of the expression forces F(t)."""
+        return tuple(np.asarray(a, dtype=float) for a in self._call("forcing_harmonics"))
+
+    def ground_harmonics(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, float]:
+        """``(omega (H,), cos_amp (H,), sin_amp (H,), const)`` of the ground acceleration a_g(t)."""
+        wg, gc, gs, g0 = self._call("ground_harmonics")
+        return (np.asarray(wg, dtype=float), np.asarray(gc, dtype=float), np.asarray(gs, dtype=float),
+                float(g0))
+
+    def dampers(self) -> tuple[np.ndarray, np.ndarray]:
+        """``(ends, c)``: the dashpots' mass indices (-1 a wall), int shape (D, 2), and constants, shape (D,);
+        empty without ``[[dampers]]``."""
+        if not self.has("damper_constants"):
+            return np.zeros((0, 2), dtype=np.intp), np.zeros(0)
+        if self.chain:
+            ends = self.module.damper_ends(n=self.n)
+        else:
+            ends = self.module.DAMPER_ENDS
+        return (np.asarray(ends, dtype=np.intp).reshape(-1, 2),
+                np.asarray(self._call("damper_constants"), dtype=float))
+
+    def rayleigh_coefficients(self) -> tuple[float, float] | None:
+        """``(alpha, beta)`` of ``[damping] rayleigh`` (C = alpha M + beta K); None without it."""
+        if not self.has("rayleigh_coefficients"):
+            return None
+        a, b = self._call("rayleigh_coefficients")
+        return float(a), float(b)
+
+    def modal_damping_ratios(self) -> np.ndarray | None:
+        """ζ per mode (ascending ω) of ``[damping] modal``, shape (N,); None without it."""
+        if not self.has("modal_damping_ratios"):
+            return None
+        return np.asarray(self._call("modal_damping_ratios"), dtype=float)
+
+    def make_acceleration(self) -> Callable[[np.ndarray], np.ndarray]:
+        """a(x) with everything that does not depend on x computed once (the module's ``make_acceleration``)."""
+        return self._call("make_acceleration")
 
     # -- what the module provides ---------------------------------------------------------------
     @property
@@ -117,8 +278,7 @@ class System:
         shape (N,); None without potentials."""
         if not self.potential:
             return None
-        mod, p = self.module, self.params
-        return np.asarray(mod.equilibrium(**p, n=self.n) if self.chain else mod.equilibrium(**p), dtype=float)
+        return np.asarray(self._call("equilibrium"), dtype=float)
 
     def spring_tensions(self, x: np.ndarray) -> np.ndarray:
         """Tension V'(d) of every spring (scenes with spring potentials; the generated cancellation-free
@@ -154,8 +314,7 @@ class System:
     @property
     def acceleration_fn(self) -> Callable[[np.ndarray], np.ndarray]:
         """a(x) with everything that does not depend on x computed once."""
-        mod, p = self.module, self.params
-        return mod.make_acceleration(**p, n=self.n) if self.chain else mod.make_acceleration(**p)
+        return self.make_acceleration()
 
     @property
     def damped(self) -> bool:
@@ -265,7 +424,7 @@ class System:
         if not self.chain:
             return float(self.spectrum.omega_max)
         if self.has("mode_omega"):
-            return float(np.max(self.module.mode_omega(**self.params, n=self.n), initial=0.0))
+            return float(np.max(self.mode_omega(), initial=0.0))
         return self.omega_max_bound()
 
     def stable(self, h: float, limit: float = 2.0) -> bool:
@@ -314,7 +473,7 @@ class System:
         None for linear springs."""
         if self.linear:
             return None
-        k3 = self.module.cubic_constants(**self.params, **({"n": self.n} if self.chain else {}))
+        k3 = self._call("spring_cubic_constants" if self.chain else "cubic_constants")
         return np.asarray(k3, dtype=float) * np.ones(self.spring_ends.shape[0])
 
     def damping_rate_matrix(self):
@@ -328,9 +487,8 @@ class System:
         if self.chain and self.n > LOADED_CHAIN_EXACT_MAX:
             import scipy.sparse
 
-            mod, n = self.module, self.n
-            ends = np.asarray(mod.damper_ends(n), dtype=np.intp).reshape(-1, 2)
-            c = np.asarray(mod.damper_constants(**self.params, n=n), dtype=float)
+            n = self.n
+            ends, c = self.dampers()
             rows, cols, vals = [], [], []
             for ci, si in ((0, 1.0), (1, -1.0)):
                 for cj, sj in ((0, 1.0), (1, -1.0)):
@@ -341,7 +499,7 @@ class System:
             C = scipy.sparse.coo_matrix((np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))),
                                         shape=(n, n)).tocsr()
             return -(scipy.sparse.diags(1.0 / self.masses) @ C).tocsr()
-        return -np.asarray(self.module.damping_matrix(**self.params), dtype=float) / self.masses[:, None]
+        return -self.damping_matrix() / self.masses[:, None]
 
     @property
     def external_fn(self) -> Callable[[float], np.ndarray] | None:

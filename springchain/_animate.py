@@ -86,7 +86,8 @@ def animate(scene: str | Path | Scene, mode: int | None = None, method: str | No
     """
     import numpy as np
 
-    from ._api import _system, load, simulate
+    from ._api import load, simulate
+    from ._modules import system_of
     from .numeric.plots import animation as anim
     from .numeric.errors import RunRefused
 
@@ -101,7 +102,7 @@ def animate(scene: str | Path | Scene, mode: int | None = None, method: str | No
     if mode is not None and (isinstance(mode, bool) or not isinstance(mode, int | np.integer)):
         raise RunRefused(f"mode {mode!r}: accepted: a whole number >= 0", quantity="mode")
     out = Path(out)
-    system, _ = _system(sc)
+    system, _ = system_of(sc)
     chain = system.chain
     if method is None:
         if mode is None:

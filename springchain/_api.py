@@ -32,27 +32,22 @@ def _chain_omega2(scene: Scene, chain_modes):
     ``omega2()``, O(n) per value; :mod:`numeric.modes.chain`)."""
     if chain_modes.omega2 is not None:
         return None
-    from ._modules import load_module
     from .derive.chain import MAX_MODES_LISTED, MODES_LISTED_EACH_END
-    from .generated.contract import End, read
+    from .generated.contract import End
 
-    module, _ = load_module(scene)
+    system, _ = _system(scene)
     n = scene.chain.n
-    if n > MAX_MODES_LISTED and read(module).left is not End.RING:
-        import numpy as np
-
+    if n > MAX_MODES_LISTED and system.ends[0] is not End.RING:
         from .numeric.modes.chain import bidiagonal_factor, singular_values
         from .numeric.progress import phase
 
         e = MODES_LISTED_EACH_END
         with phase(f"modes: the {e} lowest and {e} highest of {n} (bisection on the spring factor)"):
-            p = scene.parameters
-            f = bidiagonal_factor(np.asarray(module.masses(**p), dtype=float), module.spring_ends(n=n),
-                                  np.asarray(module.spring_constants(**p), dtype=float))
+            f = bidiagonal_factor(system.masses, system.spring_ends, system.stiffness)
             w = singular_values(f, e, e)
         return dict(zip(list(range(e)) + list(range(n - e, n)), (w * w).tolist()))
     try:
-        return module.omega2(**scene.parameters)
+        return system.omega2()
     except ValueError:  # a non-uniform ring longer than the module's MAX_DENSE
         return None
 

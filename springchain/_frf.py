@@ -302,7 +302,7 @@ def _chain_modes(sc: Scene, system) -> list | None:
             return None
         el = Elements.from_system(system)
         return damped_rows(el.masses, el.spring_ends, el.stiffness, el.damper_ends, el.damping)
-    alpha, beta = (float(v) for v in system.module.rayleigh_coefficients(**system.params))
+    alpha, beta = system.rayleigh_coefficients()
     rows = []
     for w in undamped_omegas(system, MAX_REFINED).tolist():
         if w > 0 and len(rows) < MAX_REFINED:

@@ -11,7 +11,6 @@ from __future__ import annotations
 
 import hashlib
 import importlib
-import importlib.util
 import os
 import sys
 from pathlib import Path
@@ -19,6 +18,8 @@ from types import ModuleType
 
 from ._scenes import is_bundled
 from .derive.scene import Scene
+from .numeric.io.files import atomic_write_text
+from .numeric.io.imports import import_file
 
 GENERATED = __package__ + ".generated"
 
@@ -59,13 +60,6 @@ def cache_dir() -> Path:
     return (Path(xdg) if xdg else Path.home() / ".cache") / "springchain"
 
 
-def _import_file(path: Path, name: str) -> ModuleType:
-    spec = importlib.util.spec_from_file_location(name, path)
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
-
-
 def bundled_module(scene: Scene) -> ModuleType | None:
     """The checked-in generated module of a bundled scene if its scene hash matches."""
     if not is_bundled(scene.file) or not module_path(scene).exists():
@@ -82,15 +76,13 @@ def bundled_module(scene: Scene) -> ModuleType | None:
 
 def load_module(scene: Scene) -> tuple[ModuleType, str]:
     """The generated module for a scene, and where it came from ("generated" or "cache")."""
-    from .numeric.io.files import atomic_write_text
-
     module = bundled_module(scene)
     if module is not None:
         return module, "generated"
     path = cache_dir() / f"{scene.name}-{scene.sha256[:16]}-{_code_version()}.py"
     if not path.exists():
         atomic_write_text(path, derive(scene).source)
-    return _import_file(path, f"springchain_cache_{scene.name}_{scene.sha256[:16]}"), "cache"
+    return import_file(path, f"springchain_cache_{scene.name}_{scene.sha256[:16]}"), "cache"
 
 
 def load_tables(scene: Scene) -> dict:
@@ -124,8 +116,6 @@ def check(scene: Scene, out_dir: Path | None = None) -> tuple[bool, str]:
 
 def write(derivation, out_dir: Path | None = None) -> Path:
     """Write a derivation's module atomically into ``out_dir`` (default: the package's generated/)."""
-    from .numeric.io.files import atomic_write_text
-
     path = module_path(derivation.scene, out_dir)
     atomic_write_text(path, derivation.source)
     sys.modules.pop(f"{GENERATED}.{derivation.scene.name}", None)  # a re-import must see the new text

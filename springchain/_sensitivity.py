@@ -85,12 +85,10 @@ class Setup:
 
         from .numeric.sensitivity.compute import compute
         from .numeric.sensitivity.derivatives import ElementDerivatives
-        from .numeric.system import System
 
         vals = dict(self.scene.parameters)
         vals.update(values or {})
-        system = self.system if values is None else System.from_module(
-            self.system.module, vals, tables=self.system.tables, ground_table=self.system.ground_table)
+        system = self.system if values is None else self.system.with_params(vals)
         if values is not None and not (np.all(system.masses > 0) and np.all(system.stiffness >= 0)):
             from .numeric.errors import RunRefused
 

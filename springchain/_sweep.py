@@ -216,7 +216,7 @@ def sweep(scene: str | Path | Scene, vary=(), disorder=(), samples: int = 100, *
             raise RunRefused(f"--disorder {what}={dist.text}: accepted: uniform, normal or lognormal (a grid "
                              "is not a disorder)")
     system, _ = _system(sc)
-    source = Path(system.module.__file__).read_text(encoding="utf-8")
+    source = system.source_text
     spec = SweepSpec(sc.name, source, tuple(sorted(sc.parameters.items())), tuple(vary), tuple(disorder),
                      samples, seed)
     total = spec.total

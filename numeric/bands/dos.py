@@ -28,7 +28,7 @@ def _sorted_value(cell: Cell, q: np.ndarray, j: int) -> tuple[np.ndarray, np.nda
     return s.omega[:, j], s.velocity[:, j]
 
 
-def _pieces(cell: Cell, j: int, qs: np.ndarray, w: np.ndarray) -> list[tuple[float, float]]:
+def band_pieces(cell: Cell, j: int, qs: np.ndarray, w: np.ndarray) -> list[tuple[float, float]]:
     """Monotone pieces [q_a, q_b] of band j, with the interior extrema refined."""
     from scipy.optimize import minimize_scalar
 
@@ -83,7 +83,7 @@ def density(cell: Cell, omega: np.ndarray) -> np.ndarray:
     grid = spectrum(cell, qs)
     out = np.zeros((omega.shape[0], cell.p))
     for j in range(cell.p):
-        for a, b in _pieces(cell, j, qs, grid.omega[:, j]):
+        for a, b in band_pieces(cell, j, qs, grid.omega[:, j]):
             (wa, wb), _ = _sorted_value(cell, np.array([a, b]), j)
             lo, hi = min(wa, wb), max(wa, wb)
             inside = np.flatnonzero((omega > lo) & (omega < hi))

@@ -84,7 +84,7 @@ def label(cell: Cell, omega2: np.ndarray, vectors: np.ndarray, ring: bool) -> li
     ring : bool
         The chain closes on itself (no ends: a gap mode is a defect mode).
     """
-    from .dos import SAMPLES, _pieces
+    from .dos import SAMPLES, band_pieces
 
     p, n = cell.p, omega2.shape[0]
     cells = -(-n // p)
@@ -93,7 +93,7 @@ def label(cell: Cell, omega2: np.ndarray, vectors: np.ndarray, ring: bool) -> li
     grid = spectrum(cell, qs)
     candidates: list[list[tuple[int, float]]] = [[] for _ in range(n)]
     for j in range(p):
-        for a, b in _pieces(cell, j, qs, grid.omega[:, j]):
+        for a, b in band_pieces(cell, j, qs, grid.omega[:, j]):
             ends = spectrum(cell, np.array([a, b])).omega[:, j]
             lo, hi = min(ends), max(ends)
             tol = 1e-12 * max(hi, 1e-300)

@@ -21,7 +21,7 @@ from .runs import adaptive_rtols, adaptive_sweep, energy_norm, progress_reporter
     peer_filter, selected_in_order, timed_run
 from .records import BenchConfig, BenchRecord, BenchResult
 from ..plan.planner import with_tolerance
-from ..plan.pilot import REFERENCE_FLOATS, ExactReference, PilotPlanner, _reference_grid
+from ..plan.pilot import REFERENCE_FLOATS, ExactReference, PilotPlanner, reference_grid
 from ..run.grid import Grid
 from ..run.protocol import Kind, Method, Options
 from ..run import registry
@@ -81,7 +81,7 @@ def run_pilot_bench(system: System, x0: np.ndarray, v0: np.ndarray, t_end: float
                           law.error(grid.h, t_end))
             report_run(prog, rec)
             records.append(rec)
-    grid = _reference_grid(t_end, dt_out, n)
+    grid = reference_grid(t_end, dt_out, n)
     xr, vr = ref.at(grid.t)
     size = max(float(np.max(np.abs(xr))), 1e-300)
     selected = set(filter(peer_filter(config, methods), registry.methods(Kind.ADAPTIVE, Options(progress=False),

@@ -34,7 +34,7 @@ from __future__ import annotations
 
 import math
 import time
-from dataclasses import asdict, dataclass, field
+from dataclasses import InitVar, asdict, dataclass, field
 from types import ModuleType
 from typing import Callable
 
@@ -44,7 +44,7 @@ from ...generated.contract import MAX_DENSE, End
 from ..compiled import fast
 from .timing import best_seconds, interleaved_samples, interleaved_seconds, single_threaded_blas
 from ..exact.chain import ChainModal
-from ..system import interface
+from ..system import System
 
 #: Default chain sizes of ``springchain scaling``.
 DEFAULT_SIZES = (3, 10, 30, 100, 300, 1000, 2000, 4000, 10_000, 30_000, 100_000, 300_000, 1_000_000)
@@ -173,24 +173,31 @@ def crossover_time(c_exact: float, c_step: float, tol: float, omega_max: float) 
 # -- chains ---------------------------------------------------------------------------------------------
 @dataclass(frozen=True)
 class ChainCase:
-    """A generated ``[chain]`` module at fixed parameters, evaluated at any N."""
+    """A generated ``[chain]`` module at fixed parameters, evaluated at any N (built from the module,
+    held as a :class:`System`)."""
 
     label: str
-    module: ModuleType = field(repr=False)
+    module: InitVar[ModuleType]
     params: dict[str, float] = field(default_factory=dict)
+    #: The module bound to ``params`` at its own N.
+    base: System = field(init=False, repr=False)
+
+    def __post_init__(self, module: ModuleType) -> None:
+        object.__setattr__(self, "base", System.from_module(module, self.params))
 
     @property
     def values(self) -> dict[str, float]:
-        p = dict(self.module.DEFAULTS)
-        p.update(self.params)
-        return p
+        """The parameter values (the module's defaults updated by ``params``)."""
+        return dict(self.base.params)
+
+    def system(self, n: int) -> System:
+        """The chain at ``n`` masses."""
+        return self.base.with_n(n)
 
     def arrays(self, n: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """masses (n,), spring_ends (S, 2), stiffness (S,)."""
-        p = self.values
-        return (np.asarray(self.module.masses(**p, n=n), dtype=float),
-                np.asarray(self.module.spring_ends(n=n)), np.asarray(self.module.spring_constants(**p, n=n),
-                                                                     dtype=float))
+        s = self.system(n)
+        return s.masses, s.spring_ends, s.stiffness
 
     def initial(self, n: int) -> tuple[np.ndarray, np.ndarray]:
         """A smooth initial displacement (half sine) and zero velocity, shape (n, 1)."""
@@ -200,7 +207,8 @@ class ChainCase:
 
 def _numpy_step(case: ChainCase, n: int, h: float) -> tuple[Callable, str]:
     """The project's ``verlet`` kernel on the generated stencil (or :mod:`numeric.compiled.fast`'s NumPy backend)."""
-    acc = case.module.make_acceleration(**case.values, n=n)
+    system = case.system(n)
+    acc = system.make_acceleration()
     try:
         from ..integrators.base import Problem
         from ..run import registry
@@ -208,7 +216,7 @@ def _numpy_step(case: ChainCase, n: int, h: float) -> tuple[Callable, str]:
         kernel = registry.implementation(registry.DEFAULT_STEP)().kernel(Problem(acc), h)
         return kernel, f"numeric.integrators {registry.DEFAULT_STEP} kernel"
     except Exception:  # the integrator package's API moved: time the same formula here
-        fv = fast.FusedVerlet.from_module(case.module, case.params, n, h, fast.Backend.NUMPY)
+        fv = fast.FusedVerlet.from_system(system, h, fast.Backend.NUMPY)
         return fv.kernel(), "numeric.compiled.fast NumPy backend"
 
 
@@ -233,9 +241,10 @@ def floor_calls(n: int) -> dict[str, tuple[Callable[[], object], int]]:
 def step_calls(case: ChainCase, n: int, prefix: str = "", advance_steps: int = 100) -> tuple[dict, str]:
     """Verlet-step calls (NumPy stencil path, fused step, fused multi-step) for :func:`interleaved_seconds`."""
     x0, v0 = case.initial(n)
-    h = 0.5 * STABLE_OMEGA_H / fast.ChainCoefficients.from_module(case.module, case.params, n).omega_max_bound
+    system = case.system(n)
+    h = 0.5 * STABLE_OMEGA_H / fast.ChainCoefficients.from_system(system).omega_max_bound
     kernel, source = _numpy_step(case, n, h)
-    a0 = case.module.make_acceleration(**case.values, n=n)(x0)
+    a0 = system.make_acceleration()(x0)
     state = [x0.copy(), v0.copy(), a0.copy()]
 
     def numpy_step():
@@ -243,7 +252,7 @@ def step_calls(case: ChainCase, n: int, prefix: str = "", advance_steps: int = 1
 
     calls = {prefix + "step_numpy": (numpy_step, 1)}
     if fast.available():
-        fv = fast.FusedVerlet.from_module(case.module, case.params, n, h, fast.Backend.NUMBA)
+        fv = fast.FusedVerlet.from_system(system, h, fast.Backend.NUMBA)
         x, v, a = x0[:, 0].copy(), v0[:, 0].copy(), a0[:, 0].copy()
         calls[prefix + "step_fused"] = (lambda: fv.step(x, v, a, inplace=True), 1)
         if not prefix:
@@ -284,8 +293,9 @@ def measure_exact_uniform(case: ChainCase, n: int, budget: float) -> dict:
     """Transform solution: set-up (two forward transforms) and one output time."""
     x0, v0 = case.initial(n)
     x0, v0 = x0[:, 0], v0[:, 0]
-    setup = best_seconds(lambda: ChainModal.from_module(case.module, case.params, x0, v0), budget=budget)
-    sol = ChainModal.from_module(case.module, case.params, x0, v0)
+    system = case.system(n)
+    setup = best_seconds(lambda: ChainModal.from_system(system, x0, v0), budget=budget)
+    sol = ChainModal.from_system(system, x0, v0)
     ev = best_seconds(lambda: sol.at(12.5), budget=budget)
     return {"setup_transform": setup, "eval_transform": ev, "basis": sol.basis.value}
 
@@ -296,19 +306,20 @@ def measure_exact_dense(case: ChainCase, n: int, config: ScalingConfig) -> dict:
 
     from ..modes.spectrum import spectrum
 
-    m, ends, k = case.arrays(n)
+    system = case.system(n)
+    m, ends, k = system.masses, system.spring_ends, system.stiffness
     out: dict = {"setup_dense_svd": None, "setup_dense_eigh": None, "setup_tridiagonal": None, "eval_dense": None}
     b = config.budget
     if n <= config.svd_max:
         out["setup_dense_svd"] = best_seconds(lambda: spectrum(m, ends, k), budget=b)
     if n <= config.dense_max:
         r = 1.0 / np.sqrt(m)
-        K = case.module.stiffness_matrix(**case.values, n=n) if n <= MAX_DENSE else None
+        K = system.stiffness_matrix() if n <= MAX_DENSE else None
         if K is not None:
             D = K * r[:, None] * r[None, :]
             out["setup_dense_eigh"] = best_seconds(lambda: scipy.linalg.eigh(D), budget=b)
-    if n <= config.tridiagonal_max and interface(case.module).left is not End.RING:
-        diag, off = case.module.stiffness_bands(**case.values, n=n)
+    if n <= config.tridiagonal_max and system.ends[0] is not End.RING:
+        diag, off = system.stiffness_bands()
         r = 1.0 / np.sqrt(m)
         d, e = diag * r * r, off * r[:-1] * r[1:]
         out["setup_tridiagonal"] = best_seconds(lambda: scipy.linalg.eigh_tridiagonal(d, e), budget=b)
@@ -393,7 +404,7 @@ def run(uniform: ChainCase, random: ChainCase, config: ScalingConfig = ScalingCo
     say = progress or (lambda line: None)
     records: list[dict] = []
     omega_random: dict[int, float] = {}
-    omega_uniform = fast.ChainCoefficients.from_module(uniform.module, uniform.params, 3).omega_max_bound
+    omega_uniform = fast.ChainCoefficients.from_system(uniform.system(3)).omega_max_bound
     with single_threaded_blas():
         if fast.available():
             say("compiling the fused kernels (numba; cached after the first run)")
@@ -412,7 +423,7 @@ def run(uniform: ChainCase, random: ChainCase, config: ScalingConfig = ScalingCo
                 rec["fused_over_floor"] = rec["step_fused_advance"] / rec["floor"]
                 rec["fused_sweep_over_floor"] = rec["step_fused_sweep"] / rec["floor"]
                 rec["fused_step_over_floor"] = rec["step_fused"] / rec["floor"]
-            omega_random[n] = fast.ChainCoefficients.from_module(random.module, random.params, n).omega_max_bound
+            omega_random[n] = fast.ChainCoefficients.from_system(random.system(n)).omega_max_bound
             records.append(rec)
             say(f"N = {n:>8d}  ({j + 1}/{len(sizes)}, {time.perf_counter() - t0:.1f} s): "
                 f"numpy step {_ns(rec['step_numpy'], n)}, fused {_ns(rec.get('step_fused'), n)}, "

@@ -267,8 +267,26 @@ def run_bench(system: System, x0: np.ndarray, v0: np.ndarray, t_end: float, dt_o
 
 
 # -- error against horizon ---------------------------------------------------------------------------
-#: The step methods of the error-vs-horizon study (verlet-kahan follows verlet; the propagators are exact).
-HORIZON_METHODS = ("verlet", "yoshida4", "blanes-moan4", "blanes-moan6", "kahan-li8", "rk4")
+def horizon_methods() -> tuple[str, ...]:
+    """The step methods of the error-vs-horizon study, read from the registry: the explicit fixed-step
+    integrators (run by the plain step method: the implicit Newmark family has its own), with a finite
+    stability limit (the exact propagators, expm and chebyshev, have none), one per scheme (an integrator
+    that subclasses a listed one follows it: verlet-kahan is verlet with compensated sums)."""
+    out: list[tuple[str, type]] = []
+    for name in registry.names(Kind.STEP):
+        e = registry.entry(name)
+        cls = e.load()
+        if e.runner is None and math.isfinite(cls.stability_limit) \
+                and not any(issubclass(cls, listed) for _, listed in out):
+            out.append((name, cls))
+    return tuple(name for name, _ in out)
+
+
+def __getattr__(name: str):
+    if name == "HORIZON_METHODS":  # the study's methods (imports the step integrators on first access)
+        return horizon_methods()
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
 
 
 def horizon_study(ctx: _Context) -> tuple[tuple[HorizonCurve, ...], list[str]]:
@@ -293,7 +311,7 @@ def horizon_study(ctx: _Context) -> tuple[tuple[HorizonCurve, ...], list[str]]:
         e = ctx.system.energy(run.x.T, run.v.T)
         return err, np.maximum.accumulate(np.abs(e - ctx.e0) / abs(ctx.e0))
 
-    for m in registry.methods(Kind.STEP, quiet, only=HORIZON_METHODS):
+    for m in registry.methods(Kind.STEP, quiet, only=horizon_methods()):
         traits = m.traits
         h = traits.evals_per_step / cfg.horizon_work
         if ctx.planner.model.omega_max * h >= traits.stability_limit:

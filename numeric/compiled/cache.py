@@ -20,17 +20,17 @@ from __future__ import annotations
 
 import functools
 import hashlib
-import importlib.util
 import inspect
 import os
-import sys
-import tempfile
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
 from types import ModuleType
 
 from ...generated.contract import SCALAR_HELPERS
+from ..io.files import atomic_write_text
+from ..io.imports import import_file
+from ..system import System
 from . import implicit_loops as _implicit
 from . import loops as _template
 
@@ -87,17 +87,18 @@ def loops_source() -> str:
             + "\n\n".join(inspect.getsource(t) for t in _TEMPLATES) + _LOOPS_TAIL.format(binds=binds))
 
 
-def source_of(module: ModuleType) -> str:
-    """The text of the compiled force of ``module`` (which must define ``scalar_force``)."""
+def source_of(system: System) -> str:
+    """The text of the compiled force of ``system``'s module (which must define ``scalar_force``)."""
     import numba
 
-    body = inspect.getsource(module.scalar_force) + "\n\n" + inspect.getsource(module._scalar_force_terms)
-    laws = [name for name in _LAW_HELPERS if hasattr(module, name)]  # a potential's scalar helpers
+    body = system.source("scalar_force") + "\n\n" + system.source("_scalar_force_terms")
+    laws = [name for name in _LAW_HELPERS if system.binds(name)]  # a potential's scalar helpers
     if laws:
-        body += (f"\n\n_EXPM1MX_COEFFICIENTS = {tuple(getattr(module, '_EXPM1MX_COEFFICIENTS', ()))!r}\n\n"
-                 + "\n\n".join(inspect.getsource(getattr(module, name)) for name in laws))
+        coefficients = tuple(system.value("_EXPM1MX_COEFFICIENTS")) if system.binds("_EXPM1MX_COEFFICIENTS") else ()
+        body += (f"\n\n_EXPM1MX_COEFFICIENTS = {coefficients!r}\n\n"
+                 + "\n\n".join(system.source(name) for name in laws))
     binds = "\n".join(f"{name} = _numba.njit(cache=True, error_model=\"numpy\")({name})" for name in laws)
-    return (f"# compiled force of scene {module.SCENE!r} (numba {numba.__version__}); written by "
+    return (f"# compiled force of scene {system.scene_name!r} (numba {numba.__version__}); written by "
             f"springchain.numeric.compiled.cache, do not edit\n"
             + "import numpy as _np\n\n\n" + body
             + _FORCE_TAIL.format(binds=binds, signature=FORCE_SIGNATURE))
@@ -138,8 +139,8 @@ class Compiled:
 
     Attributes
     ----------
-    module : ModuleType
-        The module's force file (its ``force`` is the ``numba.cfunc`` the loops call).
+    kernels : ModuleType
+        The imported force file (its ``force`` is the ``numba.cfunc`` the loops call); not the generated module.
     path : Path
     compile_seconds : float
         Wall time spent in this process compiling (or loading from the disk cache) the force, and the
@@ -150,7 +151,7 @@ class Compiled:
         Whether the force was compiled (not loaded from disk) in this process.
     """
 
-    module: ModuleType
+    kernels: ModuleType
     path: Path
     compile_seconds: float = 0.0
     compiled: set = field(default_factory=set)
@@ -159,7 +160,7 @@ class Compiled:
     @property
     def force(self):
         """The module's ``scalar_force`` as a first-class function (the loops' first argument)."""
-        return self.module.force
+        return self.kernels.force
 
     def loop(self, name: str):
         """The dispatcher ``name`` (one of the templates' ``LOOPS``), shared by every module."""
@@ -174,22 +175,31 @@ class Compiled:
 
 
 _LOADED: dict[str, Compiled] = {}
-#: id(generated module) -> (module, its Compiled): the text is hashed once per module object.
-_BY_MODULE: dict[int, tuple[ModuleType, Compiled]] = {}
+#: The key of a generated module's Compiled in :meth:`System.per_module` (its text is hashed once per module).
+PER_MODULE_KEY = "compiled.cache.force"
 
 
-def compiled(module: ModuleType) -> Compiled:
-    """The compiled force of ``module`` (written, imported and compiled or loaded once per process)."""
-    known = _BY_MODULE.get(id(module))
-    if known is not None and known[0] is module:
-        return known[1]
-    text = source_of(module)
+def compiled(system: System) -> Compiled:
+    """The compiled force of ``system``'s module (written, imported and compiled or loaded once per process)."""
+    return system.per_module(PER_MODULE_KEY, lambda: _load_force(source_of(system)))
+
+
+def force_loaded(system: System) -> bool:
+    """Whether the compiled force of ``system``'s module is loaded in this process already."""
+    return system.per_module(PER_MODULE_KEY) is not None
+
+
+def compile_seconds() -> float:
+    """Seconds this process spent compiling (or loading) compiled loops, over all modules."""
+    return sum(c.compile_seconds for c in _LOADED.values())
+
+
+def _load_force(text: str) -> Compiled:
     key = hashlib.sha256(text.encode()).hexdigest()[:20]
     if key not in _LOADED:
         t0 = time.perf_counter()
-        mod, path = load_text(text, f"sc_{key}")
-        _LOADED[key] = Compiled(mod, path, time.perf_counter() - t0, force_compiled=not mod.force.cache_hits)
-    _BY_MODULE[id(module)] = (module, _LOADED[key])
+        kernels, path = load_text(text, f"sc_{key}")
+        _LOADED[key] = Compiled(kernels, path, time.perf_counter() - t0, force_compiled=not kernels.force.cache_hits)
     return _LOADED[key]
 
 
@@ -199,20 +209,10 @@ def load_text(text: str, stem: str) -> tuple[ModuleType, Path]:
 
     ``stem`` must name the text's content (a hash of it): a file is never rewritten.
     """
-    root = cache_root()
-    root.mkdir(parents=True, exist_ok=True)
-    path = root / f"{stem}.py"
+    path = cache_root() / f"{stem}.py"
     if not path.exists():
-        fd, tmp = tempfile.mkstemp(dir=root, suffix=".tmp")
-        with os.fdopen(fd, "w") as fh:
-            fh.write(text)
-        os.replace(tmp, path)
-    name = f"_springchain_compiled_{stem}"
-    spec = importlib.util.spec_from_file_location(name, path)
-    mod = importlib.util.module_from_spec(spec)
-    sys.modules[name] = mod
-    spec.loader.exec_module(mod)
-    return mod, path
+        atomic_write_text(path, text)
+    return import_file(path, f"_springchain_compiled_{stem}", register=True), path
 
 
 def timed_first_call(c: Compiled, name: str, *args):
@@ -227,5 +227,5 @@ def timed_first_call(c: Compiled, name: str, *args):
     return disp(*args)
 
 
-__all__ = ["Compiled", "FORCE_SIGNATURE", "compiled", "available", "cache_root", "load_text", "loops_module",
+__all__ = ["Compiled", "FORCE_SIGNATURE", "PER_MODULE_KEY", "compiled", "compile_seconds", "force_loaded", "available", "cache_root", "load_text", "loops_module",
            "loop_on_hand", "loops_source", "source_of", "timed_first_call"]

@@ -44,10 +44,10 @@ from typing import Callable
 import numpy as np
 
 from ...generated.contract import End
-from ..system import interface
+from ..system import System, interface
 from ..errors import RunRefused
 from .fast_coefficients import ChainCoefficients
-from .fast_kernels import BLOCK_ELEMENTS, _compiled, _Mode, available, stream_update
+from .fast_kernels import BLOCK_ELEMENTS, compiled_kernels, SweepMode, available, stream_update
 
 
 class Backend(enum.Enum):
@@ -102,10 +102,20 @@ class FusedVerlet:
         h = float(h)
         if not (math.isfinite(h) and h > 0):
             raise ValueError(f"step size h must be finite and > 0, got {h!r}")
-        coeffs = ChainCoefficients.from_module(module, params, n)
-        values = dict(interface(module).defaults)
-        values.update(params or {})
-        law_missing = interface(module).potential and coeffs.law is None  # an index-dependent potential
+        if n is not None and int(n) < 1:
+            raise ValueError(f"a chain needs n >= 1 masses, got {n}")
+        if not interface(module).chain:
+            raise RunRefused("the fused chain step needs a [chain] scene's generated module")
+        return cls.from_system(System.from_module(module, params, n=n), h, backend)
+
+    @classmethod
+    def from_system(cls, system: System, h: float = 1.0, backend: Backend | None = None) -> "FusedVerlet":
+        """Bind a ``[chain]`` :class:`System` (its size and parameter values) and a step (see :meth:`from_module`)."""
+        h = float(h)
+        if not (math.isfinite(h) and h > 0):
+            raise ValueError(f"step size h must be finite and > 0, got {h!r}")
+        coeffs = ChainCoefficients.from_system(system)
+        law_missing = system.potential and coeffs.law is None  # an index-dependent potential
         if backend is None:
             backend = Backend.NUMPY if law_missing else default_backend()
         if backend is Backend.NUMBA and law_missing and available():
@@ -114,7 +124,7 @@ class FusedVerlet:
         if backend is Backend.NUMBA and not available():
             raise RunRefused("the fused chain step needs numba: install the `fast` extra "
                              "(pip install 'springchain[fast]') or use the NumPy backend")
-        return cls(coeffs, module.make_acceleration(**values, n=coeffs.n), h, backend)
+        return cls(coeffs, system.make_acceleration(), h, backend)
 
     @property
     def n(self) -> int:
@@ -128,7 +138,7 @@ class FusedVerlet:
 
     def _kernels(self):
         law = self.coefficients.law
-        k = _compiled() if law is None else law.kernels
+        k = compiled_kernels() if law is None else law.kernels
         return k.force, k.sweep, k.half_kick
 
     # -- building blocks ------------------------------------------------------------------
@@ -181,7 +191,7 @@ class FusedVerlet:
             xo, vo, ao = np.empty_like(x), np.empty_like(v), np.empty_like(a)
             xof, vof, aof = xo.reshape(-1), vo.reshape(-1), ao.reshape(-1)
         self._kernels()[1](xf, vf, af, xof, vof, aof, inplace, nb, *self.coefficients.kernel_args(), h,
-                           int(_Mode.VERLET), 1, False)
+                           int(SweepMode.VERLET), 1, False)
         return xo, vo, ao
 
     def advance(self, x: np.ndarray, v: np.ndarray, a: np.ndarray, steps: int, *,
@@ -213,7 +223,7 @@ class FusedVerlet:
         force, sweep, half_kick = self._kernels()
         args = self.coefficients.kernel_args()
         half_kick(vf, af, 0.5 * h)
-        sweep(xf, vf, af, xf, vf, af, True, nb, *args, h, int(_Mode.LEAPFROG), steps, bool(two_step_sweeps))
+        sweep(xf, vf, af, xf, vf, af, True, nb, *args, h, int(SweepMode.LEAPFROG), steps, bool(two_step_sweeps))
         force(xf, af, nb, *args)
         half_kick(vf, af, -0.5 * h)
         return x, v, a
@@ -261,14 +271,14 @@ def chain_verlet_advance(module: ModuleType, params: dict[str, float] | None, n:
 COMPILED_FORCE_MIN_N = 1 << 14
 
 
-def compiled_acceleration(module: ModuleType, values: dict[str, float], n: int):
+def compiled_acceleration(system: System):
     """``a(x)`` of a potential chain through the compiled kernel (x shape (n,) or (n, B)), for the
     step methods other than Verlet; None below :data:`COMPILED_FORCE_MIN_N` masses, without numba or
     for an index-dependent law."""
-    facts = interface(module)
-    if n < COMPILED_FORCE_MIN_N or not facts.potential or facts.law_indexed or not available():
+    if (not system.chain or system.n < COMPILED_FORCE_MIN_N or not system.potential or system.law_indexed
+            or not available()):
         return None
-    fv = FusedVerlet.from_module(module, values, n, 1.0, Backend.NUMBA)
+    fv = FusedVerlet.from_system(system, 1.0, Backend.NUMBA)
 
     def acceleration(x):
         return fv.force(np.ascontiguousarray(x, dtype=np.float64))
@@ -281,7 +291,7 @@ def acceleration_of(system) -> Callable[[np.ndarray], np.ndarray]:
     index-free spring potential through its compiled law (:func:`compiled_acceleration`), every other
     system through :attr:`System.acceleration_fn`."""
     if system.chain and system.potential:
-        fast = compiled_acceleration(system.module, system.params, system.n)
+        fast = compiled_acceleration(system)
         if fast is not None:
             return fast
     return system.acceleration_fn

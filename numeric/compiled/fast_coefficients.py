@@ -11,7 +11,7 @@ import numpy as np
 
 from ...generated.contract import End
 from ..errors import RunRefused
-from ..system import interface
+from ..system import System, interface
 
 
 @dataclass(frozen=True)
@@ -65,22 +65,26 @@ class ChainCoefficients:
         module : module
             A generated chain module (``CHAIN = True``).
         params : dict, optional
-            Parameter values overriding ``module.DEFAULTS``.
+            Parameter values overriding the module's defaults.
         n : int, optional
-            Number of masses (default ``module.N``).
+            Number of masses (default the module's N).
         """
-        facts = interface(module)
-        if not facts.chain:
-            raise RunRefused("the fused chain step needs a [chain] scene's generated module")
-        values = dict(facts.defaults)
-        values.update(params or {})
-        n = int(facts.n if n is None else n)
-        if n < 1:
+        if n is not None and int(n) < 1:
             raise ValueError(f"a chain needs n >= 1 masses, got {n}")
-        left, right = facts.left, facts.right
-        uniform = facts.uniform
-        m = np.asarray(module.masses(**values, n=n), dtype=float)
-        ks = np.asarray(module.spring_constants(**values, n=n), dtype=float)
+        if not interface(module).chain:
+            raise RunRefused("the fused chain step needs a [chain] scene's generated module")
+        return cls.from_system(System.from_module(module, params, n=n))
+
+    @classmethod
+    def from_system(cls, system: System) -> "ChainCoefficients":
+        """Read the coefficients of a ``[chain]`` :class:`System` (its size and parameter values)."""
+        if not system.chain:
+            raise RunRefused("the fused chain step needs a [chain] scene's generated module")
+        n = system.n
+        left, right = system.ends
+        uniform = system.uniform
+        m = system.masses
+        ks = system.stiffness
         off = 1 if left is End.WALL else 0
         inner = ks[off:off + n - 1]
         k_left = float(ks[0]) if left is End.WALL else 0.0
@@ -88,12 +92,12 @@ class ChainCoefficients:
         k3 = None
         k3_left = k3_right = 0.0
         law = None
-        if facts.potential:  # a spring potential: the compiled law (index-free laws only)
+        if system.potential:  # a spring potential: the compiled law (index-free laws only)
             from .potential_law import compiled_law
 
-            law = None if facts.law_indexed else compiled_law(module, values)
-        elif not facts.linear:  # spring_cubic_constants(): spring_constants() order
-            k3s = np.asarray(module.spring_cubic_constants(**values, n=n), dtype=float)
+            law = None if system.law_indexed else compiled_law(system)
+        elif not system.linear:  # spring_cubic_constants(): spring_constants() order
+            k3s = system.cubic_stiffness
             k3 = np.array(k3s[off:off + n - 1])
             if left is End.WALL:
                 k3_left = float(k3s[0])

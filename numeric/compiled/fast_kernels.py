@@ -1,6 +1,6 @@
 """The compiled sweeps behind :mod:`springchain.numeric.compiled.fast` (numba, compiled on first use).
 
-Module-level plain functions (``*_impl``) compiled lazily by :func:`_compiled` with
+Module-level plain functions (``*_impl``) compiled lazily by :func:`compiled_kernels` with
 ``numba.njit(cache=True)``; :func:`stream_update` is the memory floor's reference sweep.
 """
 
@@ -27,7 +27,7 @@ def available() -> bool:
     return True
 
 
-class _Mode(enum.IntEnum):
+class SweepMode(enum.IntEnum):
     """What a sweep's kick does with the new acceleration A (a run-time argument of the kernels)."""
 
     VERLET = 0  #: v ← v + h/2 (a + A); a ← A
@@ -36,17 +36,17 @@ class _Mode(enum.IntEnum):
 
 
 # -- compiled sweeps ------------------------------------------------------------------------------
-# The kernels are plain module-level functions compiled lazily by :func:`_compiled` with
+# The kernels are plain module-level functions compiled lazily by :func:`compiled_kernels` with
 # ``numba.njit(cache=True)`` (so a second process loads machine code instead of compiling).
 # They are specialised by the *types* of the coefficients: a uniform chain passes floats, an
 # index-dependent one arrays; a linear chain passes None for the cubic coefficients. The helpers
 # below are overloaded for numba on those types, so the branches vanish at compile time and the
-# inner loops vectorise. What a kick does (:class:`_Mode`) is a run-time argument tested outside
+# inner loops vectorise. What a kick does (:class:`SweepMode`) is a run-time argument tested outside
 # the inner loops. States are flat C-contiguous float64 views of (n, nb) arrays: row i is
 # elements i*nb … i*nb + nb - 1. Chain ends are the integers of :class:`End`.
 
 _FREE, _WALL, _RING = End.FREE.code, End.WALL.code, End.RING.code
-_VERLET, _LEAPFROG, _FORCE = int(_Mode.VERLET), int(_Mode.LEAPFROG), int(_Mode.FORCE)
+_VERLET, _LEAPFROG, _FORCE = int(SweepMode.VERLET), int(SweepMode.LEAPFROG), int(SweepMode.FORCE)
 #: Integer constants passed to the inner kernels go through ``_int`` (``np.intp``): numba types a bare
 #: ``0`` or a global constant as a literal and compiles the callee once more for each literal value;
 #: ``_int(0)`` is a plain int64, so every call site shares one compiled kick (half the compile time).
@@ -291,7 +291,7 @@ def _stream_impl(x, v, c):
         v[e] = v[e] - c * x[e]
 
 
-# jitted versions (set by _compiled(); the implementations call these names)
+# jitted versions (set by compiled_kernels(); the implementations call these names)
 _spring = _apply = _kick_end = _kick_flat = _kick_row_batch = _kick_rows = _drift_rows = _leapfrog_pair = None
 
 
@@ -315,7 +315,7 @@ COMPILE_NOTE = ("compiling numba kernels (first run only, several seconds; later
 
 
 @functools.lru_cache(maxsize=1)
-def _compiled():
+def compiled_kernels():
     """Register the numba overloads and compile (or load from numba's cache) the kernels.
 
     Says so on stderr (one line) when nothing is cached yet: compiling takes seconds.
@@ -389,7 +389,7 @@ def stream_update(x: np.ndarray, v: np.ndarray, c: float = 1e-12) -> None:
     x, v : ndarray, shape (N,), float64, C-contiguous
     """
     if available():
-        _compiled().stream(x, v, float(c))
+        compiled_kernels().stream(x, v, float(c))
     else:
         x += c * v
         v -= c * x

@@ -62,7 +62,7 @@ def run_newmark(system: System, integrator, x0: np.ndarray, v0: np.ndarray, h: f
             np.ascontiguousarray(lu), np.ascontiguousarray(piv, dtype=np.int64), D, op.cubic is not None,
             np.ascontiguousarray(op.masses, dtype=float), np.ascontiguousarray(op.spring_ends, dtype=np.int64),
             np.ascontiguousarray(op.stiffness, dtype=float), np.ascontiguousarray(k3), int(MAX_NEWTON))
-    evals, failed = timed_first_call(compiled(system.module), LOOP, *args)
+    evals, failed = timed_first_call(compiled(system), LOOP, *args)
     if failed >= 0:
         raise RunRefused(f"Newton iterations of the implicit step did not converge at step {failed} "
                          f"(cubic springs); accepted: a smaller dt", quantity="dt")

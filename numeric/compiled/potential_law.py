@@ -18,9 +18,10 @@ import hashlib
 import inspect
 import re
 from dataclasses import dataclass
-from types import ModuleType, SimpleNamespace
+from types import SimpleNamespace
 
 from ...generated.contract import SCALAR_HELPERS
+from ..system import System
 
 #: Scalar forms of the helpers a printed tension may call: inside the kernels the extension is one float.
 _SCALAR_HELPERS = SCALAR_HELPERS
@@ -54,58 +55,57 @@ class CompiledLaw:
 
 
 def _absolute_imports(text: str, package: str) -> str:
-    """``from .x`` / ``from ..x`` / ``from ...x`` of a module of ``package`` written as absolute imports."""
+    """``from .x`` / ``from ..x`` / ``from ...x`` (any depth) of a module of ``package`` written as absolute imports."""
     parts = package.split(".")
 
     def absolute(m: re.Match) -> str:
-        up = len(m.group(2)) - 1
-        return f"{m.group(1)}from {'.'.join(parts[:len(parts) - up])}.{m.group(3)}"
+        base = ".".join(parts[:len(parts) + 1 - len(m.group(2))])
+        return f"{m.group(1)}from {base}.{m.group(3)}"
 
     return re.sub(r"^(\s*)from (\.+)(\w)", absolute, text, flags=re.M)
 
 
-def law_source(module: ModuleType) -> str:
+def law_source(system: System) -> str:
     """The law file's text for a chain module with an index-free ``spring_force`` (the same for every
     scene with the same law: the text names no scene)."""
     import numba
 
     from . import fast_kernels
 
-    force = inspect.getsource(module.spring_force)
+    force = system.source("spring_force")
     calls = sorted(name for name in _SCALAR_HELPERS if re.search(rf"\b{name}\(", force))
     helpers = "".join(f"{name} = _numba.njit(cache=True)({_SCALAR_HELPERS[name]})\n" for name in calls)
-    table = (f"_EXPM1MX_COEFFICIENTS = {tuple(module._EXPM1MX_COEFFICIENTS)!r}\n\n\n"
+    table = (f"_EXPM1MX_COEFFICIENTS = {tuple(system.value('_EXPM1MX_COEFFICIENTS'))!r}\n\n\n"
              if "_expm1mx" in calls else "")
-    scalar = "".join(inspect.getsource(getattr(module, _SCALAR_HELPERS[n])) + "\n\n" for n in calls)
+    scalar = "".join(system.source(_SCALAR_HELPERS[n]) + "\n\n" for n in calls)
     return (f"# fused chain kernels of one spring potential (numba {numba.__version__}); "
             f"written by springchain.numeric.compiled.potential_law, do not edit\n"
             + _absolute_imports(inspect.getsource(fast_kernels), fast_kernels.__package__)
             + "\n\nimport numpy as _np\n\n\n" + table + scalar + force + _TAIL.format(helpers=helpers))
 
 
-def compiled_law(module: ModuleType, values: dict[str, float]) -> CompiledLaw | None:
-    """The kernels of the module's law and the parameter values to call them with; None without numba.
+def compiled_law(system: System) -> CompiledLaw | None:
+    """The kernels of the system's law and its parameter values to call them with; None without numba.
     For index-free laws only (the caller asks :attr:`System.law_indexed`). The file is written and
-    imported once per law in a process; numba compiles a kernel on its first call or loads it from disk."""
+    imported once per law in a process (its text read and hashed once per module,
+    :meth:`System.per_module`); numba compiles a kernel on its first call or loads it from disk."""
     from .fast_kernels import available
 
     if not available():
         return None
-    known = _BY_MODULE.get(id(module))
-    if known is None or known[0] is not module:  # the text is read and hashed once per module object
-        text = law_source(module)
-        key = hashlib.sha256(text.encode()).hexdigest()[:20]
-        if key not in _LAWS:
-            from .cache import load_text
+    kernels, path = system.per_module("compiled.potential_law", lambda: _load_law(law_source(system)))
+    return CompiledLaw(kernels, tuple(float(v) for v in system.parameter_vector()), path)
 
-            mod, path = load_text(text, f"law_{key}")
-            _LAWS[key] = (mod._compiled(), str(path))
-        known = _BY_MODULE[id(module)] = (module, _LAWS[key])
-    kernels, path = known[1]
-    return CompiledLaw(kernels, tuple(float(values[p]) for p in module.PARAMETERS), path)
+
+def _load_law(text: str) -> tuple:
+    key = hashlib.sha256(text.encode()).hexdigest()[:20]
+    if key not in _LAWS:
+        from .cache import load_text
+
+        law_file, path = load_text(text, f"law_{key}")
+        _LAWS[key] = (law_file.compiled_kernels(), str(path))
+    return _LAWS[key]
 
 
 #: The kernels of this process by the hash of their file's text: (namespace, path).
 _LAWS: dict = {}
-#: id(generated module) -> (module, its entry of _LAWS).
-_BY_MODULE: dict = {}

@@ -17,7 +17,7 @@ from ..integrators.splitting import SplittingMethod
 from ..integrators.verlet import VelocityVerlet
 from ..integrators.verlet_compensated import CompensatedVerlet
 from ..system import System
-from .cache import available, compiled, timed_first_call
+from .cache import available, compile_seconds, compiled, force_loaded, loop_on_hand, timed_first_call
 
 #: Frames × masses kept in memory by one compiled run (beyond it the NumPy driver streams).
 MAX_FRAME_VALUES = 50_000_000
@@ -67,33 +67,22 @@ def eager(enabled: bool = True):
 def ready(system: System, loop: str) -> bool:
     """Whether a run of ``loop`` on ``system`` compiles nothing: the system's force is loaded in this process
     and the loop is loaded or in numba's disk cache (:func:`.cache.loop_on_hand`)."""
-    from .cache import loop_on_hand
-
-    return _force_loaded(system) and loop_on_hand(loop)
+    return force_loaded(system) and loop_on_hand(loop)
 
 
 def min_evals(system: System, loop: str) -> float:
     """Force evaluations from which a run of ``loop`` on ``system`` takes the compiled loop: 0 when nothing
     must compile (:func:`ready`); :data:`FORCE_MIN_EVALS` when only the force must (the loop is loaded or
     on disk); else :data:`COMPILE_MIN_EVALS` (within :func:`eager`: 0)."""
-    from .cache import loop_on_hand
-
     if not loop_on_hand(loop):
         return float(COMPILE_MIN_EVALS)
-    return 0.0 if _force_loaded(system) else float(min(COMPILE_MIN_EVALS, FORCE_MIN_EVALS))
-
-
-def _force_loaded(system: System) -> bool:
-    from .cache import _BY_MODULE
-
-    known = _BY_MODULE.get(id(system.module))
-    return bool(known and known[0] is system.module)
+    return 0.0 if force_loaded(system) else float(min(COMPILE_MIN_EVALS, FORCE_MIN_EVALS))
 
 
 def worth_compiling(system: System, loop: str, evals: float) -> bool:
     """Take the compiled loop for a run of ``evals`` force evaluations (:func:`min_evals`). A run shorter
     than both thresholds on a system whose force is not loaded is refused first, without importing numba."""
-    if evals < min(COMPILE_MIN_EVALS, FORCE_MIN_EVALS) and not _force_loaded(system):
+    if evals < min(COMPILE_MIN_EVALS, FORCE_MIN_EVALS) and not force_loaded(system):
         return False
     return evals >= min_evals(system, loop)
 
@@ -109,7 +98,7 @@ def route(system: System, integrator: Integrator, frames: int, evals: float = fl
 
 def parameter_vector(system: System) -> np.ndarray:
     """The parameter values in the module's PARAMETERS order (``scalar_force``'s ``p``)."""
-    return np.array([float(system.params[q]) for q in system.module.PARAMETERS], dtype=np.float64)
+    return system.parameter_vector()
 
 
 def _half_flow(system: System, h: float) -> np.ndarray:
@@ -137,7 +126,7 @@ def run_steps(system: System, integrator: Integrator, name: str, x0: np.ndarray,
     xs, vs : ndarray, shape (F, N)
     """
     n = system.n
-    c = compiled(system.module)
+    c = compiled(system)
     x0 = np.ascontiguousarray(x0, dtype=np.float64).reshape(n)
     v0 = np.ascontiguousarray(v0, dtype=np.float64).reshape(n)
     rec = np.ascontiguousarray(rec, dtype=np.int64)
@@ -158,13 +147,6 @@ def run_steps(system: System, integrator: Integrator, name: str, x0: np.ndarray,
     return xs, vs
 
 
-def compile_seconds() -> float:
-    """Seconds this process spent compiling (or loading) compiled loops, over all modules."""
-    from .cache import _LOADED
-
-    return sum(c.compile_seconds for c in _LOADED.values())
-
-
 def dop853(system: System, x0: np.ndarray, v0: np.ndarray, t_end: float, rtol: float, atol: float,
            max_steps: int = 0, t_eval: np.ndarray | None = None):
     """SciPy's DOP853 compiled: ``(x, v, step_ends, evaluations)`` at ``t_end`` from t = 0.
@@ -183,7 +165,7 @@ def dop853(system: System, x0: np.ndarray, v0: np.ndarray, t_end: float, rtol: f
         raise RunRefused("the compiled DOP853 needs a [masses] scene of at most 12 masses without tables",
                          quantity="method")
     n = system.n
-    c = compiled(system.module)
+    c = compiled(system)
     Ad = system.damping_rate_matrix()
     Ad = np.zeros((0, 0)) if Ad is None else np.ascontiguousarray(Ad, dtype=float)
     ts = np.empty(max(int(max_steps), 1))
@@ -216,7 +198,7 @@ def rkn(system: System, table, x0: np.ndarray, v0: np.ndarray, t_eval: np.ndarra
     from ..integrators.ivp import AdaptiveResult
 
     n = system.n
-    c = compiled(system.module)
+    c = compiled(system)
     tab = table.arrays
     t_eval = np.ascontiguousarray(t_eval, dtype=np.float64)
     xs = np.empty((t_eval.shape[0], n))

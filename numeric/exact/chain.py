@@ -48,7 +48,7 @@ import numpy as np
 import scipy.fft
 
 from ...generated.contract import MAX_DENSE, End
-from ..system import interface
+from ..system import System, interface
 from ..errors import RunRefused
 from .modal import tsinc
 from .sine_transform import dst1
@@ -72,7 +72,7 @@ class Basis(enum.Enum):
         return self is not Basis.EIGENVECTORS
 
 
-def _basis_of(left: End, right: End) -> Basis:
+def basis_of(left: End, right: End) -> Basis:
     """The transform that diagonalises a uniform chain with these ends (free–wall: reversed wall–free)."""
     if left is End.RING:
         return Basis.FFT
@@ -83,7 +83,7 @@ def _basis_of(left: End, right: End) -> Basis:
     return Basis.DST_ODD
 
 
-def _forward(basis: Basis, x: np.ndarray) -> np.ndarray:
+def forward_transform(basis: Basis, x: np.ndarray) -> np.ndarray:
     """Modal coordinates of x (axis 0)."""
     n = x.shape[0]
     if basis is Basis.DCT:
@@ -162,13 +162,13 @@ class ChainModal:
         omega = np.asarray(mode_omega, dtype=float)
         if omega.shape != (n,):
             raise ValueError(f"mode_omega: need shape ({n},), got {omega.shape}")
-        basis = _basis_of(left, right)
+        basis = basis_of(left, right)
         if basis is Basis.FFT:
             omega = omega[: n // 2 + 1]  # one frequency per rFFT coefficient (j and n - j coincide)
         reverse = left is End.FREE and right is End.WALL
         if reverse:
             x0, v0 = x0[::-1], v0[::-1]
-        return cls(basis, n, omega, _forward(basis, x0), _forward(basis, v0), reverse)
+        return cls(basis, n, omega, forward_transform(basis, x0), forward_transform(basis, v0), reverse)
 
     @classmethod
     def from_module(cls, module: ModuleType, params: dict[str, float] | None, x0: np.ndarray,
@@ -185,32 +185,42 @@ class ChainModal:
         if not facts.linear:
             raise RunRefused("no exact solution: this chain has cubic springs or spring potentials "
                              "(use an integrator, e.g. verlet)")
-        values = dict(facts.defaults)
-        values.update(params or {})
+        x0, v0 = _initial(x0, v0)
+        return cls.from_system(System.from_module(module, params, n=x0.shape[0]), x0, v0)
+
+    @classmethod
+    def from_system(cls, system: System, x0: np.ndarray, v0: np.ndarray) -> "ChainModal":
+        """The exact solution of a linear ``[chain]`` :class:`System` of len(x0) masses (see :meth:`from_module`)."""
+        if not system.chain:
+            raise RunRefused("ChainModal needs a [chain] scene's generated module; use numeric.exact.modal for others")
+        if not system.linear:
+            raise RunRefused("no exact solution: this chain has cubic springs or spring potentials "
+                             "(use an integrator, e.g. verlet)")
         x0, v0 = _initial(x0, v0)
         n = x0.shape[0]
-        if facts.has("mode_omega"):
-            return cls.transform(module.mode_omega(**values, n=n), facts.left, facts.right, x0, v0)
-        masses = np.asarray(module.masses(**values, n=n), dtype=float)
-        ks = np.asarray(module.spring_constants(**values, n=n), dtype=float)
+        system = system.with_n(n)
+        if system.has("mode_omega"):
+            left, right = system.ends
+            return cls.transform(system.mode_omega(), left, right, x0, v0)
         if n > MAX_FALLBACK:
             raise RunRefused(f"index-dependent chain of n = {n} masses: no closed-form modes, and the "
                              f"eigenvector fallback is limited to n <= {MAX_FALLBACK}; use method 'verlet'", quantity="method")
-        return cls._eigenvectors(module, facts, values, masses, ks, x0, v0)
+        return cls._eigenvectors(system, x0, v0)
 
     @classmethod
-    def _eigenvectors(cls, module, facts, values, masses, ks, x0, v0) -> "ChainModal":
+    def _eigenvectors(cls, system: System, x0, v0) -> "ChainModal":
+        masses, ends, ks = system.masses, system.spring_ends, system.stiffness
         n = masses.shape[0]
         r = np.sqrt(masses)
-        if facts.left is End.RING:
+        if system.ends[0] is End.RING:
             from ..modes.spectrum import spectrum
 
-            spec = spectrum(masses, module.spring_ends(n=n), ks)
+            spec = spectrum(masses, ends, ks)
             omega, E = spec.omega, spec.vectors
         else:  # the bidiagonal spring factor: ω by bisection (the printed values), vectors by dbdsqr
             from ..modes.chain import chain_spectrum
 
-            spec = chain_spectrum(masses, module.spring_ends(n=n), ks)
+            spec = chain_spectrum(masses, ends, ks)
             omega, E = spec.omega, spec.vectors
         shape = (-1,) + (1,) * (x0.ndim - 1)
         rr = r.reshape(shape)

@@ -57,7 +57,7 @@ EIG_COND = 1e3
 STIFF_DAMPING = 1e-13
 #: Largest state (2N + 2H + 1) decomposed in mpmath, and its working precision.
 MP_MAX_STATES = 64
-#: Largest state whose every eigenpair is refined (:func:`_refine_small`): beside the slow ones, the
+#: Largest state whose every eigenpair is refined (:func:`refine_small`): beside the slow ones, the
 #: eigenvectors of weakly damped modes near the forcing's frequencies (2.9e-9 of the amplitude on a
 #: 4-mass scene with gravity, a force and ground motion at 1e10 mass contrast; 1.4e-13 refined).
 REFINE_ALL_STATES = 16
@@ -89,7 +89,7 @@ def _phi(z: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 SNAP = 1e-13
 
 
-def _refine_small(A: np.ndarray, lam: np.ndarray, V: np.ndarray, threshold: float = STIFF_DAMPING) -> tuple[np.ndarray, np.ndarray]:
+def refine_small(A: np.ndarray, lam: np.ndarray, V: np.ndarray, threshold: float = STIFF_DAMPING) -> tuple[np.ndarray, np.ndarray]:
     """Eigenpairs of A whose float64 eigenvalue errs by more than ``threshold`` of itself (LAPACK's
     error is ε·‖A‖, so these are the slow ones: |λ| < ε‖A‖/threshold; every pair for a negative
     threshold), refined by
@@ -186,7 +186,6 @@ class AugmentedLinear:
         from .equilibrium import equilibrium
         from ..modes.spectrum import spectrum
 
-        mod, p = system.module, system.params
         n = system.n
         m = system.masses
         el = Elements.from_system(system)
@@ -197,19 +196,18 @@ class AugmentedLinear:
         omegas, fc, fs = np.zeros(0), np.zeros((0, n)), np.zeros((0, n))
         loads = []  # constant forces, kept apart (their signs are summed separately)
         if system.has("gravity_forces"):
-            loads.append(np.asarray(mod.gravity_forces(**p), dtype=float))
+            loads.append(system.gravity_forces())
         if system.has("external_acceleration"):
             if not system.harmonic_forcing:
                 raise ValueError("external forces are not constant + harmonic: no exact solution")
-            omegas, fc, fs, c0 = (np.asarray(a, dtype=float) for a in mod.forcing_harmonics(**p))
+            omegas, fc, fs, c0 = system.forcing_harmonics()
             loads.append(c0)
         if system.ground == "expression":  # every mass feels -m_i a_g(t): acceleration -a_g(t)
-            wg, gc, gs, g0 = mod.ground_harmonics(**p)
-            wg = np.asarray(wg, dtype=float)
+            wg, gc, gs, g0 = system.ground_harmonics()
             omegas = np.concatenate([omegas, wg])
-            fc = np.vstack([fc, -np.outer(np.asarray(gc, dtype=float), m)])
-            fs = np.vstack([fs, -np.outer(np.asarray(gs, dtype=float), m)])
-            loads.append(-float(g0) * m)
+            fc = np.vstack([fc, -np.outer(gc, m)])
+            fs = np.vstack([fs, -np.outer(gs, m)])
+            loads.append(-g0 * m)
         static = equilibrium(m, system.spring_ends, system.stiffness, loads) if loads else None
         inputs = []
         for (tt, ff), on in zip(system.tables, system.provided.table_force_on):
@@ -344,7 +342,7 @@ class AugmentedLinear:
                 V = np.array([[complex(Vm[i, j]) for j in range(size)] for i in range(size)])
                 return lam, V, np.array([[complex(Wm[i, j]) for j in range(size)] for i in range(size)])
         if self.A.shape[0] <= MP_MAX_STATES:  # every pair of a small state, the slow ones up to MP_MAX_STATES
-            lam, V = _refine_small(self.A, lam, V, -1.0 if self.A.shape[0] <= REFINE_ALL_STATES else STIFF_DAMPING)
+            lam, V = refine_small(self.A, lam, V, -1.0 if self.A.shape[0] <= REFINE_ALL_STATES else STIFF_DAMPING)
         return lam, V, np.linalg.inv(V)
 
     @cached_property
@@ -502,10 +500,9 @@ def frequency_response(system: System, drive: np.ndarray, force: np.ndarray) -> 
     -------
     ndarray, shape (W, N), complex (inf where an undamped mode is hit exactly)
     """
-    mod, p = system.module, system.params
-    K = np.asarray(mod.stiffness_matrix(**p), dtype=float)
+    K = system.stiffness_matrix()
     M = np.diag(system.masses)
-    C = np.asarray(mod.damping_matrix(**p), dtype=float) if system.damped else 0 * K
+    C = system.damping_matrix() if system.damped else 0 * K
     Z = K[None] - (drive**2)[:, None, None] * M[None] + 1j * drive[:, None, None] * C[None]
     with np.errstate(all="ignore"):
         return np.linalg.solve(Z, np.broadcast_to(force.astype(complex), (drive.shape[0], force.shape[0]))[..., None])[..., 0]

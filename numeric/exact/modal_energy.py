@@ -26,7 +26,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ...generated.contract import MAX_DENSE, End
-from .chain import Basis, _basis_of, _forward
+from .chain import Basis, basis_of, forward_transform
 from ..errors import RunRefused
 from ..system import System
 
@@ -59,14 +59,13 @@ class ModalEnergy:
     @classmethod
     def from_system(cls, system: System) -> "ModalEnergy":
         """The modes of a scene's generated module at its parameter values (linearised about x_eq)."""
-        mod, p = system.module, system.params
         n = system.n
         x_eq = _equilibrium(system)
         sqrt_m = np.sqrt(system.masses)
         if system.chain and system.uniform and system.has("mode_omega"):
             left, right = system.ends
-            basis = _basis_of(left, right)
-            omega_index = np.asarray(mod.mode_omega(**p, n=n), dtype=float)
+            basis = basis_of(left, right)
+            omega_index = system.mode_omega()
             if basis is Basis.FFT:  # real coefficients: cos_j (j = 0 … n/2) then sin_j (0 < j < n/2)
                 j = np.arange(n // 2 + 1)
                 sin_j = np.arange(1, (n + 1) // 2)
@@ -89,7 +88,7 @@ class ModalEnergy:
             return np.tensordot(self.vectors.T, y, axes=1)
         if self.reverse:
             y = y[::-1]
-        c = _forward(self.basis, y)
+        c = forward_transform(self.basis, y)
         if self.basis is Basis.FFT:
             n = y.shape[0]
             scale = np.full(n // 2 + 1, np.sqrt(2.0 / n))
@@ -119,15 +118,14 @@ class ModalEnergy:
 def _equilibrium(system: System) -> np.ndarray:
     """x_eq: the module's ``equilibrium()`` (scenes with potentials), the cancellation-free sag of a linear
     scene under gravity (:func:`numeric.exact.equilibrium.equilibrium`), else 0."""
-    mod, p, n = system.module, system.params, system.n
+    n = system.n
     if system.potential:
         return system.potential_equilibrium()
     if "gravity" not in system.effects:
         return np.zeros(n)
     from .equilibrium import equilibrium
 
-    load = mod.gravity_forces(**p, n=n) if system.chain else mod.gravity_forces(**p)
-    eq = equilibrium(system.masses, system.spring_ends, system.stiffness, [np.asarray(load, dtype=float)])
+    eq = equilibrium(system.masses, system.spring_ends, system.stiffness, [system.gravity_forces()])
     if np.any(eq.acceleration != 0):
         raise RunRefused("modal energies about an equilibrium: a free piece under gravity has none (it "
                          "accelerates); accepted: scenes whose pieces under gravity hang from a wall",

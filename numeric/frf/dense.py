@@ -158,7 +158,7 @@ class DenseReceptance:
         dashpots = list(zip(el.damper_ends.tolist(), el.damping.tolist()))
         alpha, beta = el.rayleigh if el.rayleigh is not None else (0.0, 0.0)
         with mpmath.workdps(50):
-            mp = lambda v: _mp(v, mpmath)  # noqa: E731
+            mp = lambda v: to_mp(v, mpmath)  # noqa: E731
             ks = [((a, b), mp(k)) for (a, b), k in springs]
             cs = [((a, b), mp(c)) for (a, b), c in dashpots]
             ms = [mp(v) for v in el.masses.tolist()]
@@ -250,7 +250,7 @@ class DenseReceptance:
 
 
 # -- extended precision ----------------------------------------------------------------------------
-def _mp(v, mpmath):
+def to_mp(v, mpmath):
     """A float64 as an mpmath number, exactly (its 53 bits fit at every precision used here, >= 30 digits)."""
     return mpmath.mpf(float(v))
 
@@ -263,7 +263,7 @@ def mp_stamp(target, ends: np.ndarray, values: np.ndarray, r: list, mpmath, *, r
     for (a, b), k in zip(ends.tolist(), values.tolist()):
         if a == b:
             continue
-        k = _mp(k, mpmath)
+        k = to_mp(k, mpmath)
         for i, si in ((a, 1), (b, -1)):
             for j, sj in ((a, 1), (b, -1)):
                 if i >= 0 and j >= 0:
@@ -274,7 +274,7 @@ def mp_modes(el: Elements, mpmath) -> tuple[list, list[list]]:
     """λ = ω² ascending and the physical M-orthonormal shapes φⱼ = M^-1/2 eⱼ (one list per mode), from
     ``mpmath.eigsy`` of D = M^-1/2 K M^-1/2 assembled exactly from the elements at the current precision."""
     n = el.n
-    r = [1 / mpmath.sqrt(_mp(m, mpmath)) for m in el.masses.tolist()]
+    r = [1 / mpmath.sqrt(to_mp(m, mpmath)) for m in el.masses.tolist()]
     D = mpmath.zeros(n, n)
     mp_stamp(D, el.spring_ends, el.stiffness, r, mpmath)
     lam, E = mpmath.eigsy(D)
@@ -300,10 +300,10 @@ _MODAL_C: dict = {}
 def _mp_modal_damping_at(el: Elements, mpmath):
     n = el.n
     lam, shapes = mp_modes(el, mpmath)
-    m = [_mp(v, mpmath) for v in el.masses.tolist()]
+    m = [to_mp(v, mpmath) for v in el.masses.tolist()]
     C = mpmath.zeros(n, n)
     for pos, (lj, phi) in enumerate(zip(lam, shapes)):
-        g = 2 * _mp(el.modal_zeta[pos], mpmath) * mpmath.sqrt(max(lj, 0))
+        g = 2 * to_mp(el.modal_zeta[pos], mpmath) * mpmath.sqrt(max(lj, 0))
         if g == 0:
             continue
         mphi = [m[i] * phi[i] for i in range(n)]
@@ -318,23 +318,23 @@ def _mp_solve(el: Elements, omega: float, i: int, o: int, dps: int) -> complex:
 
     n = el.n
     with mpmath.workdps(dps):
-        w = _mp(omega, mpmath)
+        w = to_mp(omega, mpmath)
         Z = mpmath.matrix(n, n)
         for a in range(n):
-            Z[a, a] = -w * w * _mp(el.masses[a], mpmath)
+            Z[a, a] = -w * w * to_mp(el.masses[a], mpmath)
         iw = mpmath.mpc(0, 1) * w
         groups = [(el.spring_ends, el.stiffness, 1), (el.damper_ends, el.damping, iw)]
         if el.rayleigh is not None:
-            a_, b_ = (_mp(v, mpmath) for v in el.rayleigh)
+            a_, b_ = (to_mp(v, mpmath) for v in el.rayleigh)
             for a in range(n):
-                Z[a, a] += iw * a_ * _mp(el.masses[a], mpmath)
+                Z[a, a] += iw * a_ * to_mp(el.masses[a], mpmath)
             groups.append((el.spring_ends, el.stiffness, iw * b_))
         for ends, vals, fac in groups:
             for (a, b), v in zip(np.asarray(ends).tolist(), np.asarray(vals).tolist()):
                 for p, sp in ((a, 1), (b, -1)):
                     for q, sq in ((a, 1), (b, -1)):
                         if p >= 0 and q >= 0 and a != b:
-                            Z[p, q] += sp * sq * fac * _mp(v, mpmath)
+                            Z[p, q] += sp * sq * fac * to_mp(v, mpmath)
         if el.modal_zeta is not None:
             Z += iw * _mp_modal_damping(el, mpmath)
         F = mpmath.matrix(n, 1)

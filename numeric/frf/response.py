@@ -118,13 +118,12 @@ def operator(system: System) -> Operator:
     """The matrices of ``system`` (bands for a ``[chain]``, dense otherwise)."""
     from ..modes.elements import Elements
 
-    mod, p = system.module, system.params
     el = Elements.from_system(system)
     if not system.chain:
         from .dense import DenseReceptance
 
-        K = np.asarray(mod.stiffness_matrix(**p), dtype=float)
-        C = np.asarray(mod.damping_matrix(**p), dtype=float) if system.damped else None
+        K = system.stiffness_matrix()
+        C = system.damping_matrix() if system.damped else None
         return Operator(system.masses, K, C, False, dense=DenseReceptance.from_elements(el))
     n = system.n
     if system.ends[0] is not End.RING:
@@ -143,7 +142,7 @@ def operator(system: System) -> Operator:
         from .dense import DenseReceptance
 
         dense = DenseReceptance.from_elements(el)
-    diag, off = (np.asarray(b, dtype=float) for b in mod.stiffness_bands(**p, n=n))
+    diag, off = system.stiffness_bands()
     if n == 2 and system.spring_ends.shape[0] > 1:  # a two-mass ring: both springs join 0 and 1
         inner = (system.spring_ends >= 0).all(axis=1)
         off = np.array([-float(system.stiffness[inner].sum())])
@@ -151,7 +150,7 @@ def operator(system: System) -> Operator:
     C = None
     if system.damped:
         try:
-            C = _bands_of_dense(np.asarray(mod.damping_matrix(**p, n=n), dtype=float))
+            C = _bands_of_dense(system.damping_matrix())
         except ValueError as exc:
             raise RunRefused(f"frequency response of a damped chain of {n} masses: {exc}") from None
     return Operator(system.masses, K, C, True, dense=dense, elements=None if dense is not None else el)
@@ -334,14 +333,13 @@ def undamped_omegas(system: System, count: int | None = None) -> np.ndarray:
     """Undamped ω ascending (rigid zeros first): the accurate spectrum for ``[masses]`` scenes, the
     closed form or bisection on the bidiagonal spring factor for chains (``count`` lowest plus the
     largest; relatively accurate, O(n) each)."""
-    mod, p = system.module, system.params
     if not system.chain:
         from ..modes.spectrum import spectrum
 
         return spectrum(system.masses, system.spring_ends, system.stiffness).omega
     n = system.n
     if system.has("mode_omega"):
-        return np.sort(np.asarray(mod.mode_omega(**p, n=n), dtype=float))
+        return np.sort(system.mode_omega())
     if system.ends[0] is End.RING:
         if n > MAX_DENSE:
             raise RunRefused(f"an index-dependent ring of {n} masses has no closed-form spectrum here; "

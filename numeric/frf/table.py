@@ -117,11 +117,11 @@ def connected(el, input: int, output: int) -> bool:
     """Whether a chain of springs and dashpots (nonzero) joins the input and output masses."""
     if input == output:
         return True
-    from ..modes.spectrum import _components
+    from ..modes.spectrum import spring_components
 
     ends = [np.asarray(el.spring_ends, dtype=np.intp).reshape(-1, 2)[np.asarray(el.stiffness) != 0],
             np.asarray(el.damper_ends, dtype=np.intp).reshape(-1, 2)[np.asarray(el.damping) != 0]]
-    _, labels = _components(el.n, np.concatenate(ends))
+    _, labels = spring_components(el.n, np.concatenate(ends))
     return bool(labels[input] == labels[output])
 
 

@@ -9,15 +9,15 @@ in :mod:`numeric.run.registry`.
 
 import importlib
 
+from ..run.registry import integrator_classes
+
 #: Public name -> the module that defines it (imported on first access: importing one integrator, or the
-#: package, does not import the others, SciPy's solvers among them).
+#: package, does not import the others, SciPy's solvers among them): the interfaces, then every
+#: integrator of the registry's table (:func:`numeric.run.registry.integrator_classes`).
 _WHERE = {
     "Integrator": "base", "LinearChain": "base", "Problem": "base", "State": "base",
-    "BlanesMoan4": "blanes_moan4", "BlanesMoan6": "blanes_moan6", "ChebyshevPropagator": "chebyshev",
-    "DPRKN6": "dprkn6", "DPRKN8": "dprkn8", "DPRKN12": "dprkn12", "MatrixExponential": "expm",
-    "DOP853": "ivp", "LSODA": "ivp", "RK45": "ivp", "AdaptiveMethod": "ivp", "AdaptiveResult": "ivp",
-    "KahanLi8": "kahan_li", "RK4": "rk4", "VelocityVerlet": "verlet", "CompensatedVerlet": "verlet_compensated",
-    "Yoshida4": "yoshida",
+    "AdaptiveMethod": "ivp", "AdaptiveResult": "ivp",
+    **integrator_classes(),
 }
 
 
@@ -29,9 +29,4 @@ def __getattr__(name: str):
     raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 
 
-__all__ = [
-    "Integrator", "Problem", "State", "LinearChain",
-    "VelocityVerlet", "CompensatedVerlet", "Yoshida4", "BlanesMoan4", "BlanesMoan6", "KahanLi8", "RK4",
-    "MatrixExponential", "ChebyshevPropagator", "AdaptiveMethod", "AdaptiveResult",
-    "RK45", "DOP853", "LSODA", "DPRKN6", "DPRKN8", "DPRKN12",
-]
+__all__ = list(_WHERE)

@@ -56,12 +56,12 @@ def from_receptance(form: str, omega: np.ndarray, H: np.ndarray) -> np.ndarray:
 def ground_couplings(el) -> tuple[np.ndarray, np.ndarray]:
     """``(K 1, C 1)``: the stiffness and damping joining each mass to the base, shape (N,) each
     (internal elements cancel exactly: each adds and subtracts the same number)."""
-    from .state_space import _damping, _stamp
+    from .state_space import damping_of, stamp
 
     n = el.n
-    K = _stamp(n, el.spring_ends, el.stiffness)
+    K = stamp(n, el.spring_ends, el.stiffness)
     ones = np.ones(n)
-    return np.asarray(K @ ones).reshape(-1), np.asarray(_damping(el, K) @ ones).reshape(-1)
+    return np.asarray(K @ ones).reshape(-1), np.asarray(damping_of(el, K) @ ones).reshape(-1)
 
 
 def transmissibility(omega: np.ndarray, H_cols: dict[int, np.ndarray], k1: np.ndarray, c1: np.ndarray) -> np.ndarray:

@@ -102,7 +102,7 @@ def contrast_note(el: Elements) -> str | None:
             "elements and stays accurate")
 
 
-def _stamp(n: int, ends: np.ndarray, values: np.ndarray):
+def stamp(n: int, ends: np.ndarray, values: np.ndarray):
     """``Σ v (e_a − e_b)(e_a − e_b)ᵀ`` as CSR (walls omitted)."""
     ends = np.asarray(ends, dtype=np.intp).reshape(-1, 2)
     values = np.asarray(values, dtype=float)
@@ -117,9 +117,9 @@ def _stamp(n: int, ends: np.ndarray, values: np.ndarray):
                                    shape=(n, n)).tocsr()
 
 
-def _damping(el: Elements, K):
+def damping_of(el: Elements, K):
     n = el.n
-    C = _stamp(n, el.damper_ends, el.damping)
+    C = stamp(n, el.damper_ends, el.damping)
     if el.rayleigh is not None:
         a, b = el.rayleigh
         C = C + a * scipy.sparse.diags(el.masses) + b * K
@@ -148,8 +148,8 @@ def state_space(el: Elements, names: tuple[str, ...], inputs: list, outputs: lis
         CSR matrices (``[chain]`` scenes) instead of dense arrays.
     """
     n = el.n
-    K = _stamp(n, el.spring_ends, el.stiffness)
-    C = _damping(el, K)
+    K = stamp(n, el.spring_ends, el.stiffness)
+    C = damping_of(el, K)
     minv = scipy.sparse.diags(1.0 / el.masses)
     zero, eye = scipy.sparse.csr_matrix((n, n)), scipy.sparse.identity(n, format="csr")
     A = scipy.sparse.bmat([[zero, eye], [-(minv @ K), -(minv @ C)]], format="csr")

@@ -73,7 +73,7 @@ class Bidiagonal:
         return self.size == self.n + 1
 
 
-def _positions(n: int, ends: np.ndarray, k: np.ndarray) -> np.ndarray:
+def spring_positions(n: int, ends: np.ndarray, k: np.ndarray) -> np.ndarray:
     """Stiffness at chain positions 0 … n: 0 the left wall, p the spring between p−1 and p, n the right wall.
 
     Parallel springs add (a sum of positive numbers). Raises ValueError if the springs are not an
@@ -110,7 +110,7 @@ def bidiagonal_factor(masses: np.ndarray, ends: np.ndarray, k: np.ndarray) -> Bi
     """
     m = np.asarray(masses, dtype=float)
     n = int(m.shape[0])
-    stiff = _positions(n, ends, k)
+    stiff = spring_positions(n, ends, k)
     rk, rm = np.sqrt(stiff), 1.0 / np.sqrt(m)
     left, right = stiff[0] > 0, stiff[n] > 0
     if n == 1:
@@ -127,7 +127,7 @@ def bidiagonal_factor(masses: np.ndarray, ends: np.ndarray, k: np.ndarray) -> Bi
     return Bidiagonal(d, e, True, n, 0 if right else 1)
 
 
-def _golub_kahan(f: Bidiagonal) -> np.ndarray:
+def golub_kahan(f: Bidiagonal) -> np.ndarray:
     t = np.empty(2 * f.size - 1)
     t[0::2], t[1::2] = f.d, f.e
     return t
@@ -145,7 +145,7 @@ def singular_values(f: Bidiagonal, lowest: int | None = None, highest: int = 0) 
     """
     s, n = f.size, f.n
     first = s + (s - n)  # Golub–Kahan index of the smallest physical ω (the padding zero skipped)
-    t = _golub_kahan(f)
+    t = golub_kahan(f)
     # stebz floors its pivots and its stopping tolerance at tiny * max(1, max entry²) (absolute): at
     # entries of 1e149 that is 2e-10, which took ω² = 2 to 1.99999999768. Scaled by a power of 2 (exact)
     # to a largest entry in [1/2, 1), the floor is tiny itself: relative accuracy down to ω ~ 1e-300.

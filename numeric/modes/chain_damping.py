@@ -9,7 +9,7 @@ masses, as :mod:`derive.damping_report` does for ``[masses]`` scenes past mpmath
    (:func:`numeric.modes.elements.modal_damping`);
 2. the eigenvalues λ = −σ ± iω_d of the balanced modal state matrix ``[[0, Ω], [−Ω, −G]]`` by
    LAPACK, each pair then refined by Newton's method with residuals in extended precision
-   (:func:`numeric.exact.linear._refine_small`; states of at most :data:`REFINE_MAX_STATES`), so a
+   (:func:`numeric.exact.linear.refine_small`; states of at most :data:`REFINE_MAX_STATES`), so a
    light ζ of a low mode is not lost in ε·ω_max; modes of a piece the dashpots do not touch (a zero row of G) are undamped by
    structure, ζ = 0 exactly.
 
@@ -54,7 +54,7 @@ def damped_rows(masses: np.ndarray, spring_ends: np.ndarray, stiffness: np.ndarr
     import scipy.linalg
 
     from .elements import Elements, modal_damping
-    from ..exact.linear import _refine_small
+    from ..exact.linear import refine_small
     from .spectrum import spectrum
 
     el = Elements(np.asarray(masses, dtype=float), np.asarray(spring_ends, dtype=np.intp).reshape(-1, 2),
@@ -77,7 +77,7 @@ def damped_rows(masses: np.ndarray, spring_ends: np.ndarray, stiffness: np.ndarr
         lam, V = scipy.linalg.eig(A)
         refined = A.shape[0] <= REFINE_MAX_STATES
         if refined:
-            lam, _ = _refine_small(A, lam, V.astype(complex), -1.0)  # (all-real λ: V comes real)
+            lam, _ = refine_small(A, lam, V.astype(complex), -1.0)  # (all-real λ: V comes real)
         # oscillatory: relative to |λ| (a light mode's λ ~ 1e-11 beside λ ~ 1 is no zero)
         osc = sorted((v for v in lam if v.imag > 1e-12 * abs(v)), key=abs)
         # G's entries are float64 products of the modes (normwise accurate): Re λ is known to about
@@ -107,11 +107,11 @@ def _mp_eigenvalues(el, dps: int) -> list:
     elements (float inputs read as exact rationals) and solved by mpmath at ``dps`` digits."""
     import mpmath
 
-    from ..frf.dense import _mp, mp_stamp
+    from ..frf.dense import to_mp, mp_stamp
 
     n = el.n
     with mpmath.workdps(dps):
-        r = [1 / mpmath.sqrt(_mp(m, mpmath)) for m in el.masses.tolist()]
+        r = [1 / mpmath.sqrt(to_mp(m, mpmath)) for m in el.masses.tolist()]
         A = mpmath.zeros(2 * n, 2 * n)
         for i in range(n):
             A[i, n + i] = 1

@@ -46,22 +46,10 @@ class Elements:
 
     @classmethod
     def from_system(cls, system: System) -> "Elements":
-        mod, p, n = system.module, system.params, system.n
-        ends, c = np.zeros((0, 2), dtype=np.intp), np.zeros(0)
+        ends, c = system.dampers()
         rayleigh = modal = None
-        if system.chain:
-            if system.has("damper_ends"):
-                ends = np.asarray(mod.damper_ends(n=n), dtype=np.intp).reshape(-1, 2)
-                c = np.asarray(mod.damper_constants(**p, n=n), dtype=float)
-        else:
-            if system.has("damper_constants"):
-                ends = np.asarray(mod.DAMPER_ENDS, dtype=np.intp).reshape(-1, 2)
-                c = np.asarray(mod.damper_constants(**p), dtype=float)
-            if system.has("rayleigh_coefficients"):
-                a, b = (float(v) for v in mod.rayleigh_coefficients(**p))
-                rayleigh = (a, b)
-            if system.has("modal_damping_ratios"):
-                modal = np.asarray(mod.modal_damping_ratios(**p), dtype=float)
+        if not system.chain:  # [damping] models are read for [masses] scenes (chains: dashpots only)
+            rayleigh, modal = system.rayleigh_coefficients(), system.modal_damping_ratios()
         return cls(system.masses, system.spring_ends, system.stiffness, ends, c, rayleigh, modal)
 
     @property

@@ -296,7 +296,7 @@ def _small_components(n: int, a: np.ndarray, b: np.ndarray) -> tuple[int, np.nda
     return int(roots.shape[0]), labels
 
 
-def _components(n: int, ends: np.ndarray) -> tuple[int, np.ndarray]:
+def spring_components(n: int, ends: np.ndarray) -> tuple[int, np.ndarray]:
     """The number of connected pieces (springs between masses join, walls join nothing) and each
     mass's piece label, shape (N,)."""
     inner = (ends[:, 0] >= 0) & (ends[:, 1] >= 0)
@@ -309,14 +309,14 @@ def _components(n: int, ends: np.ndarray) -> tuple[int, np.ndarray]:
 
 def pieces(n: int, ends: np.ndarray) -> list[np.ndarray]:
     """Index arrays (ascending) of every connected piece, the pieces ordered by their first mass."""
-    count, labels = _components(n, _ends(ends))
+    count, labels = spring_components(n, _ends(ends))
     return sorted((np.flatnonzero(labels == c) for c in range(count)), key=lambda idx: int(idx[0]))
 
 
 def free_pieces(n: int, ends: np.ndarray) -> list[np.ndarray]:
     """Index arrays of the connected pieces with no spring to a wall."""
     ends = _ends(ends)
-    count, labels = _components(n, ends)
+    count, labels = spring_components(n, ends)
     walled = np.zeros(count, dtype=bool)
     one = (ends[:, 0] >= 0) != (ends[:, 1] >= 0)
     touched = np.where(ends[one, 0] >= 0, ends[one, 0], ends[one, 1])

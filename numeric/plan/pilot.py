@@ -117,7 +117,7 @@ class ExactReference:
         return self._cache[key]
 
 
-def _reference_grid(t_end: float, dt_out: float, n: int) -> Grid:
+def reference_grid(t_end: float, dt_out: float, n: int) -> Grid:
     """The reference grid ``t = k·spacing`` (spacing a multiple of ``dt_out``), at most
     ``REFERENCE_FLOATS / n`` frames."""
     k = max(1, math.ceil((t_end / dt_out) * n / REFERENCE_FLOATS))
@@ -162,7 +162,7 @@ def _pilot_law(system: System, method: Method, ref: ExactReference, x0, v0, t_en
     h1_target = 0.5 * limit / max(w_max, 1e-300)
     steps_guess = 2 * t_end / h1_target * max(traits.evals_per_step, 1.0)
     t_pilot = t_end if steps_guess * n <= PILOT_WORK else max(dt_out, t_end * PILOT_WORK / (steps_guess * n))
-    grid = _reference_grid(t_pilot, dt_out, n)
+    grid = reference_grid(t_pilot, dt_out, n)
     t_pilot = grid.t_end
     x_ref, _ = ref.at(grid.t)
     size = float(np.max(np.abs(x_ref)))
@@ -244,7 +244,7 @@ class PilotPlanner(Horizon):
             short, long = (32, 288) if system.n <= MAX_MASSES else (2, max(4, min(288, int(PILOT_WORK // (8 * system.n)))))
             costs[m] = measure_step_cost(m, system, x0, v0, h_probe, short, long)
         # the exact method: its cost on the output grid (timed on a sample of it), rounding-level error
-        out = _reference_grid(t_end, dt_out, 1)
+        out = reference_grid(t_end, dt_out, 1)
         sample = min(out.frames, max(2, int(REFERENCE_FLOATS // max(system.n, 1))), 2001)
         exact_seconds = measure_exact_cost(system, x0, v0, out, sample, budget=0.1) if ref.exact else math.nan
         size = max([law.size for law in laws.values()] + [float(np.max(np.abs(x0))), 1e-300])
@@ -252,7 +252,7 @@ class PilotPlanner(Horizon):
         laws_a = {}
         if adaptive:
             t_ad = t_end if system.n <= MAX_MASSES else min([t_end] + [law.t_pilot for law in laws.values()])
-            g = _reference_grid(t_ad, dt_out, system.n)
+            g = reference_grid(t_ad, dt_out, system.n)
 
             def reference(t):
                 return ref.at(t)[0]

@@ -273,7 +273,6 @@ def mode_shape(system, j: int) -> tuple[float, np.ndarray, bool]:
     if not (0 <= j < n):
         raise RunRefused(f"mode {j!r}: accepted: a mode number 0 ... {n - 1} (ascending frequency, "
                          "rigid-body modes included)", quantity="mode")
-    mod, p = system.module, system.params
     ring = system.chain and system.ends[0] is End.RING
     uniform = system.chain and system.has("mode_omega")
     if not system.chain or (ring and not uniform and n <= MAX_DENSE):
@@ -283,20 +282,20 @@ def mode_shape(system, j: int) -> tuple[float, np.ndarray, bool]:
         i = np.arange(n)
         q = (j + 1) // 2
         shape = np.cos(2 * np.pi * q * i / n) if j % 2 == 1 or j == 0 else np.sin(2 * np.pi * q * i / n)
-        omega = float(np.sort(np.asarray(mod.mode_omega(**p, n=n), dtype=float))[j])
+        omega = float(np.sort(system.mode_omega())[j])
         rigid = j == 0
     elif ring:
         raise RunRefused(f"mode shapes of an index-dependent ring of {n} masses need a dense solve; "
                          f"accepted: rings of at most {MAX_DENSE} masses", quantity="mode")
     else:
-        diag, off = (np.asarray(b, dtype=float) for b in mod.stiffness_bands(**p, n=n))
+        diag, off = system.stiffness_bands()
         r = 1 / np.sqrt(system.masses)
         w2, e = scipy.linalg.eigh_tridiagonal(diag * r * r, off * r[:-1] * r[1:], select="i", select_range=(j, j))
         rigid = j < system.rigid_modes
         shape = np.ones(n) if rigid else e[:, 0] * r
         omega = 0.0 if rigid else float(np.sqrt(max(w2[0], 0.0)))
         if uniform and not rigid:
-            omega = float(np.sort(np.asarray(mod.mode_omega(**p, n=n), dtype=float))[j])
+            omega = float(np.sort(system.mode_omega())[j])
     shape = np.asarray(shape, dtype=float)
     big = int(np.argmax(np.abs(shape)))
     return omega, shape / shape[big], bool(rigid)

@@ -33,7 +33,7 @@ def write_figures(out: Path, scene_name: str, names, system: System, runs: dict)
     if system.harmonic_forcing and system.exact_available:
         from ..exact.linear import frequency_response
 
-        omegas, fc, fs, _ = (np.asarray(a, dtype=float) for a in system.module.forcing_harmonics(**system.params))
+        omegas, fc, fs, _ = system.forcing_harmonics()
         if omegas.size:
             spec = system.spectrum
             force = np.abs(fc[0] + 1j * fs[0])

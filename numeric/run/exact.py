@@ -45,12 +45,11 @@ def closed_form_spectrum(system: System) -> Spectrum:
     """The generated module's ω² and shapes (closed forms where they are cancellation-free, else
     its own spring-factor route), or a one-line refusal naming the first mode that is not finite,
     not ≥ 0, or a rigid mode that is not exactly 0 (e.g. parameter values beyond float range)."""
-    mod = system.module
     n, rigid = system.masses.shape[0], system.rigid_modes
     try:
         with np.errstate(all="ignore"):
-            w2 = np.asarray(mod.omega2(**system.params), dtype=float)
-            shapes = np.asarray(mod.mode_shapes(**system.params), dtype=float)
+            w2 = system.omega2()
+            shapes = system.mode_shapes()
     except (FloatingPointError, ArithmeticError, np.linalg.LinAlgError) as exc:
         raise RunRefused(f"spectrum 'closed-form': the modes cannot be evaluated to float64 accuracy at these "
                          f"parameter values ({exc}); accepted: spectrum 'svd'", quantity="spectrum") from None
@@ -120,7 +119,7 @@ def solve(system: System, x0: np.ndarray, v0: np.ndarray,
     if system.springs_only and system.chain:
         from ..exact.chain import ChainModal
 
-        sol = ChainModal.from_module(system.module, system.params, x0, v0)
+        sol = ChainModal.from_system(system, x0, v0)
         return Solution("exact: the chain's transform solution (numeric.exact.chain), float64", sol.at, True)
     if system.springs_only:
         from ..exact.modal import ModalSolution

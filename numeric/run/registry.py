@@ -105,6 +105,9 @@ _TABLE: dict[str, Entry] = {e.name: e for e in (
     }),
 )}
 
+#: The built-in entries (the table before any :func:`register`).
+_BUILT_IN: dict[str, Entry] = dict(_TABLE)
+
 #: The exact method's name (the default runs pair it with a step method).
 EXACT = "modal"
 #: The default step method, and the reference adaptive method of plans, benches and references.
@@ -114,6 +117,17 @@ REFERENCE_ADAPTIVE = "dop853"
 COMPILED_PEER = "dop853-compiled"
 #: The step method of the benchmark's grid reference (eighth order, symplectic).
 REFERENCE_STEP = "kahan-li8"
+
+
+def integrator_classes() -> dict[str, str]:
+    """Class name -> module in ``numeric.integrators`` of every integrator of the built-in table (imports
+    nothing): the package :mod:`numeric.integrators` exports these names from it."""
+    out = {}
+    for e in _BUILT_IN.values():
+        if isinstance(e.target, str) and e.target.startswith(".integrators."):
+            module, _, cls = e.target[len(".integrators."):].partition(":")
+            out.setdefault(cls, module)
+    return out
 
 
 def names(kind: Kind | None = None) -> tuple[str, ...]:
@@ -192,5 +206,5 @@ def registered(name: str, kind: Kind, target: str | type) -> Iterator[None]:
 
 
 __all__ = ["Entry", "EXACT", "DEFAULT_STEP", "REFERENCE_ADAPTIVE", "REFERENCE_STEP", "names", "entry",
-           "implementation", "classes", "method", "methods", "planned", "PEERS_ONLY", "COMPILED_PEER", "register",
+           "implementation", "classes", "integrator_classes", "method", "methods", "planned", "PEERS_ONLY", "COMPILED_PEER", "register",
            "unregister", "registered"]

@@ -52,9 +52,9 @@ class FusedChainVerlet(VelocityVerlet):
         self.system = system
 
     def kernel(self, problem: Problem, h: float):
-        from ..compiled.fast import chain_verlet_kernel
+        from ..compiled.fast import FusedVerlet
 
-        return chain_verlet_kernel(self.system.module, self.system.params, self.system.n, h, inplace=True)
+        return FusedVerlet.from_system(self.system, h).kernel(inplace=True)
 
 
 @dataclass(frozen=True)

@@ -16,9 +16,9 @@ from __future__ import annotations
 import numpy as np
 import scipy.linalg
 
-from ..modes.chain import _golub_kahan, _positions, bidiagonal_factor
+from ..modes.chain import golub_kahan, spring_positions, bidiagonal_factor
 from . import double_double as ddm
-from .refine import _assemble, refine_cluster, rigid_shape
+from .refine import assemble_refined, refine_cluster, rigid_shape
 from .solvers import ChainSolver
 
 
@@ -26,7 +26,7 @@ def omega_at(f, positions: np.ndarray) -> np.ndarray:
     """ω of the modes at ``positions`` (0-based, ascending, rigid first) by bisection, shape (J,)."""
     s, n = f.size, f.n
     first = s + (s - n)
-    t = _golub_kahan(f)
+    t = golub_kahan(f)
     out = np.zeros(len(positions))
     for a, j in enumerate(positions):
         if j < f.rigid:
@@ -58,7 +58,7 @@ def chain_modes(stencil: ddm.Stencil, ends: np.ndarray, k: np.ndarray, wanted: n
     masses = stencil.masses
     n = stencil.n
     f = bidiagonal_factor(masses, ends, k)
-    solver = ChainSolver(masses, _positions(n, ends, k))
+    solver = ChainSolver(masses, spring_positions(n, ends, k))
     wanted = np.unique(np.asarray(wanted, dtype=np.intp))
     omega = omega_at(f, wanted)
     index, lam, cols, rig, lab, settled = [], [], [], [], [], []
@@ -72,7 +72,7 @@ def chain_modes(stencil: ddm.Stencil, ends: np.ndarray, k: np.ndarray, wanted: n
                                      lambda rr, lm, tw=t: solver.solve(rr, lm, tw))
         index.append(j), lam.append(q[0]), cols.append(xs[0]), rig.append(False), lab.append(j)
         settled.append(last)
-    return _assemble(stencil, index, lam, cols, lab, rig, settled), solver
+    return assemble_refined(stencil, index, lam, cols, lab, rig, settled), solver
 
 
 __all__ = ["chain_modes", "omega_at"]

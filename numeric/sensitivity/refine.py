@@ -172,7 +172,7 @@ def _sign(phi: np.ndarray, masses: np.ndarray) -> np.ndarray:
     return np.where(u[big, np.arange(u.shape[1])] < 0, -1.0, 1.0)
 
 
-def _assemble(stencil, index, lam, cols, label, rigid, settled) -> RefinedModes:
+def assemble_refined(stencil, index, lam, cols, label, rigid, settled) -> RefinedModes:
     hi = np.stack([c[0] for c in cols], axis=1) if cols else np.zeros((stencil.n, 0))
     lo = np.stack([c[1] for c in cols], axis=1) if cols else np.zeros((stencil.n, 0))
     sign = _sign(hi, stencil.masses) if cols else np.zeros(0)
@@ -235,7 +235,7 @@ def dense_modes(stencil: ddm.Stencil, k: np.ndarray, spectrum, wanted: np.ndarra
                 lab.append(int(c)), settled.append(last)
     order = np.argsort(index, kind="stable")
     pick = lambda seq: [seq[i] for i in order]  # noqa: E731
-    return _assemble(stencil, pick(index), pick(lam), pick(cols), pick(lab), pick(rig), pick(settled)), solver
+    return assemble_refined(stencil, pick(index), pick(lam), pick(cols), pick(lab), pick(rig), pick(settled)), solver
 
 
 __all__ = ["RefinedModes", "refine_cluster", "dense_modes", "clusters", "normalise", "rayleigh",

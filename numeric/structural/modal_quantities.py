@@ -7,7 +7,7 @@ nearly orthogonal to r = 1 is a sum of terms of both signs. Here, for scenes of 
 :data:`MP_MAX_MASSES` masses:
 
 1. ``D = M^-1/2 K M^-1/2`` is assembled exactly from the elements (every float parameter an exact
-   binary fraction, :func:`numeric.frf.dense._mp`) and diagonalised by ``mpmath.eigsy`` at
+   binary fraction, :func:`numeric.frf.dense.to_mp`) and diagonalised by ``mpmath.eigsy`` at
    d₀ = 30 + log10(λ_max/λ_min) digits (the spread from the float64 spectrum), then 2d₀, 4d₀;
 2. per mode (ascending ω, M-orthonormal physical shape φⱼ, the sign of its first non-negligible
    component positive, as the float route): Γⱼ, the peak quantities per unit spectral
@@ -34,7 +34,7 @@ import numpy as np
 
 from ..io.array_record import array_record
 from ..modes.elements import Elements
-from ..frf.dense import _mp, mp_modes
+from ..frf.dense import to_mp, mp_modes
 
 #: Largest scene whose modal quantities are computed in mpmath (the cost grows with the digits the scene's contrast needs).
 MP_MAX_MASSES = 24
@@ -87,7 +87,7 @@ def _at(el: Elements, dps: int) -> dict:
     import mpmath
 
     with mpmath.workdps(dps):
-        mp = lambda v: _mp(v, mpmath)
+        mp = lambda v: to_mp(v, mpmath)
         m = [mp(v) for v in el.masses.tolist()]
         springs = [(a, b, mp(k)) for (a, b), k in zip(el.spring_ends.tolist(), el.stiffness.tolist())]
         lam, shapes = mp_modes(el, mpmath)

@@ -144,7 +144,7 @@ class ModalProperties:
                 C = -system.damping_rate_matrix() * m[:, None]
                 C = C.toarray() if hasattr(C, "toarray") else np.asarray(C)
             else:
-                C = np.asarray(system.module.damping_matrix(**system.params), dtype=float)
+                C = system.damping_matrix()
             G = phi.T @ C @ phi
             d = np.diag(G)
             off = G - np.diag(d)

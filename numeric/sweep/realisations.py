@@ -34,7 +34,8 @@ import scipy.linalg
 
 from .distributions import Dist
 from ..errors import RunRefused
-from ..system import interface
+from ..system import System, interface
+from ...generated.contract import Ground
 
 _MODULES: dict[str, types.ModuleType] = {}
 
@@ -77,21 +78,30 @@ def module_of(source: str) -> types.ModuleType:
 def _import_generated(source: str, key: str) -> types.ModuleType:
     """Import generated source through a content-addressed file (written atomically once per machine),
     so a worker on another host loads the very module the client derived, by the import system."""
-    import importlib.util
     import tempfile
     from pathlib import Path
 
     from ..io.files import atomic_write_text
+    from ..io.imports import import_file
 
     path = Path(tempfile.gettempdir()) / f"springchain-sweep-{os.getuid() if hasattr(os, 'getuid') else 0}" / f"m_{key[:32]}.py"
     if not path.exists() or hashlib.sha256(path.read_bytes()).hexdigest() != key:
         path.parent.mkdir(mode=0o700, parents=True, exist_ok=True)
         atomic_write_text(path, source)
-    name = f"springchain_sweep_{key[:12]}"
-    spec = importlib.util.spec_from_file_location(name, path)
-    mod = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(mod)
-    return mod
+    return import_file(path, f"springchain_sweep_{key[:12]}")
+
+
+def system_of(source: str, params: dict[str, float]) -> System:
+    """The generated module of ``source`` (:func:`module_of`) bound to ``params``.
+
+    A sweep draws masses and springs only: a scene's force or ground tables never enter a realisation,
+    so they are bound as empty stand-ins (one sample at t = 0) to satisfy :meth:`System.from_module`.
+    """
+    mod = module_of(source)
+    facts = interface(mod)
+    blank = (np.zeros(1), np.zeros(1))
+    return System.from_module(mod, params, tables=tuple(blank for _ in facts.table_force_on),
+                              ground_table=blank if facts.ground is Ground.TABLE else None)
 
 
 def _describe(dist_owner: str, dist: Dist) -> str:
@@ -100,7 +110,6 @@ def _describe(dist_owner: str, dist: Dist) -> str:
 
 def realise(spec: SweepSpec, s: int):
     """Sample ``s``: (varied values dict, masses, spring_ends, stiffness)."""
-    mod = module_of(spec.source)
     rng = np.random.default_rng(np.random.SeedSequence(spec.seed, spawn_key=(int(s),)))
     params = dict(spec.params)
     varied = {}
@@ -111,16 +120,8 @@ def realise(spec: SweepSpec, s: int):
         value = float(dist.grid_values()[idx.pop(0)]) if dist.is_grid else float(dist.draw(rng))
         params[name] = value
         varied[name] = value
-    facts = interface(mod)
-    if facts.chain:
-        n = facts.n
-        masses = np.array(mod.masses(**params, n=n), dtype=float)
-        ends = np.asarray(mod.spring_ends(n), dtype=np.intp).reshape(-1, 2)
-        k = np.array(mod.spring_constants(**params, n=n), dtype=float)
-    else:
-        masses = np.array(mod.masses(**params), dtype=float)
-        ends = np.asarray(mod.SPRING_ENDS, dtype=np.intp).reshape(-1, 2)
-        k = np.array(mod.spring_constants(**params), dtype=float)
+    system = system_of(spec.source, params)
+    masses, ends, k = system.masses.copy(), system.spring_ends, system.stiffness.copy()
     for what, dist in spec.disorder:
         target = masses if what == "mass" else k
         factors = dist.draw(rng, target.shape[0])
@@ -238,8 +239,7 @@ def compute_batch(spec: SweepSpec, start: int, stop: int) -> dict:
     """Samples ``start ... stop-1``: a dict of columns (NumPy arrays; list columns as 2-D arrays)."""
     from threadpoolctl import threadpool_limits
 
-    mod = module_of(spec.source)
-    facts = interface(mod)
+    facts = interface(module_of(spec.source))
     chain = facts.chain
     rigid = facts.rigid_modes if chain else 0
     names = [n for n, _ in spec.vary]
@@ -267,4 +267,4 @@ def compute_batch(spec: SweepSpec, start: int, stop: int) -> dict:
     return out
 
 
-__all__ = ["SweepSpec", "realise", "compute_batch", "solve_chain", "lyapunov", "module_of", "chain_bands"]
+__all__ = ["SweepSpec", "realise", "compute_batch", "solve_chain", "lyapunov", "module_of", "system_of", "chain_bands"]

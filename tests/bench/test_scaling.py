@@ -28,9 +28,8 @@ from springchain import symbolic_cost
 from springchain.derive.chain import ChainModel
 from springchain.derive.chain_codegen import render_chain_module
 from springchain.derive.scene import load_scene
+from springchain.numeric.bench import scaling, scaling_report
 from springchain.numeric.compiled import fast
-from springchain.numeric.bench import scaling
-from springchain.numeric.bench import scaling_report
 from springchain.numeric.exact.chain import ChainModal
 
 

@@ -248,10 +248,9 @@ def test_progress_is_silent_for_short_phases_and_reports_long_ones(monkeypatch):
 
 
 def test_the_reporters_share_one_module():
-    from springchain.numeric.bench import runs as bench_runs
+    from springchain.numeric.bench import runs as bench_runs, scaling
     from springchain.numeric.io import chunked
     from springchain.numeric.run import driver
-    from springchain.numeric.bench import scaling
     from springchain.numeric.sweep import driver as sweep_driver
     from springchain.numeric.progress import Reporter
 
@@ -266,9 +265,9 @@ def test_numba_compile_note(monkeypatch, capsys):
 
     if not fast_kernels.available():
         pytest.skip("numba not installed")
-    fast_kernels._compiled.cache_clear()
+    fast_kernels.compiled_kernels.cache_clear()
     monkeypatch.setattr(fast_kernels, "_numba_cache_present", lambda: False)
-    fast_kernels._compiled()
+    fast_kernels.compiled_kernels()
     assert fast_kernels.COMPILE_NOTE in capsys.readouterr().err
 
 

@@ -173,7 +173,7 @@ _CHILD = textwrap.dedent("""
     from springchain.numeric.compiled.cache import compiled
     system, _ = system_of(load("duffing"))
     run = record(registry.method("verlet"), system, np.full(3, 0.1), np.zeros(3), Grid(0.001, 200_000, 20_000))
-    c = compiled(system.module)
+    c = compiled(system)
     d = c.loop("verlet_loop")
     print(json.dumps({"compiled": sorted(c.compiled), "force_compiled": c.force_compiled,
                       "hits": sum(d.stats.cache_hits.values()),
@@ -204,9 +204,9 @@ def test_scenes_share_one_compiled_loop(systems):
         system = systems[name]
         x0, v0 = _state(system.n)
         record(method, system, x0, v0, Grid(0.01, 50, 50))
-    forces = {id(compiled(systems[name].module).force) for name in ("everything", "springy")}
+    forces = {id(compiled(systems[name]).force) for name in ("everything", "springy")}
     assert len(forces) == 2
-    assert len(compiled(systems["springy"].module).loop("verlet_loop").signatures) == 1
+    assert len(compiled(systems["springy"]).loop("verlet_loop").signatures) == 1
 
 
 def test_a_new_scene_takes_a_compiled_loop_from_ten_thousand_evaluations(monkeypatch, systems, scene_from_text):

@@ -90,6 +90,7 @@ def chain_module(scene_from_text, import_source, name, pot, params, n, left, rig
 def test_law_kernel_equals_numpy_stencil(law, scene_from_text, import_source, monkeypatch):
     from springchain.numeric.compiled import fast as fast_module
     from springchain.numeric.compiled.fast import Backend, FusedVerlet, available
+    from springchain.numeric.system import System
 
     monkeypatch.setattr(fast_module, "COMPILED_FORCE_MIN_N", 1)  # the other step methods' force, at n = 9
 
@@ -107,7 +108,7 @@ def test_law_kernel_equals_numpy_stencil(law, scene_from_text, import_source, mo
             assert fused.coefficients.law is not None
             a1, a2 = fused.force(x.copy()), plain.force(x.copy())
             assert np.allclose(a1, a2, rtol=1e-14, atol=1e-15 * np.max(np.abs(a2)))
-            a3 = fast_module.compiled_acceleration(mod, dict(mod.DEFAULTS), 9)(x.T.copy().T)  # not contiguous
+            a3 = fast_module.compiled_acceleration(System.from_module(mod, None, n=9))(x.T.copy().T)  # not contiguous
             assert np.allclose(a3, a2, rtol=1e-14, atol=1e-15 * np.max(np.abs(a2)))
             s1 = [x.copy(), v.copy(), a1.copy()]
             s2 = [x.copy(), v.copy(), a2.copy()]
@@ -342,9 +343,10 @@ def test_a_tension_that_calls_a_helper_compiles_with_its_scalar_form(import_sour
     """A tension that calls ``_expm1mx`` (array form in the module) runs in the law file through the
     scalar form the module carries: the compiled force equals the NumPy formula on a free chain."""
     from springchain.derive.law_helpers import helper_source
-    from springchain.generated.contract import End
+    from springchain.generated.contract import End, Layout, Provided
     from springchain.numeric.compiled.fast_kernels import available
     from springchain.numeric.compiled.potential_law import compiled_law
+    from springchain.numeric.system import System
 
     if not available():
         pytest.skip("numba is not installed")
@@ -352,7 +354,11 @@ def test_a_tension_that_calls_a_helper_compiles_with_its_scalar_form(import_sour
            "def spring_force(_d, a):\n    return a * _d + _expm1mx(_d)\n\n\n"
            + helper_source({"_expm1mx", "_expm1mx_s"}))
     mod = import_source(src, "helper_law")
-    law = compiled_law(mod, {"a": 2.0})
+    # a module that binds the law only: the System around it states the rest of the contract by hand
+    facts = Provided(scene="helper_law", scene_sha256="", parameters=("a",), defaults={"a": 2.0}, n=5,
+                     effects=frozenset({"spring"}), linear=False, layout=Layout.CHAIN, rigid_modes=1)
+    law = compiled_law(System(mod, {"a": 2.0}, np.ones(5), np.zeros((0, 2), dtype=np.intp), np.zeros(0),
+                              provided=facts))
     x = np.array([0.3, -0.2, 0.9, 0.1, -0.7])
     a = np.empty_like(x)
     free = End.FREE.code

@@ -348,7 +348,7 @@ def test_worker_side_needs_no_sympy(repo_root):
     code = ("import sys; sys.modules['sympy'] = None\n"
             "from pathlib import Path\n"
             "import springchain.generated.seed as g\n"
-            "from springchain.numeric.sweep import driver as sweep_driver\nfrom springchain.numeric.sweep import summary as sweep_summary\n"
+            "from springchain.numeric.sweep import driver as sweep_driver, summary as sweep_summary\n"
             "from springchain.numeric.sweep.distributions import parse\n"
             "from springchain.numeric.sweep.realisations import SweepSpec, compute_batch\n"
             "spec = SweepSpec('seed', Path(g.__file__).read_text(), tuple(sorted(g.DEFAULTS.items())),\n"
