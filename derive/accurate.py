@@ -34,6 +34,7 @@ from fractions import Fraction
 import mpmath
 import sympy as sp
 
+from .caps import CAPS
 from .mp_eval import mp_function, mp_function_bounded
 
 #: Relative agreement of two successive precisions accepted as converged.
@@ -41,7 +42,7 @@ AGREE = 1e-18
 #: Largest working precision (decimal digits) tried before giving up.
 MAX_DPS = 1280
 #: Most masses whose numeric fallback modes come from mpmath (beyond: the spring-factor route).
-MAX_MPMATH_MODES = 16
+MAX_MPMATH_MODES = CAPS.mpmath_modes
 
 
 class NotAccurate(ArithmeticError):

@@ -25,6 +25,7 @@ from dataclasses import dataclass
 import mpmath
 import sympy as sp
 
+from .caps import CAPS
 from .printing import closed, latex, sstr
 from .accurate import (MAX_DPS, MAX_MPMATH_MODES, NotAccurate, _eig_dynamical, _mp, certified, dynamical_bound,
                        exact_values, omega2_value, value)
@@ -38,7 +39,7 @@ from .work import MAX_NUMBER_DIGITS, WorkCapExceeded, check, number_digits, ops,
 _SETTLED = 4e-16
 #: Largest dashpot damping ratio ``φᵀCφ / φᵀMφ`` (SymPy operations, before simplifying it) whose
 #: closed form is sought (a size, never a time: the same scene gives the same report under any load).
-MAX_ZETA_OPS = 400
+MAX_ZETA_OPS = CAPS.zeta_ops
 #: First working precision of the damped modes (digits); each retry doubles it.
 FIRST_DIGITS = 40
 #: The absolute floor near ζ = 0: a ratio that is noise at FIRST_DIGITS and below this at twice

@@ -27,6 +27,7 @@ from dataclasses import dataclass
 import mpmath
 import sympy as sp
 
+from .caps import CAPS
 from .printing import closed, latex
 
 from .accurate import (MAX_DPS, MAX_MPMATH_MODES, NotAccurate, _eig_dynamical, certified, clusters, dynamical_bound,
@@ -41,9 +42,9 @@ from .scene import WALL
 _SETTLED = 1e-17
 #: Largest size (SymPy operation count of Σ mᵢφᵢ plus Σ mᵢφᵢ², measured before simplifying) of a
 #: mode whose Γ and M* are put in closed form: a work cap, never a clock (:mod:`.work`).
-MAX_INPUT_OPS = 2000
+MAX_INPUT_OPS = CAPS.participation_input_ops
 #: Longest closed form (SymPy operation count) printed.
-MAX_OPS = 400
+MAX_OPS = CAPS.participation_ops
 
 
 @dataclass(frozen=True)
