@@ -437,13 +437,22 @@ def _settled_rows(model: Model) -> tuple[list[tuple], bool]:
     raise NotAccurate(f"damped modes did not settle to float64 accuracy within {MAX_DPS} digits")
 
 
+def _rows(model: Model) -> tuple[list[tuple], bool]:
+    """The damped rows at the scene's values and whether the damping is proportional, computed once per
+    model (the notes ask for ``proportional`` alone, the report for the rows with closed forms: one
+    mpmath eigen-solve, not two)."""
+    def compute():
+        if model.scene.n > MAX_MPMATH_MODES:  # float64 spring-factor route (mpmath takes minutes here)
+            return _rows_float(model)
+        return _settled_rows(model)
+
+    return cached_on(model, "_damped_rows", None, compute)
+
+
 def _damped_modes(model: Model, modes: ModeSet | None) -> DampedModes:
     parts = (["dashpots"] if model.dampers else []) + (
         [model.scene.damping.kind] if model.scene.damping is not None else [])
-    if model.scene.n > MAX_MPMATH_MODES:  # float64 spring-factor route (mpmath takes minutes here)
-        rows, prop = _rows_float(model)
-    else:
-        rows, prop = _settled_rows(model)
+    rows, prop = _rows(model)
     exprs = _closed_forms(model, modes) if prop and modes is not None else [None] * len(rows)
     subs = _values(model)
     out = []

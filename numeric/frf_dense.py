@@ -319,28 +319,83 @@ def _mp_solve(el: Elements, omega: float, i: int, o: int, dps: int) -> complex:
     n = el.n
     with mpmath.workdps(dps):
         w = _mp(omega, mpmath)
-        Z = mpmath.matrix(n, n)
+        Z = [dict() for _ in range(n)]  # row a: {column: entry}, the nonzeros of Z(ω) only
+
+        def add(p, q, v):
+            Z[p][q] = Z[p].get(q, 0) + v
+
         for a in range(n):
-            Z[a, a] = -w * w * _mp(el.masses[a], mpmath)
+            add(a, a, -w * w * _mp(el.masses[a], mpmath))
         iw = mpmath.mpc(0, 1) * w
         groups = [(el.spring_ends, el.stiffness, 1), (el.damper_ends, el.damping, iw)]
         if el.rayleigh is not None:
             a_, b_ = (_mp(v, mpmath) for v in el.rayleigh)
             for a in range(n):
-                Z[a, a] += iw * a_ * _mp(el.masses[a], mpmath)
+                add(a, a, iw * a_ * _mp(el.masses[a], mpmath))
             groups.append((el.spring_ends, el.stiffness, iw * b_))
         for ends, vals, fac in groups:
             for (a, b), v in zip(np.asarray(ends).tolist(), np.asarray(vals).tolist()):
                 for p, sp in ((a, 1), (b, -1)):
                     for q, sq in ((a, 1), (b, -1)):
                         if p >= 0 and q >= 0 and a != b:
-                            Z[p, q] += sp * sq * fac * _mp(v, mpmath)
+                            add(p, q, sp * sq * fac * _mp(v, mpmath))
         if el.modal_zeta is not None:
-            Z += iw * _mp_modal_damping(el, mpmath)
-        F = mpmath.matrix(n, 1)
-        F[i] = 1
-        X = mpmath.lu_solve(Z, F)
-        return complex(X[o])
+            G = _mp_modal_damping(el, mpmath)
+            for a in range(n):
+                for b in range(n):
+                    if G[a, b]:
+                        add(a, b, iw * G[a, b])
+        return complex(sparse_solve(Z, i, mpmath)[o])
+
+
+def sparse_solve(rows: list[dict], i: int, mpmath) -> list:
+    """``Z⁻¹ e_i`` by Gaussian elimination with partial pivoting on the nonzeros of ``Z`` (in place).
+
+    The same elimination as ``mpmath.lu_solve`` (largest pivot in its column; a pivot at most
+    ε·max|Z| raises ZeroDivisionError, as mpmath's does), touching only nonzero entries: a chain's
+    tridiagonal Z costs O(n) operations instead of O(n³) (a 12-mass chain at contrast 1e12 spent
+    3 s of a 200-point ``frf`` in mpmath's dense elimination).
+
+    Parameters
+    ----------
+    rows : list of dict, length n
+        Row ``a`` of Z as ``{column: mpmath number}``.
+    i : int
+        The unit right-hand side's index.
+    mpmath : module
+
+    Returns
+    -------
+    list, length n
+        The solution.
+    """
+    n = len(rows)
+    rhs = [mpmath.mpf(0)] * n
+    rhs[i] = mpmath.mpf(1)
+    scale = max((abs(v) for r in rows for v in r.values()), default=0)
+    tiny = scale * mpmath.eps
+    for c in range(n):
+        p = max((r for r in range(c, n) if c in rows[r]), key=lambda r: abs(rows[r][c]), default=None)
+        if p is None or abs(rows[p][c]) <= tiny:
+            raise ZeroDivisionError("matrix is numerically singular")
+        rows[c], rows[p] = rows[p], rows[c]
+        rhs[c], rhs[p] = rhs[p], rhs[c]
+        pivot = rows[c]
+        for r in range(c + 1, n):
+            f = rows[r].pop(c, None)
+            if f is None or not f:
+                continue
+            f = f / pivot[c]
+            row = rows[r]
+            for q, v in pivot.items():
+                if q != c:
+                    row[q] = row.get(q, 0) - f * v
+            rhs[r] -= f * rhs[c]
+    x = [mpmath.mpf(0)] * n
+    for c in reversed(range(n)):
+        acc = rhs[c] - mpmath.fsum(v * x[q] for q, v in rows[c].items() if q != c)
+        x[c] = acc / rows[c][c]
+    return x
 
 
 def mp_start_digits(el: Elements, omega: float) -> int:
