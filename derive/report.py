@@ -12,6 +12,7 @@ import sympy as sp
 from .accurate import exact_values, omega2_value, value
 from .model import Effect, Model
 from .modes import ModeSet
+from .closed_summary import closed_form_line, closed_form_parts
 from .sag import sag_note, static_sag
 from .printing import MATRIX_LATEX, MATRIX_TEXT, MAX_TEXT_CLOSED_FORM, ScenePrinter, closed, json_closed, latex, sstr
 
@@ -193,6 +194,8 @@ def modes_json(model: Model, modes: ModeSet) -> dict:
         "masses": list(sc.mass_names),
         "modes": records,
         "closed_form": modes.closed_form,
+        "closed_form_parts": (parts := closed_form_parts(model, modes)),
+        "closed_form_summary": closed_form_line(parts),
         "notes": notes,
         **extra,
     }
@@ -356,6 +359,7 @@ def render_text(model: Model, modes: ModeSet) -> str:
     notes = effect_notes(model)
     if notes:
         out += [""] + [f"{n}" for n in notes]
+    out += ["", closed_form_line(closed_form_parts(model, modes))]
     return "\n".join(out) + "\n"
 
 
