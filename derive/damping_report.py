@@ -108,8 +108,8 @@ def _modal_damping(model: Model, dps: int):
     """(ω² list, G matrix) in modal coordinates at working precision ``dps``."""
     subs = _values(model)
     n = model.scene.n
-    masses = [m.subs(subs) for m in model.masses]
-    springs = [(a, b, k.subs(subs)) for a, b, k, _, _ in model.springs]
+    masses = [m.xreplace(subs) for m in model.masses]
+    springs = [(a, b, k.xreplace(subs)) for a, b, k, _, _ in model.springs]
     w2, shapes = _eig_by_piece(masses, springs, _pieces(model), dps)
     with mpmath.workdps(dps):
         n_rigid = len(model.free_components)
@@ -120,11 +120,11 @@ def _modal_damping(model: Model, dps: int):
                 Phi[i, j] = s[i]
         G = mpmath.zeros(n, n)
         if model.C is not None:
-            C = mpmath.matrix([[_mp(model.C[i, j].subs(subs), dps) for j in range(n)] for i in range(n)])
+            C = mpmath.matrix([[_mp(model.C[i, j].xreplace(subs), dps) for j in range(n)] for i in range(n)])
             G = Phi.T * C * Phi
         if model.modal_zeta is not None:
             for j in range(n):
-                G[j, j] += 2 * _mp(model.modal_zeta[j].subs(subs), dps) * mpmath.sqrt(max(w2[j], 0))  # ω² noise < 0
+                G[j, j] += 2 * _mp(model.modal_zeta[j].xreplace(subs), dps) * mpmath.sqrt(max(w2[j], 0))  # ω² noise < 0
         return w2, G
 
 
@@ -232,8 +232,8 @@ def _float_modes(model: Model, subs: dict):
     from .spring_factor import accurate_modes_function
 
     n = model.scene.n
-    masses = np.array([float(m.subs(subs)) for m in model.masses])
-    springs = [(a, b, float(k.subs(subs))) for a, b, k, _, _ in model.springs]
+    masses = np.array([float(m.xreplace(subs)) for m in model.masses])
+    springs = [(a, b, float(k.xreplace(subs))) for a, b, k, _, _ in model.springs]
     found = []
     for piece in _pieces(model):  # a loop over pieces, not masses
         where = {i: j for j, i in enumerate(piece)}
@@ -258,7 +258,7 @@ def _float_damping(model: Model, subs: dict, w2, Phi):
     G = np.zeros((n, n))
     if model.dampers:
         B = np.zeros((len(model.dampers), n))
-        c = np.array([float(cc.subs(subs)) for _, _, cc, _ in model.dampers])
+        c = np.array([float(cc.xreplace(subs)) for _, _, cc, _ in model.dampers])
         for r, (a, b, _, _) in enumerate(model.dampers):  # a loop over dashpots
             B[r, a] += 1.0 if a >= 0 else 0.0
             B[r, b] -= 1.0 if b >= 0 else 0.0
@@ -266,10 +266,10 @@ def _float_damping(model: Model, subs: dict, w2, Phi):
         G = P.T @ (c[:, None] * P)
         G = 0.5 * (G + G.T)
     if model.rayleigh is not None:
-        alpha, beta = (float(e.subs(subs)) for e in model.rayleigh)
+        alpha, beta = (float(e.xreplace(subs)) for e in model.rayleigh)
         G[np.arange(n), np.arange(n)] += alpha + beta * w2
     if model.modal_zeta is not None:
-        zeta = np.array([float(z.subs(subs)) for z in model.modal_zeta])
+        zeta = np.array([float(z.xreplace(subs)) for z in model.modal_zeta])
         G[np.arange(n), np.arange(n)] += 2 * zeta * np.sqrt(np.maximum(w2, 0.0))
     return G
 
@@ -419,8 +419,8 @@ def damped_modes(model: Model, modes: ModeSet | None) -> DampedModes:
 def _settled_rows(model: Model) -> tuple[list[tuple], bool]:
     """:func:`_rows_at` at 40, 80, … digits until two successive precisions agree (float64 settled)."""
     subs = _values(model)
-    bound = dynamical_bound([m.subs(subs) for m in model.masses],
-                            [(a, b, k.subs(subs)) for a, b, k, _, _ in model.springs])
+    bound = dynamical_bound([m.xreplace(subs) for m in model.masses],
+                            [(a, b, k.xreplace(subs)) for a, b, k, _, _ in model.springs])
     n_rigid = len(model.free_components)
     prev = None
     dps = FIRST_DIGITS

@@ -350,8 +350,8 @@ def _numeric_modes(model: Model, lam: sp.Symbol, n_rigid: int) -> list[Mode]:
     (:func:`accurate.spring_factor_modes`).
     """
     subs = exact_values(model.params, model.scene.parameters)
-    masses = [m.subs(subs) for m in model.masses]
-    springs = [(a, b, k.subs(subs)) for a, b, k, _, _ in model.springs]
+    masses = [m.xreplace(subs) for m in model.masses]
+    springs = [(a, b, k.xreplace(subs)) for a, b, k, _, _ in model.springs]
     if model.scene.n > MAX_MPMATH_MODES:
         found = spring_factor_modes(masses, springs, model.free_components)
     else:

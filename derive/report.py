@@ -227,7 +227,9 @@ def static_equilibrium(model: Model) -> list[sp.Expr] | None:
     sag = static_sag(model)
     if sag is None:
         return None
-    return list(sag.closed if sag.closed is not None else sag.exact)
+    if sag.closed is not None:
+        return list(sag.closed)
+    return list(sag.exact) if sag.exact is not None else [sp.Float(v, 17) for v in sag.values]
 
 
 def effect_notes(model: Model) -> list[str]:

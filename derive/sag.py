@@ -18,10 +18,11 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+import mpmath
 import sympy as sp
 from sympy.polys.matrices import DomainMatrix
 
-from .accurate import exact_values, value
+from .accurate import MAX_DPS, NotAccurate, _mp, exact_values, value
 from .caps import CAPS
 from .model import Model
 from .model_cache import cached_on
@@ -37,8 +38,9 @@ class Sag:
     ----------
     closed : tuple of sympy.Expr, shape (n,), or None
         ``K⁻¹ M g`` in the scene's parameters (factored), None past a cap.
-    exact : tuple of sympy.Rational, shape (n,)
-        The exact sag at the scene's parameter values.
+    exact : tuple of sympy.Rational, shape (n,), or None
+        The exact sag at the scene's parameter values (None where an entry of K or M g is irrational:
+        ``values`` are then settled in mpmath).
     values : tuple of float, shape (n,)
         ``exact`` correctly rounded.
     why : str
@@ -116,11 +118,36 @@ def capped_solve(A: sp.Matrix, b: sp.Matrix, max_terms: int) -> list[sp.Expr]:
     return [dom.to_sympy(e) for e in x]
 
 
-def exact_solve(A: sp.Matrix, b: sp.Matrix) -> list[sp.Rational]:
-    """``A⁻¹ b`` for a matrix of exact rationals (SymPy's exact rational arithmetic, no rounding)."""
+def exact_solve(A: sp.Matrix, b: sp.Matrix) -> list[sp.Rational] | None:
+    """``A⁻¹ b`` for a matrix of exact rationals (SymPy's exact rational arithmetic, no rounding); None when
+    an entry is not rational (``pi``, ``sqrt(2)`` in a scene's expressions)."""
+    if not all(e.is_Rational for e in (*A, *b)):
+        return None
     dm = DomainMatrix.from_Matrix(A).convert_to(sp.QQ)
     rhs = DomainMatrix.from_Matrix(b).convert_to(sp.QQ)
     return list(dm.lu_solve(rhs).to_Matrix())
+
+
+def settled_solve(A: sp.Matrix, b: sp.Matrix) -> list[float]:
+    """``A⁻¹ b`` for a matrix of exact (irrational) numbers: mpmath's elimination at 30, 60, … digits until two
+    precisions agree to 1e-18 per entry, then correctly rounded.
+
+    Raises
+    ------
+    NotAccurate
+        If no two precisions up to :data:`accurate.MAX_DPS` digits agree.
+    """
+    n = A.rows
+    prev, dps = None, 30
+    while dps <= MAX_DPS:
+        with mpmath.workdps(dps):
+            Am = mpmath.matrix([[_mp(A[i, j], dps) for j in range(n)] for i in range(n)])
+            x = mpmath.lu_solve(Am, mpmath.matrix([_mp(e, dps) for e in b]))
+            if prev is not None and all(abs(x[i] - prev[i]) <= mpmath.mpf(10) ** -18 * abs(x[i]) for i in range(n)):
+                return [float(x[i]) for i in range(n)]
+            prev = x
+        dps *= 2
+    raise NotAccurate(f"the static sag did not settle within {MAX_DPS} digits")
 
 
 def _closed(model: Model, rhs: sp.Matrix) -> tuple[tuple | None, str]:
@@ -155,9 +182,10 @@ def _static_sag(model: Model) -> Sag:
     rhs = sp.Matrix(model.gravity_force)
     closed, why = _closed(model, rhs)
     subs = exact_values(model.params, model.scene.parameters)
-    exact = tuple(exact_solve(model.K.subs(subs), rhs.subs(subs)))
-    values = tuple(value(e, {}) for e in exact)
-    return Sag(closed, exact, values, why)
+    K, F = model.K.xreplace(subs), rhs.xreplace(subs)  # symbols -> exact rationals
+    exact = exact_solve(K, F)
+    values = tuple(value(e, {}) for e in exact) if exact is not None else tuple(settled_solve(K, F))
+    return Sag(closed, None if exact is None else tuple(exact), values, why)
 
 
 def sag_note(sag: Sag) -> str:
@@ -167,8 +195,9 @@ def sag_note(sag: Sag) -> str:
                 + "); modes are about x_eq (at the scene's values: ("
                 + ", ".join(f"{v:.10g}" for v in sag.values) + "))")
     return ("gravity: static equilibrium (sag) x_eq = K^-1 M g = (" + ", ".join(repr(v) for v in sag.values)
-            + f"); modes are about x_eq (values at the scene's parameters from an exact rational solve; "
-              f"no closed form: {sag.why})")
+            + "); modes are about x_eq (values at the scene's parameters from "
+            + ("an exact rational solve" if sag.exact is not None else "mpmath, two precisions agreeing")
+            + f"; no closed form: {sag.why})")
 
 
-__all__ = ["Sag", "capped_solve", "exact_solve", "static_sag", "sag_note"]
+__all__ = ["Sag", "capped_solve", "exact_solve", "settled_solve", "static_sag", "sag_note"]

@@ -300,3 +300,22 @@ def test_json_and_text_share_the_closed_form_line(tmp_path):
     data = json.loads(json.dumps(m.to_json()))
     assert data["closed_form_summary"] == line
     assert data["closed_form_parts"]["sag"] is False and "static sag x_eq" in line.split("values only")[1]
+
+
+def test_sag_with_irrational_constants_settles_in_mpmath(tmp_path):
+    """Springs sqrt(2)*k2 and pi*k3: no rational solve; the values settle in mpmath, equal to the hand formula."""
+    masses, springs = [1.1, 1.2, 1.3], [53.0, 56.0, 59.0]
+    text = hanging_text(3, masses=masses, springs=springs).replace('k = "k2"', 'k = "sqrt(2)*k2"').replace(
+        'k = "k3"', 'k = "pi*k3"')
+    model = Model(load_scene(_scene(tmp_path, text)))
+    sag = static_sag(model)
+    assert sag.exact is None
+    with mp.workdps(DPS):
+        k = [_q(springs[0]), mp.sqrt(2) * _q(springs[1]), mp.pi * _q(springs[2])]
+        m = [_q(v) for v in masses]
+        ref, acc = [], mp.mpf(0)
+        for j in range(3):
+            acc += _q(9.81) * mp.fsum(m[j:]) / k[j]
+            ref.append(acc)
+    for v, r in zip(sag.values, ref):
+        assert abs(v - r) <= 1.2e-16 * abs(r)
