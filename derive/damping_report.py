@@ -33,6 +33,7 @@ from .model import Model
 from .model_cache import cached_on
 from .modes import ModeSet
 from .pieces import pieces
+from .qep_roots import qep_roots
 from .work import MAX_NUMBER_DIGITS, WorkCapExceeded, check, number_digits, ops, sympy_numbers
 
 #: Two successive precisions agreeing to this relative difference settle a float64 value.
@@ -191,7 +192,10 @@ def _rows_at(model: Model, dps: int, w2G=None) -> tuple[list[tuple], bool]:
             A[m + a, a] = -w2[i]
             for b, j in enumerate(kept):
                 A[m + a, m + b] = -G[i, j]
-        lam = list(mpmath.eig(A, left=False, right=False)) if m else []
+        lam = qep_roots([w2[i] for i in kept], mpmath.matrix([[G[i, j] for j in kept] for i in kept]), dps) \
+            if m else []
+        if lam is None:  # a repeated or nearly repeated eigenvalue: Newton is not trusted there
+            lam = list(mpmath.eig(A, left=False, right=False))
         lam += [mpmath.mpc(0, mpmath.sqrt(w2[j])) for j in free if w2[j] > 0]
         lam += [mpmath.mpc(0, 0)] * (2 * sum(1 for j in free if w2[j] == 0))
         scale = max(abs(l) for l in lam) or mpmath.mpf(1)
