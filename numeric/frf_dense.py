@@ -272,7 +272,22 @@ def mp_stamp(target, ends: np.ndarray, values: np.ndarray, r: list, mpmath, *, r
 
 def mp_modes(el: Elements, mpmath) -> tuple[list, list[list]]:
     """λ = ω² ascending and the physical M-orthonormal shapes φⱼ = M^-1/2 eⱼ (one list per mode), from
-    ``mpmath.eigsy`` of D = M^-1/2 K M^-1/2 assembled exactly from the elements at the current precision."""
+    ``mpmath.eigsy`` of D = M^-1/2 K M^-1/2 assembled exactly from the elements at the current precision.
+    Computed once per scene and precision (the resonance table asks once per resonance: 20 eigsy of one
+    matrix were 1 s of a 12-mass ``frf``)."""
+    key = (mpmath.mp.dps, el.masses.tobytes(), el.spring_ends.tobytes(), el.stiffness.tobytes())
+    if key not in _MODES:
+        if len(_MODES) > 16:
+            _MODES.clear()
+        _MODES[key] = _mp_modes_at(el, mpmath)
+    lam, shapes = _MODES[key]
+    return list(lam), [list(s) for s in shapes]
+
+
+_MODES: dict = {}
+
+
+def _mp_modes_at(el: Elements, mpmath) -> tuple[list, list[list]]:
     n = el.n
     r = [1 / mpmath.sqrt(_mp(m, mpmath)) for m in el.masses.tolist()]
     D = mpmath.zeros(n, n)
