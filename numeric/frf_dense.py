@@ -19,7 +19,8 @@
 4. **Extended precision** for the frequencies the certificate still rejects: Gaussian elimination in
    mpmath on Z assembled exactly from the elements (parameters as exact binary fractions; modal
    damping from mpmath's ``eigsy``), at 30, 60, 120, … digits until two agree to 1e-15 —
-   scenes of at most :data:`MPMATH_MAX_MASSES` masses. Larger scenes are refused at such a
+   scenes of at most :data:`MPMATH_MAX_MASSES` masses, or banded ones of the same cost
+   (:func:`mp_solvable`: chains of any practical length). Other larger scenes are refused at such a
    frequency in one line (never a silently wrong number).
 
 A plain float64 LU of ``K − ω²M + iωC`` (the route this replaces) loses κ·ε: 45 % on four masses
@@ -239,17 +240,37 @@ class DenseReceptance:
             ok = ((self.error_bound(x[bad], weights, r, hidden) <= CERTIFIED * np.abs(H[bad]))
                   & (np.abs(step[:, output]) <= CONVERGED * np.abs(H[bad])))  # and the refinement has converged
             bad, r = bad[~ok], r[~ok]
-        if bad.size and self.el.n > MPMATH_MAX_MASSES:
+        if bad.size and not mp_solvable(self.el):
             raise RunRefused(f"frequency response: H at {bad.size} of {omega.shape[0]} frequencies (first "
                              f"ω = {omega[bad[0]]:.6g} rad/s) cannot be certified to 1e-10 in float64 (parameter "
                              f"contrast), and the extended-precision solve takes at most {MPMATH_MAX_MASSES} "
-                             "masses", quantity="frf")
+                             f"masses (or N·b² ≤ {MPMATH_MAX_MASSES}³ for a banded Z of half-bandwidth b, "
+                             "without modal damping)", quantity="frf")
         if bad.size:
             H[bad] = mp_receptance(self.el, omega[bad], input, output)
         return H
 
 
 # -- extended precision ----------------------------------------------------------------------------
+def bandwidth(el: Elements) -> int:
+    """Half-bandwidth of Z = K − ω²M + iωC in mass order: the largest |a − b| over springs and dashpots
+    between two masses (0 for none)."""
+    ends = [np.asarray(e).reshape(-1, 2) for e in (el.spring_ends, el.damper_ends)]
+    ends = np.concatenate(ends) if ends else np.zeros((0, 2), int)
+    ends = ends[(ends[:, 0] >= 0) & (ends[:, 1] >= 0)]
+    return int(np.max(np.abs(ends[:, 0] - ends[:, 1]))) if ends.size else 0
+
+
+def mp_solvable(el: Elements) -> bool:
+    """Whether the extended-precision elimination (:func:`sparse_solve`, cost ~ N·b² per frequency and
+    precision) is offered: at most :data:`MPMATH_MAX_MASSES` masses, or a banded Z (no modal damping, whose
+    C is dense) of the same cost, N·b² ≤ MPMATH_MAX_MASSES³ — a chain of any length up to 13 824 masses
+    (a 40-mass chain was refused at 28 near-resonance frequencies its float64 certificate rejected)."""
+    if el.n <= MPMATH_MAX_MASSES:
+        return True
+    return el.modal_zeta is None and el.n * max(bandwidth(el), 1) ** 2 <= MPMATH_MAX_MASSES ** 3
+
+
 def _mp(v, mpmath):
     """A float64 as an mpmath number, exactly (its 53 bits fit at every precision used here, >= 30 digits)."""
     return mpmath.mpf(float(v))
@@ -456,4 +477,4 @@ def mp_receptance(el: Elements, omega: np.ndarray, input: int, output: int) -> n
     return out
 
 
-__all__ = ["DenseReceptance", "mp_receptance", "CERTIFIED", "MPMATH_MAX_MASSES"]
+__all__ = ["DenseReceptance", "mp_receptance", "mp_solvable", "CERTIFIED", "MPMATH_MAX_MASSES"]

@@ -319,3 +319,32 @@ def test_sag_with_irrational_constants_settles_in_mpmath(tmp_path):
             ref.append(acc)
     for v, r in zip(sag.values, ref):
         assert abs(v - r) <= 1.2e-16 * abs(r)
+
+
+def test_frf_of_a_forty_mass_chain_is_certified_not_refused(tmp_path):
+    """Past the dense mpmath limit (24 masses) a chain's Z is tridiagonal: the extended-precision solve is
+    offered (it was refused at the near-resonance frequencies the float64 certificate rejects), and |H| equals
+    an independent mpmath elimination at 50 digits."""
+    n = 40
+    out = ['name = "c40"', "[parameters]"] + [f"m{i} = {1.0 + 0.1 * i!r}" for i in range(1, n + 1)]
+    out += [f"k{i} = {50.0 + 3.0 * i!r}" for i in range(1, n + 2)] + ["[masses]"]
+    out += [f'a{i} = "m{i}"' for i in range(1, n + 1)]
+    ends = ["wall"] + [f"a{i}" for i in range(1, n + 1)] + ["wall"]
+    for i, (a, b) in enumerate(zip(ends, ends[1:]), 1):
+        out += ["[[springs]]", f'between = ["{a}", "{b}"]', f'k = "k{i}"']
+    h = springchain.frf(_scene(tmp_path, "\n".join(out) + "\n"), "a1", f"a{n}", points=200, transfer=False)
+    m = [_q(1.0 + 0.1 * i) for i in range(1, n + 1)]
+    k = [_q(50.0 + 3.0 * i) for i in range(1, n + 2)]
+    omega, mag = list(h.omega), list(h.magnitude)
+    with mp.workdps(DPS):
+        for j in range(0, len(omega), max(1, len(omega) // 25)):
+            w = _q(float(omega[j]))
+            Z = mp.zeros(n, n)
+            for i in range(n):
+                Z[i, i] = k[i] + k[i + 1] - w * w * m[i]
+                if i + 1 < n:
+                    Z[i, i + 1] = Z[i + 1, i] = -k[i + 1]
+            e = mp.matrix(n, 1)
+            e[0] = 1
+            ref = abs(mp.lu_solve(Z, e)[n - 1])
+            assert abs(mag[j] - ref) <= 1e-10 * ref, (omega[j], mag[j], ref)
