@@ -25,6 +25,7 @@ from dataclasses import dataclass
 import mpmath
 import sympy as sp
 
+from .caps import CAPS
 from .printing import closed, latex, sstr
 from .accurate import (MAX_DPS, MAX_MPMATH_MODES, NotAccurate, eig_dynamical, mp_value, certified, dynamical_bound,
                        exact_values, omega2_value, value)
@@ -32,13 +33,14 @@ from .model import Model
 from .model_cache import cached_on
 from .modes import ModeSet
 from .pieces import pieces
+from .qep_roots import qep_roots
 from .work import MAX_NUMBER_DIGITS, WorkCapExceeded, check, number_digits, ops, sympy_numbers
 
 #: Two successive precisions agreeing to this relative difference settle a float64 value.
 _SETTLED = 4e-16
 #: Largest dashpot damping ratio ``φᵀCφ / φᵀMφ`` (SymPy operations, before simplifying it) whose
 #: closed form is sought (a size, never a time: the same scene gives the same report under any load).
-MAX_ZETA_OPS = 400
+MAX_ZETA_OPS = CAPS.zeta_ops
 #: First working precision of the damped modes (digits); each retry doubles it.
 FIRST_DIGITS = 40
 #: The absolute floor near ζ = 0: a ratio that is noise at FIRST_DIGITS and below this at twice
@@ -107,8 +109,8 @@ def _modal_damping(model: Model, dps: int):
     """(ω² list, G matrix) in modal coordinates at working precision ``dps``."""
     subs = _values(model)
     n = model.scene.n
-    masses = [m.subs(subs) for m in model.masses]
-    springs = [(a, b, k.subs(subs)) for a, b, k, _, _ in model.springs]
+    masses = [m.xreplace(subs) for m in model.masses]
+    springs = [(a, b, k.xreplace(subs)) for a, b, k, _, _ in model.springs]
     w2, shapes = _eig_by_piece(masses, springs, _pieces(model), dps)
     with mpmath.workdps(dps):
         n_rigid = len(model.free_components)
@@ -119,11 +121,11 @@ def _modal_damping(model: Model, dps: int):
                 Phi[i, j] = s[i]
         G = mpmath.zeros(n, n)
         if model.C is not None:
-            C = mpmath.matrix([[mp_value(model.C[i, j].subs(subs), dps) for j in range(n)] for i in range(n)])
+            C = mpmath.matrix([[mp_value(model.C[i, j].xreplace(subs), dps) for j in range(n)] for i in range(n)])
             G = Phi.T * C * Phi
         if model.modal_zeta is not None:
             for j in range(n):
-                G[j, j] += 2 * mp_value(model.modal_zeta[j].subs(subs), dps) * mpmath.sqrt(max(w2[j], 0))  # ω² noise < 0
+                G[j, j] += 2 * mp_value(model.modal_zeta[j].xreplace(subs), dps) * mpmath.sqrt(max(w2[j], 0))  # ω² noise < 0
         return w2, G
 
 
@@ -190,7 +192,10 @@ def _rows_at(model: Model, dps: int, w2G=None) -> tuple[list[tuple], bool]:
             A[m + a, a] = -w2[i]
             for b, j in enumerate(kept):
                 A[m + a, m + b] = -G[i, j]
-        lam = list(mpmath.eig(A, left=False, right=False)) if m else []
+        lam = qep_roots([w2[i] for i in kept], mpmath.matrix([[G[i, j] for j in kept] for i in kept]), dps) \
+            if m else []
+        if lam is None:  # a repeated or nearly repeated eigenvalue: Newton is not trusted there
+            lam = list(mpmath.eig(A, left=False, right=False))
         lam += [mpmath.mpc(0, mpmath.sqrt(w2[j])) for j in free if w2[j] > 0]
         lam += [mpmath.mpc(0, 0)] * (2 * sum(1 for j in free if w2[j] == 0))
         scale = max(abs(l) for l in lam) or mpmath.mpf(1)
@@ -231,8 +236,8 @@ def _float_modes(model: Model, subs: dict):
     from .spring_factor import accurate_modes_function
 
     n = model.scene.n
-    masses = np.array([float(m.subs(subs)) for m in model.masses])
-    springs = [(a, b, float(k.subs(subs))) for a, b, k, _, _ in model.springs]
+    masses = np.array([float(m.xreplace(subs)) for m in model.masses])
+    springs = [(a, b, float(k.xreplace(subs))) for a, b, k, _, _ in model.springs]
     found = []
     for piece in _pieces(model):  # a loop over pieces, not masses
         where = {i: j for j, i in enumerate(piece)}
@@ -257,7 +262,7 @@ def _float_damping(model: Model, subs: dict, w2, Phi):
     G = np.zeros((n, n))
     if model.dampers:
         B = np.zeros((len(model.dampers), n))
-        c = np.array([float(cc.subs(subs)) for _, _, cc, _ in model.dampers])
+        c = np.array([float(cc.xreplace(subs)) for _, _, cc, _ in model.dampers])
         for r, (a, b, _, _) in enumerate(model.dampers):  # a loop over dashpots
             B[r, a] += 1.0 if a >= 0 else 0.0
             B[r, b] -= 1.0 if b >= 0 else 0.0
@@ -265,10 +270,10 @@ def _float_damping(model: Model, subs: dict, w2, Phi):
         G = P.T @ (c[:, None] * P)
         G = 0.5 * (G + G.T)
     if model.rayleigh is not None:
-        alpha, beta = (float(e.subs(subs)) for e in model.rayleigh)
+        alpha, beta = (float(e.xreplace(subs)) for e in model.rayleigh)
         G[np.arange(n), np.arange(n)] += alpha + beta * w2
     if model.modal_zeta is not None:
-        zeta = np.array([float(z.subs(subs)) for z in model.modal_zeta])
+        zeta = np.array([float(z.xreplace(subs)) for z in model.modal_zeta])
         G[np.arange(n), np.arange(n)] += 2 * zeta * np.sqrt(np.maximum(w2, 0.0))
     return G
 
@@ -418,8 +423,8 @@ def damped_modes(model: Model, modes: ModeSet | None) -> DampedModes:
 def _settled_rows(model: Model) -> tuple[list[tuple], bool]:
     """:func:`_rows_at` at 40, 80, … digits until two successive precisions agree (float64 settled)."""
     subs = _values(model)
-    bound = dynamical_bound([m.subs(subs) for m in model.masses],
-                            [(a, b, k.subs(subs)) for a, b, k, _, _ in model.springs])
+    bound = dynamical_bound([m.xreplace(subs) for m in model.masses],
+                            [(a, b, k.xreplace(subs)) for a, b, k, _, _ in model.springs])
     n_rigid = len(model.free_components)
     prev = None
     dps = FIRST_DIGITS
@@ -436,13 +441,22 @@ def _settled_rows(model: Model) -> tuple[list[tuple], bool]:
     raise NotAccurate(f"damped modes did not settle to float64 accuracy within {MAX_DPS} digits")
 
 
+def _rows(model: Model) -> tuple[list[tuple], bool]:
+    """The damped rows at the scene's values and whether the damping is proportional, computed once per
+    model (the notes ask for ``proportional`` alone, the report for the rows with closed forms: one
+    mpmath eigen-solve, not two)."""
+    def compute():
+        if model.scene.n > MAX_MPMATH_MODES:  # float64 spring-factor route (mpmath takes minutes here)
+            return _rows_float(model)
+        return _settled_rows(model)
+
+    return cached_on(model, "_damped_rows", None, compute)
+
+
 def _damped_modes(model: Model, modes: ModeSet | None) -> DampedModes:
     parts = (["dashpots"] if model.dampers else []) + (
         [model.scene.damping.kind] if model.scene.damping is not None else [])
-    if model.scene.n > MAX_MPMATH_MODES:  # float64 spring-factor route (mpmath takes minutes here)
-        rows, prop = _rows_float(model)
-    else:
-        rows, prop = _settled_rows(model)
+    rows, prop = _rows(model)
     exprs = _closed_forms(model, modes) if prop and modes is not None else [None] * len(rows)
     subs = _values(model)
     out = []

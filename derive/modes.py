@@ -26,6 +26,7 @@ from dataclasses import dataclass, field
 
 import sympy as sp
 
+from .caps import CAPS
 from .accurate import MAX_MPMATH_MODES, Float64Limit, exact_values, numeric_modes, omega2_value, spring_factor_modes
 from .errors import SceneError
 from .model import Model
@@ -34,9 +35,9 @@ from .work import (MAX_DET_TERMS, MAX_NUMBER_DIGITS, NumbersTooLong, SymbolicNum
                    det_terms_bound, number_digits, sympy_numbers)
 
 #: Largest block (after rigid modes and mirror symmetry) whose determinant is expanded symbolically.
-MAX_SYMBOLIC_BLOCK = 6
+MAX_SYMBOLIC_BLOCK = CAPS.symbolic_block
 #: Largest closed-form root (SymPy operation count) worth printing and generating.
-MAX_ROOT_OPS = 120
+MAX_ROOT_OPS = CAPS.root_ops
 
 
 #: The symbolic eigen-problem is past a work cap (kept name: it was once a time budget).
@@ -349,8 +350,8 @@ def _numeric_modes(model: Model, lam: sp.Symbol, n_rigid: int) -> list[Mode]:
     (:func:`accurate.spring_factor_modes`).
     """
     subs = exact_values(model.params, model.scene.parameters)
-    masses = [m.subs(subs) for m in model.masses]
-    springs = [(a, b, k.subs(subs)) for a, b, k, _, _ in model.springs]
+    masses = [m.xreplace(subs) for m in model.masses]
+    springs = [(a, b, k.xreplace(subs)) for a, b, k, _, _ in model.springs]
     if model.scene.n > MAX_MPMATH_MODES:
         found = spring_factor_modes(masses, springs, model.free_components)
     else:

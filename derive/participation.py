@@ -27,6 +27,7 @@ from dataclasses import dataclass
 import mpmath
 import sympy as sp
 
+from .caps import CAPS
 from .printing import closed, latex
 
 from .accurate import (MAX_DPS, MAX_MPMATH_MODES, NotAccurate, eig_dynamical, certified, clusters, dynamical_bound,
@@ -41,9 +42,9 @@ from .scene import WALL
 _SETTLED = 1e-17
 #: Largest size (SymPy operation count of Σ mᵢφᵢ plus Σ mᵢφᵢ², measured before simplifying) of a
 #: mode whose Γ and M* are put in closed form: a work cap, never a clock (:mod:`.work`).
-MAX_INPUT_OPS = 2000
+MAX_INPUT_OPS = CAPS.participation_input_ops
 #: Longest closed form (SymPy operation count) printed.
-MAX_OPS = 400
+MAX_OPS = CAPS.participation_ops
 
 
 @dataclass(frozen=True)
@@ -144,8 +145,8 @@ def _values_mp(model: Model, dps: int, n_rigid: int, bound):
     ``bound`` bounds ‖D‖ (:func:`accurate.dynamical_bound`), for telling a repeated ω from a close pair."""
     subs = exact_values(model.params, model.scene.parameters)
     n = model.scene.n
-    masses = [m.subs(subs) for m in model.masses]
-    springs = [(a, b, k.subs(subs)) for a, b, k, _, _ in model.springs]
+    masses = [m.xreplace(subs) for m in model.masses]
+    springs = [(a, b, k.xreplace(subs)) for a, b, k, _, _ in model.springs]
     w2, shapes = eig_dynamical(masses, springs, n, dps)
     with mpmath.workdps(dps):
         w2 = [mpmath.mpf(0) if j < n_rigid else w for j, w in enumerate(w2)]
@@ -183,8 +184,8 @@ def _accurate_values(model: Model):
     if n > MAX_MPMATH_MODES:
         return _spring_factor_values(model) + ("spring-factor SVD (float64, compensated sums)",)
     subs = exact_values(model.params, model.scene.parameters)
-    bound = dynamical_bound([x.subs(subs) for x in model.masses],
-                            [(a, b, k.subs(subs)) for a, b, k, _, _ in model.springs])
+    bound = dynamical_bound([x.xreplace(subs) for x in model.masses],
+                            [(a, b, k.xreplace(subs)) for a, b, k, _, _ in model.springs])
     prev = None
     dps = 40
     while dps <= MAX_DPS:
@@ -210,9 +211,9 @@ def _spring_factor_values(model: Model):
     from .spring_factor import accurate_modes_function
 
     subs = exact_values(model.params, model.scene.parameters)
-    masses = [float(m.subs(subs)) for m in model.masses]
+    masses = [float(m.xreplace(subs)) for m in model.masses]
     ends = tuple((a, b) for a, b, *_ in model.springs)
-    ks = [float(k.subs(subs)) for _, _, k, _, _ in model.springs]
+    ks = [float(k.xreplace(subs)) for _, _, k, _, _ in model.springs]
     run = accurate_modes_function(len(masses), ends, tuple(tuple(sorted(p)) for p in model.free_components))
     w2, shapes = run(masses, ks)  # M-orthonormal physical shapes, columns
     shapes = np.asarray(shapes, dtype=float)
@@ -276,12 +277,12 @@ def _participation(model: Model, modes: ModeSet | None) -> Participation:
         records.sort(key=lambda r: omega2_value(r[0], subs))
     # the sign of each mass-normalised shape follows the printed shape (modes of multiplicity one)
     if len(records) == n:
+        mass_values = [value(x, subs) for x in model.masses]  # once, not once per mode
         for j, (mode, shape) in enumerate(records):
             if mode.multiplicity != 1:
                 continue
             printed = [value(c, subs) if not isinstance(c, float) else c for c in shape]
-            dot = math.fsum(float(mi) * p * q for mi, p, q in
-                            zip((value(x, subs) for x in model.masses), printed, phis[j]))
+            dot = math.fsum(float(mi) * p * q for mi, p, q in zip(mass_values, printed, phis[j]))
             if dot < 0:
                 phis[j] = [-c for c in phis[j]]
                 gamma[j] = -gamma[j]

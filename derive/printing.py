@@ -21,9 +21,12 @@ forms of at most :data:`MAX_JSON_CLOSED_FORM` characters and a longer one is nul
 from __future__ import annotations
 
 import sympy as sp
+
 from sympy.printing.conventions import split_super_sub
 from sympy.printing.precedence import PRECEDENCE
 from sympy.printing.str import StrPrinter
+
+from .caps import CAPS
 
 #: The matrices of the derivation, as LaTeX (bold) and as text (Unicode mathematical bold).
 MATRIX_LATEX = {"M": r"\mathbf{M}", "K": r"\mathbf{K}", "C": r"\mathbf{C}", "D": r"\mathbf{D}"}
@@ -89,9 +92,9 @@ def latex(expr, **settings) -> str:
 
 
 #: Longest closed form a text report prints (characters, about two terminal lines).
-MAX_TEXT_CLOSED_FORM = 160
+MAX_TEXT_CLOSED_FORM = CAPS.text_closed_form
 #: Longest closed form a ``--json`` field carries (characters); a longer one is null, with a note.
-MAX_JSON_CLOSED_FORM = 4000
+MAX_JSON_CLOSED_FORM = CAPS.json_closed_form
 
 
 def closed(text: str) -> str:

@@ -93,8 +93,8 @@ def _elastic_mp(model, dps: int):
     """Elastic ω² (ascending) at working precision ``dps`` or more: raised until every value is certified
     (:func:`accurate.certified`; two precisions can agree on the same deflated, wrong value)."""
     subs = exact_values(model.params, model.scene.parameters)
-    masses = [m.subs(subs) for m in model.masses]
-    springs = [(a, b, k.subs(subs)) for a, b, k, _, _ in model.springs]
+    masses = [m.xreplace(subs) for m in model.masses]
+    springs = [(a, b, k.xreplace(subs)) for a, b, k, _, _ in model.springs]
     rigid, bound = len(model.free_components), dynamical_bound(masses, springs)
     while True:
         w2, _ = eig_dynamical(masses, springs, model.scene.n, dps)
@@ -107,8 +107,8 @@ def _elastic_float(model):
     from .accurate import spring_factor_modes
 
     subs = exact_values(model.params, model.scene.parameters)
-    masses = [m.subs(subs) for m in model.masses]
-    springs = [(a, b, k.subs(subs)) for a, b, k, _, _ in model.springs]
+    masses = [m.xreplace(subs) for m in model.masses]
+    springs = [(a, b, k.xreplace(subs)) for a, b, k, _, _ in model.springs]
     return [w for w, _ in spring_factor_modes(masses, springs, model.free_components)]
 
 

@@ -12,6 +12,8 @@ import sympy as sp
 from .accurate import exact_values, omega2_value, value
 from .model import Effect, Model
 from .modes import ModeSet
+from .closed_summary import closed_form_line, closed_form_parts
+from .sag import sag_note, static_sag
 from .printing import MATRIX_LATEX, MATRIX_TEXT, MAX_TEXT_CLOSED_FORM, ScenePrinter, closed, json_closed, latex, sstr
 
 MAX_MATRIX = 8  # larger matrices are described, not printed
@@ -192,6 +194,8 @@ def modes_json(model: Model, modes: ModeSet) -> dict:
         "masses": list(sc.mass_names),
         "modes": records,
         "closed_form": modes.closed_form,
+        "closed_form_parts": (parts := closed_form_parts(model, modes)),
+        "closed_form_summary": closed_form_line(parts),
         "notes": notes,
         **extra,
     }
@@ -218,12 +222,14 @@ def _cap_closed_forms(records: list[dict], extra: dict, notes: list) -> None:
 
 
 def static_equilibrium(model: Model) -> list[sp.Expr] | None:
-    """x_eq = K⁻¹ M g for a scene with gravity and no free piece (None otherwise)."""
-    if model.g is None or model.free_components or model.equilibrium is not None:
+    """x_eq = K⁻¹ M g for a scene with gravity and no free piece (None otherwise): the closed form
+    within the caps, else the exact rational values at the scene's parameters (:mod:`derive.sag`)."""
+    sag = static_sag(model)
+    if sag is None:
         return None
-    rhs = sp.Matrix(model.gravity_force)
-    sol = model.K.LUsolve(rhs) if model.scene.n <= MAX_MATRIX else None
-    return None if sol is None else [sp.factor(sp.cancel(e)) for e in sol]
+    if sag.closed is not None:
+        return list(sag.closed)
+    return list(sag.exact) if sag.exact is not None else [sp.Float(v, 17) for v in sag.values]
 
 
 def effect_notes(model: Model) -> list[str]:
@@ -234,10 +240,9 @@ def effect_notes(model: Model) -> list[str]:
                      "x_eq (K = Hessian of V there); the exact modal solution does not apply (integrators only)"
                      if not model.linear else "spring potentials: all quadratic with V'(0) = 0, i.e. linear springs")
     if model.g is not None and model.equilibrium is None:
-        eq = static_equilibrium(model)
-        if eq is not None:
-            notes.append("gravity: static equilibrium (sag) x_eq = K^-1 M g = ("
-                         + ", ".join(sstr(e) for e in eq) + "); modes are about x_eq")
+        sag = static_sag(model)
+        if sag is not None:
+            notes.append(sag_note(sag))
         elif model.free_components:
             notes.append("gravity: a free piece has no equilibrium; its centre of mass accelerates: "
                          "x_cm(t) = x_cm0 + v_cm*t + g*t**2/2 (the exact solution includes it)")
@@ -356,6 +361,7 @@ def render_text(model: Model, modes: ModeSet) -> str:
     notes = effect_notes(model)
     if notes:
         out += [""] + [f"{n}" for n in notes]
+    out += ["", closed_form_line(closed_form_parts(model, modes))]
     return "\n".join(out) + "\n"
 
 

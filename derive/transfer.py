@@ -12,12 +12,13 @@ from dataclasses import dataclass
 
 import sympy as sp
 
+from .caps import CAPS
 from .printing import latex, sstr
 from .model import Model
 from .work import MAX_DET_TERMS, WorkCapExceeded, check, det_terms_bound
 
 #: Largest scene whose transfer function is derived.
-MAX_MASSES = 6
+MAX_MASSES = CAPS.transfer_masses
 
 
 @dataclass(frozen=True)

@@ -23,10 +23,12 @@ from math import comb
 
 import sympy as sp
 
+from .caps import CAPS
+
 #: Largest bound on the terms of a characteristic polynomial that is expanded and factored
 #: (bundled scenes: at most 36; a general 4-mass chain with 9 distinct symbols: 400, ~1.5 s;
 #: a general 5-mass chain, 2000, would take ~4 s and has no readable closed form anyway).
-MAX_DET_TERMS = 1000
+MAX_DET_TERMS = CAPS.det_terms
 
 
 class WorkCapExceeded(Exception):
@@ -72,7 +74,7 @@ def ops(expr) -> int:
 #: characteristic polynomial is factored: literals such as ``2e-70`` are exact rationals, and their
 #: products in a determinant run to hundreds of digits, where factoring takes seconds and the closed
 #: form is a wall of digits nobody reads (the numeric route is exact to float64 either way).
-MAX_NUMBER_DIGITS = 40
+MAX_NUMBER_DIGITS = CAPS.number_digits
 
 
 class NumbersTooLong(WorkCapExceeded):

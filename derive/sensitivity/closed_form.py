@@ -14,14 +14,15 @@ from dataclasses import dataclass
 
 import sympy as sp
 
+from ..caps import CAPS
 from ..accurate import NotAccurate, exact_values, value
 
 #: Largest derivative (SymPy operation count) kept as a closed form.
-MAX_OPS = 400
+MAX_OPS = CAPS.sensitivity_ops
 #: Largest derivative SymPy is asked to simplify (``cancel``/``factor``; a size cap, never a time).
-MAX_SIMPLIFY_OPS = 60
+MAX_SIMPLIFY_OPS = CAPS.sensitivity_simplify_ops
 #: Largest shape component (operations) whose derivative is sought in closed form.
-MAX_SHAPE_OPS = 40
+MAX_SHAPE_OPS = CAPS.sensitivity_shape_ops
 
 
 @dataclass(frozen=True)
