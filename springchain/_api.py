@@ -12,7 +12,7 @@ import shutil
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from ._modules import load_tables, system_of as _system  # noqa: F401  (tests and scripts use these names)
+from ._modules import system_of
 from ._defaults import DEFAULT_OUT
 from ._scenes import load
 from .derive.errors import SceneError
@@ -28,24 +28,21 @@ MAX_RECORDED_BYTES = 4 * 2**30
 def _chain_omega2(scene: Scene, chain_modes):
     """ω² of a chain without closed form (None when too large): every value from the generated
     module's ``omega2()`` for a chain whose modes are all listed, else ``{position: ω²}`` of the
-    listed lowest and highest only, by bisection on the bidiagonal spring factor (the route of
-    ``omega2()``, O(n) per value; :mod:`numeric.modes.chain`)."""
+    listed lowest and highest only (:func:`numeric.modes.chain.extreme_omega2`)."""
     if chain_modes.omega2 is not None:
         return None
     from .derive.chain import MAX_MODES_LISTED, MODES_LISTED_EACH_END
     from .generated.contract import End
 
-    system, _ = _system(scene)
+    system, _ = system_of(scene)
     n = scene.chain.n
     if n > MAX_MODES_LISTED and system.ends[0] is not End.RING:
-        from .numeric.modes.chain import bidiagonal_factor, singular_values
+        from .numeric.modes.chain import extreme_omega2
         from .numeric.progress import phase
 
         e = MODES_LISTED_EACH_END
         with phase(f"modes: the {e} lowest and {e} highest of {n} (bisection on the spring factor)"):
-            f = bidiagonal_factor(system.masses, system.spring_ends, system.stiffness)
-            w = singular_values(f, e, e)
-        return dict(zip(list(range(e)) + list(range(n - e, n)), (w * w).tolist()))
+            return extreme_omega2(system.masses, system.spring_ends, system.stiffness, e)
     try:
         return system.omega2()
     except ValueError:  # a non-uniform ring longer than the module's MAX_DENSE
@@ -53,46 +50,29 @@ def _chain_omega2(scene: Scene, chain_modes):
 
 
 def _chain_damped(scene: Scene, model):
-    """``(ω_n, ζ, ω_d)`` of every mode of a chain with dashpots of at most ``chain_damped.DENSE_MAX``
-    masses (:mod:`numeric.modes.chain_damping`), else None (Rayleigh-only damping has a closed form)."""
-    from .numeric.modes.chain_damping import DENSE_MAX, damped_rows
-
-    if not getattr(model, "dampers", None) or scene.chain.n > DENSE_MAX:
+    """``(ω_n, ζ, ω_d)`` of every mode of a chain with dashpots (:func:`numeric.modes.chain_damping.
+    chain_damped_rows`), else None (Rayleigh-only damping has a closed form)."""
+    if not getattr(model, "dampers", None):
         return None
-    from .numeric.modes.elements import Elements
+    from .numeric.modes.chain_damping import chain_damped_rows
 
-    el = Elements.from_system(_system(scene)[0])
-    return damped_rows(el.masses, el.spring_ends, el.stiffness, el.damper_ends, el.damping)
+    return chain_damped_rows(system_of(scene)[0])
 
 
 def _chain_participation(scene: Scene, model):
     """Γⱼ, Mⱼ* and mass-normalised shapes of an open chain with a wall end or ``[ground]`` whose modes are
-    all listed (at most ``MAX_MODES_LISTED`` masses), from the spring-factor SVD (:mod:`numeric.modes.spectrum`;
-    Γ by compensated sums; the sign of each shape: its first non-negligible component positive, as ``rsa``);
-    else None."""
+    all listed (at most ``MAX_MODES_LISTED`` masses), from
+    :func:`numeric.structural.modal_quantities.chain_participation`; else None."""
     from .derive import participation as part
     from .derive.chain import MAX_MODES_LISTED
 
     if not part.chain_applies(model) or scene.chain.n > MAX_MODES_LISTED or "ring" in (scene.chain.left,
                                                                                         scene.chain.right):
         return None
-    import numpy as np
+    from .numeric.structural.modal_quantities import chain_participation
 
-    from .numeric.modes.elements import Elements
-    from .numeric.modes.spectrum import spectrum
-
-    el = Elements.from_system(_system(scene)[0])
-    spec = spectrum(el.masses, el.spring_ends, el.stiffness)
-    phi = spec.shapes
-    first = np.argmax(np.abs(phi) > 1e-12 * np.max(np.abs(phi), axis=0, keepdims=True), axis=0)
-    phi = phi * np.where(phi[first, np.arange(phi.shape[1])] < 0, -1.0, 1.0)[None, :]
-    m = np.asarray(el.masses, dtype=float)
-    total = math.fsum(m)
-    if spec.rigid:  # a free-free chain: r = 1 is its rigid mode, so Γ = (√M, 0, ..., 0) exactly by structure
-        gamma = [math.sqrt(total)] + [0.0] * (phi.shape[1] - 1)
-    else:
-        gamma = [math.fsum(m * phi[:, j]) for j in range(phi.shape[1])]
-    return part.from_values(spec.omega2, gamma, phi.T, total, "spring-factor SVD (float64, compensated sums)")
+    omega2, gamma, shapes, total = chain_participation(system_of(scene)[0])
+    return part.from_values(omega2, gamma, shapes, total, "spring-factor SVD (float64, compensated sums)")
 
 
 @dataclass(frozen=True)
@@ -342,7 +322,7 @@ class Simulation:
         from .numeric.structural.storeys import series
 
         exact = (self.scene.x0, self.scene.v0, self.t) if method == registry.EXACT else None
-        return series(_system(self.scene)[0], self.x[method], exact)[:3]
+        return series(system_of(self.scene)[0], self.x[method], exact)[:3]
 
     def drifts(self, method: str):
         """Drift ``x_b − x_a`` of every spring ``between = [a, b]`` (a wall is 0), ndarray, shape (S, springs) [m]."""
@@ -655,7 +635,7 @@ def simulate(scene: str | Path | Scene, methods: list[str] | None = None, dt: fl
     for name in methods or ():
         registry.method(name, options)  # before any derivation
     with phase("loading the generated module (deriving it if not cached)", enabled=progress):
-        system, origin = _system(sc)
+        system, origin = system_of(sc)
     _check_motion(sc, "simulate", system)
     names, notes = methods, []
     if not methods:  # a default Verlet that would be unstable at this dt gives way to the exact method
@@ -740,7 +720,7 @@ def plan(scene: str | Path | Scene, tol: float, t_end: float | None = None, *, a
     settings = _method_settings(alpha)
     sc = load(scene)
     _check_motion(sc, "plan")
-    system, _ = _system(sc)
+    system, _ = system_of(sc)
     _check_motion(sc, "plan", system)
     from .numeric.plan.pilot import PilotPlanner, needs_pilot, tight_reference_applies
 
@@ -777,7 +757,7 @@ def bench(scene: str | Path | Scene = "seed", t_end: float | None = None, *, qui
     settings = _method_settings(alpha, methods)
     sc = load(scene)
     _check_motion(sc, "bench")
-    system, _ = _system(sc)
+    system, _ = system_of(sc)
     _check_motion(sc, "bench", system)
     import sympy  # noqa: F401  (imported before timing: the derive time excludes the SymPy import)
 

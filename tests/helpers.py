@@ -294,7 +294,7 @@ def refused_scene(path: Path, capsys, *must_contain: str) -> str:
 # -- generated modules ----------------------------------------------------------------------------
 def system_of(scene):
     """``(module, System)``: the scene's generated module bound at its parameter values and tables."""
-    from springchain._api import load_tables
+    from springchain._modules import load_tables
     from springchain._modules import load_module
     from springchain.numeric.system import System
 

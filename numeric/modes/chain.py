@@ -230,3 +230,21 @@ def chain_spectrum(masses: np.ndarray, ends: np.ndarray, k: np.ndarray) -> Chain
 
 
 __all__ = ["Bidiagonal", "bidiagonal_factor", "singular_values", "ChainSpectrum", "chain_spectrum"]
+
+
+def extreme_omega2(masses: np.ndarray, ends: np.ndarray, k: np.ndarray, each_end: int) -> dict[int, float]:
+    """``{position: ω²}`` of the ``each_end`` lowest and highest modes of an open chain, by bisection on the
+    bidiagonal spring factor (O(n) per value): what ``modes`` lists of a chain too long to list whole.
+
+    Parameters
+    ----------
+    masses : ndarray, shape (n,)
+    ends : ndarray of int, shape (S, 2)
+        Spring ends, -1 a wall.
+    k : ndarray, shape (S,)
+    each_end : int
+        How many modes at each end of the spectrum.
+    """
+    n = masses.shape[0]
+    w = singular_values(bidiagonal_factor(masses, ends, k), each_end, each_end)
+    return dict(zip(list(range(each_end)) + list(range(n - each_end, n)), (w * w).tolist()))

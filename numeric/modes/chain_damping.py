@@ -146,3 +146,14 @@ def _settle_unresolved(el, rows: list[tuple]) -> list[tuple]:
 
 
 __all__ = ["DENSE_MAX", "damped_rows"]
+
+
+def chain_damped_rows(system) -> list[tuple] | None:
+    """``(ω_n, ζ, ω_d)`` of every mode of a :class:`~springchain.numeric.system.System` chain with dashpots of
+    at most :data:`DENSE_MAX` masses (:func:`damped_rows`), else None."""
+    if system.n > DENSE_MAX:
+        return None
+    from .elements import Elements
+
+    el = Elements.from_system(system)
+    return damped_rows(el.masses, el.spring_ends, el.stiffness, el.damper_ends, el.damping)

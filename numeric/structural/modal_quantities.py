@@ -172,3 +172,24 @@ def exact_modes(el: Elements, omega: np.ndarray) -> ExactModes | None:
 
 
 __all__ = ["ExactModes", "exact_modes", "MP_MAX_MASSES"]
+
+
+def chain_participation(system) -> tuple[np.ndarray, list[float], np.ndarray, float]:
+    """``(ω², Γ, shapes, total mass)`` of an open chain (a :class:`~springchain.numeric.system.System`) from the
+    spring-factor SVD: shapes mass-normalised, shape (n, n) one row per mode, each signed so that its first
+    non-negligible component is positive (as ``rsa``); Γⱼ = Σ mᵢφᵢⱼ by compensated sums, and for a free–free
+    chain Γ = (√M, 0, …, 0) exactly by structure (r = 1 is its rigid mode)."""
+    from ..modes.spectrum import spectrum
+
+    el = Elements.from_system(system)
+    spec = spectrum(el.masses, el.spring_ends, el.stiffness)
+    phi = spec.shapes
+    first = np.argmax(np.abs(phi) > 1e-12 * np.max(np.abs(phi), axis=0, keepdims=True), axis=0)
+    phi = phi * np.where(phi[first, np.arange(phi.shape[1])] < 0, -1.0, 1.0)[None, :]
+    m = np.asarray(el.masses, dtype=float)
+    total = math.fsum(m)
+    if spec.rigid:
+        gamma = [math.sqrt(total)] + [0.0] * (phi.shape[1] - 1)
+    else:
+        gamma = [math.fsum(m * phi[:, j]) for j in range(phi.shape[1])]
+    return spec.omega2, gamma, phi.T, total

@@ -49,7 +49,7 @@ def test_chain_gif(tmp_path, make_chain_toml, kwargs):
 
 
 def test_chain_mode_shape_against_closed_form():
-    from springchain._api import _system
+    from springchain._modules import system_of as _system
     from springchain.numeric.plots.animation import decimate, mode_shape
 
     system, _ = _system(sc.load("chain100k"))

@@ -84,7 +84,7 @@ def _frf_case(tmp_path, case, pick: int = 40):
     err = np.abs(H[idx] - want) / np.abs(want)
     assert np.max(err) <= FRF_REL, (float(np.max(err)), float(r.omega[idx][np.argmax(err)]))
     # off the grid: between grid points, through the same operator
-    from springchain._api import _system
+    from springchain._modules import system_of as _system
     from springchain.numeric.frf.response import operator, receptance
 
     rng = np.random.default_rng(len(text))
@@ -400,7 +400,7 @@ def test_index_dependent_chain_of_the_issue_full(tmp_path):
 
 def test_printed_modes_and_the_exact_method_share_their_omega(tmp_path):
     """ω of the exact method's chain modes are the values ``modes`` prints (bisection on the factor)."""
-    from springchain._api import _system
+    from springchain._modules import system_of as _system
     from springchain.numeric.modes.chain import chain_spectrum
 
     path = _write(tmp_path, _chain_text(30, "wall", "wall", 1e6, 1e8, "0", 0.1, 2), "ichain")

@@ -166,7 +166,7 @@ def test_cubic_springs_newton_against_dop853(repo_root):
 
 def test_chain_banded_solve(tmp_path):
     """A [chain] scene: sparse (banded) factorisation, never N x N; agrees with the exact solution at order 2."""
-    from springchain._api import _system
+    from springchain._modules import system_of as _system
     from springchain.numeric.integrators.newmark import StructuralOperator
 
     path = tmp_path / "ch.toml"
@@ -216,7 +216,7 @@ def test_energy_on_a_linear_chain(seed_system):
 def test_newton_force_evaluations_counted(name):
     """Cubic springs: the reported force evaluations are the calls the step made (Newton iterations
     included), counted here by wrapping the acceleration; linear springs: the declared count."""
-    from springchain._api import _system
+    from springchain._modules import system_of as _system
     from springchain.numeric.run.implicit import ImplicitStep
 
     for scene, extra in (("duffing", True), ("seed", False)):

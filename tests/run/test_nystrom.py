@@ -182,10 +182,11 @@ def test_adaptive_accuracy_on_the_seed_scene(name):
 
 
 def test_adaptive_on_duffing_against_dop853_and_batch():
-    from springchain import _api
+    import springchain as sc
+    from springchain._modules import system_of
 
-    scene = _api.load("duffing")
-    system, _ = _api._system(scene)
+    scene = sc.load("duffing")
+    system, _ = system_of(scene)
     x0 = np.stack([np.asarray(scene.x0, float), 0.5 * np.asarray(scene.x0, float)], axis=1)
     v0 = np.stack([np.asarray(scene.v0, float), np.zeros(3)], axis=1)
     t = np.linspace(0.0, 50.0, 6)

@@ -123,7 +123,7 @@ def test_api_matches_bundled_rayleigh_scene():
 def test_generated_module_other_parameters(tmp_path):
     """The generated rayleigh_coefficients() recomputes α, β from omega2() at any parameter values;
     damping_matrix() is αM + βK."""
-    from springchain._api import _system
+    from springchain._modules import system_of as _system
 
     p = _write(tmp_path, "{zeta = [0.05, 0.06], modes = [2, 3]}")
     system, _ = _system(sc.load(str(p)))

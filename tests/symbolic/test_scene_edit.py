@@ -15,6 +15,7 @@ import numpy as np
 import pytest
 
 import springchain as sc
+from springchain._modules import system_of
 from springchain.cli import main
 
 BASE = """name = "user"
@@ -83,8 +84,8 @@ def test_simulate_honours_the_change_and_never_aliases_the_file_module(scenes, t
         np.testing.assert_allclose(run.v[m], want.v[m], rtol=0, atol=1e-13)
     # the unchanged file afterwards still runs with its own values (k = m = 1), from its own module
     again = sc.simulate(base, ["modal"], steps=100, progress=False)
-    module_base, _ = sc._api._system(base)
-    module_changed, _ = sc._api._system(changed)
+    module_base, _ = system_of(base)
+    module_changed, _ = system_of(changed)
     assert module_base.module.DEFAULTS == {"k": 1.0, "m": 1.0}
     assert module_changed.module.DEFAULTS == {"k": 4.0, "m": 2.0}
     assert module_base.module.__file__ != module_changed.module.__file__
