@@ -85,6 +85,20 @@ def chain_elements(masses: np.ndarray, spring_ends: np.ndarray, stiffness: np.nd
     return ChainElements(m, gk, gc, zk, zc)
 
 
+#: A sum that rounds to exactly 0 (the dynamic stiffness of a part exactly at its float64 resonance) is
+#: taken as this fraction of its largest term: the same sum after a relative change of one element by
+#: ε/2, inside the sweep's own rounding (module docstring) — never a division by zero.
+NUDGE = 2.0 ** -53
+
+
+def _nonzero(s, a, b):
+    """``s = a + b``, or (``s`` exactly 0) the sum after a relative change of ε/2 of the larger term."""
+    if s == 0:
+        scale = max(abs(a), abs(b))
+        return complex(scale * NUDGE, 0.0) if scale > 0 else complex(1.0, 0.0)
+    return s
+
+
 def _receptance_impl(m, gk, gc, zk, zc, omega, i, o, out):
     """H(ω_w) = X_o / F_i for each ω_w (the sweep of the module docstring); out complex (W,)."""
     n = m.shape[0]
@@ -96,7 +110,7 @@ def _receptance_impl(m, gk, gc, zk, zc, omega, i, o, out):
         prod_left = complex(1.0, 0.0)
         for p in range(1, i + 1):
             z = complex(zk[p], om * zc[p])
-            u = z + e
+            u = _nonzero(z + e, z, e)  # z = 0 (no link): u = 1, nothing passes
             if p > o:
                 prod_left *= z / u
             e = complex(gk[p] - om2 * m[p], om * gc[p]) + z * e / u
@@ -107,14 +121,14 @@ def _receptance_impl(m, gk, gc, zk, zc, omega, i, o, out):
             f = complex(gk[n - 1] - om2 * m[n - 1], om * gc[n - 1])
             for p in range(n - 1, i, -1):
                 z = complex(zk[p], om * zc[p])
-                u = z + f
+                u = _nonzero(z + f, z, f)
                 if p <= o:
                     prod_right *= z / u
                 if p - 1 > i:
                     f = complex(gk[p - 1] - om2 * m[p - 1], om * gc[p - 1]) + z * f / u
                 else:
                     t = z * f / u
-        out[w] = (1.0 / (e + t)) * prod_left * prod_right
+        out[w] = (1.0 / _nonzero(e + t, e, t)) * prod_left * prod_right
 
 
 @functools.lru_cache(maxsize=1)
@@ -123,7 +137,9 @@ def _kernel():
 
     if available():
         import numba
+        from numba.extending import register_jitable
 
+        register_jitable(_nonzero)  # callable from the compiled sweep
         return numba.njit(cache=True)(_receptance_impl)
     return _receptance_impl
 
@@ -152,23 +168,23 @@ def _certified_impl(m, gk, gc, zk, zc, omega, i, o, out, bound):
             z[p] = complex(zk[p], om * zc[p])
         e[0] = a[0]
         for p in range(1, n):
-            ue[p] = 1.0 / (z[p] + e[p - 1])
+            ue[p] = 1.0 / _nonzero(z[p] + e[p - 1], z[p], e[p - 1])
             e[p] = a[p] + z[p] * e[p - 1] * ue[p]
         f[n - 1] = a[n - 1]
         for p in range(n - 2, -1, -1):
-            uf[p + 1] = 1.0 / (z[p + 1] + f[p + 1])
+            uf[p + 1] = 1.0 / _nonzero(z[p + 1] + f[p + 1], z[p + 1], f[p + 1])
             f[p] = a[p] + z[p + 1] * f[p + 1] * uf[p + 1]
         # y (force on o): magnitudes kept; then x (force on i) summed against them on the fly
         t = complex(0.0, 0.0)
         if o < n - 1:
             t = z[o + 1] * f[o + 1] * uf[o + 1]
-        y = 1.0 / (e[o] + t)
+        y = 1.0 / _nonzero(e[o] + t, e[o], t)
         ay[o] = abs(y)
         for p in range(o + 1, n):
             sy[p] = abs(y * f[p] * uf[p])
             y = y * z[p] * uf[p]
             ay[p] = abs(y)
-        y = 1.0 / (e[o] + t)
+        y = 1.0 / _nonzero(e[o] + t, e[o], t)
         for p in range(o, 0, -1):
             sy[p] = abs(y * e[p - 1] * ue[p])
             y = y * z[p] * ue[p]
@@ -176,7 +192,7 @@ def _certified_impl(m, gk, gc, zk, zc, omega, i, o, out, bound):
         t = complex(0.0, 0.0)
         if i < n - 1:
             t = z[i + 1] * f[i + 1] * uf[i + 1]
-        x0 = 1.0 / (e[i] + t)
+        x0 = 1.0 / _nonzero(e[i] + t, e[i], t)
         total = (om2 * m[i] + gk[i] + om * gc[i]) * abs(x0) * ay[i]
         x = x0
         for p in range(i + 1, n):
@@ -203,7 +219,9 @@ def _certified_kernel():
 
     if available():
         import numba
+        from numba.extending import register_jitable
 
+        register_jitable(_nonzero)  # callable from the compiled sweep
         return numba.njit(cache=True)(_certified_impl)
     return _certified_impl
 
@@ -306,8 +324,12 @@ def _mp_sweep(el: ChainElements, om, i: int, o: int, mpmath):
     z = [mpmath.mpc(mp(el.link_k[p]), om * mp(el.link_c[p])) for p in range(n)]
     e = a[0]
     left = mpmath.mpc(1)
+    tiny = mpmath.mpf(2) ** -mpmath.mp.prec  # an exact 0 sum: the relative change of one ulp (as NUDGE)
+
+    def nonzero(s, a, b):
+        return s if s != 0 else (max(abs(a), abs(b)) * tiny or mpmath.mpf(1))
     for p in range(1, i + 1):
-        u = z[p] + e
+        u = nonzero(z[p] + e, z[p], e)
         if p > o:
             left *= z[p] / u
         e = a[p] + z[p] * e / u
@@ -315,14 +337,14 @@ def _mp_sweep(el: ChainElements, om, i: int, o: int, mpmath):
     if i < n - 1:
         f = a[n - 1]
         for p in range(n - 1, i, -1):
-            u = z[p] + f
+            u = nonzero(z[p] + f, z[p], f)
             if p <= o:
                 right *= z[p] / u
             if p - 1 > i:
                 f = a[p - 1] + z[p] * f / u
             else:
                 t = z[p] * f / u
-    return left * right / (e + t)
+    return left * right / nonzero(e + t, e, t)
 
 
 __all__ = ["ChainElements", "chain_elements", "chain_receptance", "mp_chain_receptance"]

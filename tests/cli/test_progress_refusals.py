@@ -68,7 +68,7 @@ def test_option_refusals_come_before_any_work(options, expect, tmp_path, monkeyp
     def load_module(sc):
         raise AssertionError("the module was loaded before the option was refused")
 
-    monkeypatch.setattr(_api, "_system", load_module)
+    monkeypatch.setattr(_api, "system_of", load_module)
     status, out, err = run_cli(["simulate", seed_path, "--out", tmp_path / "out", *options], capsys)
     one_line_error(status, out, err, expect)
     kwargs = {"methods": ["bogus"]} if "bogus" in expect else {"spectrum": "guess"}

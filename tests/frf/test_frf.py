@@ -231,3 +231,16 @@ def test_banded_solver_with_damping_matches_dense(ring):
     got = receptance(op, w, 4, 17)
     ref = _reference(np.diag(m), K, C, w, 4, 17)
     assert np.max(np.abs(got - ref) / np.abs(ref)) <= REL
+
+
+@pytest.mark.parametrize("certify", [False, True])
+def test_chain_sweep_through_an_exact_float64_resonance_of_a_part(certify):
+    """Two free unit masses on a unit spring at ω = 1: the left mass's dynamic stiffness −ω²m cancels
+    the link exactly (u = k + e = 0 in float64). Was ZeroDivisionError in the compiled sweep; the
+    true values are Z = [[0, −1], [−1, 0]], Z⁻¹ = [[0, −1], [−1, 0]]: H₁₁ = 0, H₀₁ = −1."""
+    from springchain.numeric.frf.chain import chain_elements, chain_receptance
+
+    el = chain_elements(np.ones(2), np.array([[0, 1]]), np.array([1.0]))
+    h11 = chain_receptance(el, np.array([1.0]), 1, 1, certify=certify)[0]
+    h01 = chain_receptance(el, np.array([1.0]), 0, 1, certify=certify)[0]
+    assert abs(h11) <= 1e-15 and abs(h01 + 1) <= 1e-15
