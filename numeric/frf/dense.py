@@ -41,6 +41,9 @@ from ..modes.spectrum import spectrum, stiffness_matrix
 
 #: Largest certified error of |H| (relative) accepted from the float64 route.
 CERTIFIED = 1e-11
+#: |H| moving by more than this (relative) when every element value changes in its last bit is said in a
+#: note (the README's accuracy of H: its own conditioning at the scene's values can exceed it).
+SENSITIVE = 1e-10
 #: Normwise error allowed for the float64 row of Z⁻¹ that weights the certificate.
 ROW_ALLOWANCE = 1e-6
 #: Refinement steps (residuals in extended precision) before the mpmath solve.
@@ -202,8 +205,13 @@ class DenseReceptance:
         return np.sum(weight * (np.abs(r) + hidden), axis=1)
 
     # -- the answer ---------------------------------------------------------------------------------
-    def receptance(self, omega: np.ndarray, input: int, output: int, certify: bool = True) -> np.ndarray:
+    def receptance(self, omega: np.ndarray, input: int, output: int, certify: bool = True,
+                   notes: list | None = None) -> np.ndarray:
         """``H(iω) = X_output / F_input``, shape (W,), complex: certified float64 or mpmath.
+
+        With ``notes`` (certified calls), one line is added where H itself is sensitive to the last
+        bit of the element values (:meth:`rounding_sensitivity` above :data:`SENSITIVE`): the value
+        returned is that of the elements as the generated module rounded them.
 
         Raises
         ------
@@ -221,6 +229,7 @@ class DenseReceptance:
         x_lo = np.zeros_like(x)  # corrections, kept apart from x: x + x_lo is a double-length solution
         row_lo = np.zeros_like(row)
         r = None
+        unsettled = np.zeros(omega.shape[0], dtype=bool)  # x + x_lo not converged (for the note below)
         for _ in range(REFINE_STEPS):  # refinement with residuals in extended precision
             if not bad.size:
                 break
@@ -237,8 +246,9 @@ class DenseReceptance:
             else:
                 weights = x[bad] + x_lo[bad]
             r, hidden = self.mp_residual(w, x[bad], input, x_lo[bad])
-            ok = ((self.error_bound(x[bad], weights, r, hidden) <= CERTIFIED * np.abs(H[bad]))
-                  & (np.abs(step[:, output]) <= CONVERGED * np.abs(H[bad])))  # and the refinement has converged
+            converged = np.abs(step[:, output]) <= CONVERGED * np.abs(H[bad])
+            unsettled[bad] = ~converged
+            ok = (self.error_bound(x[bad], weights, r, hidden) <= CERTIFIED * np.abs(H[bad])) & converged
             bad, r = bad[~ok], r[~ok]
         if bad.size and not mp_solvable(self.el):
             raise RunRefused(f"frequency response: H at {bad.size} of {omega.shape[0]} frequencies (first "
@@ -248,7 +258,38 @@ class DenseReceptance:
                              "without modal damping)", quantity="frf")
         if bad.size:
             H[bad] = mp_receptance(self.el, omega[bad], input, output)
+        if notes is not None:  # from the responses where they are settled (refined, or certified)
+            keep = ~unsettled
+            xs = (x + x_lo)[keep]
+            ys = xs if output == input else (row + row_lo)[keep]
+            with np.errstate(all="ignore"):
+                rel = self.rounding_sensitivity(omega[keep], xs, ys) / np.abs(H[keep])
+                worst = float(np.max(rel[np.isfinite(rel)], initial=0.0))
+            if worst > SENSITIVE:
+                note = (f"|H| at some frequencies moves by up to {worst:.2g} relative when each mass, spring and "
+                        "dashpot value changes in its last bit (float64 rounding of the scene's expressions): the "
+                        "values are exact for the elements as rounded, the scene itself is that sensitive there")
+                notes[:] = [n for n in notes if not n.startswith("|H| at some frequencies moves by up to")] + [note]
         return H
+
+    def rounding_sensitivity(self, omega: np.ndarray, x: np.ndarray, y: np.ndarray) -> np.ndarray:
+        """``ε Σ_e |p_e ∂H/∂p_e|`` over the masses, springs and dashpots (and Rayleigh's α, β): the first-order
+        change of H when every element value changes by one rounding, shape (W,). ``x``, ``y``: the
+        responses to unit forces on the input and the output, shape (W, N); ``∂H/∂k = −(bᵀx)(bᵀy)``,
+        ``∂H/∂m_p = ω² x_p y_p``, ``∂H/∂c = −iω (bᵀx)(bᵀy)``."""
+        el = self.el
+        w = np.asarray(omega, dtype=float).reshape(-1, 1)
+        ax, ay = np.abs(x), np.abs(y)
+        Bk = incidence(el.n, el.spring_ends)
+        kk = np.abs((x @ Bk.T) * (y @ Bk.T)) @ el.stiffness  # Σ k |bᵀx||bᵀy|, (W,)
+        mm = (ax * ay) @ el.masses
+        total = kk + w[:, 0] ** 2 * mm
+        if el.damping.shape[0]:
+            Bc = incidence(el.n, el.damper_ends)
+            total = total + w[:, 0] * (np.abs((x @ Bc.T) * (y @ Bc.T)) @ el.damping)
+        if el.rayleigh is not None:
+            total = total + w[:, 0] * (abs(el.rayleigh[0]) * mm + abs(el.rayleigh[1]) * kk)
+        return _EPS * total
 
 
 # -- extended precision ----------------------------------------------------------------------------

@@ -188,7 +188,7 @@ def receptance(op: Operator, omega: np.ndarray, input: int, output: int, certify
 
 def _receptance(op: Operator, omega: np.ndarray, input: int, output: int, certify: bool) -> np.ndarray:
     if op.dense is not None:
-        return op.dense.receptance(omega, input, output, certify=certify)
+        return op.dense.receptance(omega, input, output, certify=certify, notes=op.notes if certify else None)
     if op.chain is not None:
         from .chain import chain_receptance
 
