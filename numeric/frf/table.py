@@ -38,6 +38,12 @@ SETTLE_MAX = 60
 #: Without mpmath (scenes past :data:`SETTLE_MAX`): a residue below this fraction is a node (a true
 #: residue of 5e-10 of the scale occurs on a 30-mass chain at a stiffness contrast of 1e8).
 NODE_FLOAT = 1e-12
+#: A residue below this fraction of the scale is no resonance float64 can show (|H| would pass 1e308 only
+#: within that fraction of ω_n, which no float64 frequency resolves): reported as a node. A true residue of
+#: 1e-330 arises on six masses with a mass contrast of 1e33 (the coupling falls by the contrast per mass).
+VISIBLE = 1e-300
+#: Digits at which a residue is compared with :data:`VISIBLE` (its noise then far below it).
+VISIBLE_DPS = 360
 #: Largest scene whose mode shapes are computed to check nodes (spring-factor SVD, O(N³)).
 SHAPES_MAX = 400
 #: Two ω within this relative distance are one repeated frequency (their residues add; the accurate
@@ -187,7 +193,9 @@ def _mp_sees(el, group: np.ndarray, input: int, output: int) -> bool:
     digits (d = 30 beyond the decades of the springs and masses): a true residue, however small,
     settles (two successive values agree to 1e-6); rounding noise around an exact node falls with
     the digits — a fall by more than 10^(p/2) from p to 2p digits, to below 10^-p, means a node (a
-    true residue below ~10^-(1.5 d) of the scale would be taken for one). Unsettled at
+    true residue below ~10^-(1.5 d) of the scale would be taken for one); a residue below
+    :data:`VISIBLE` of the scale (settled, or at :data:`VISIBLE_DPS` digits or more) is reported as a
+    node too: no float64 frequency shows its resonance. Unsettled at
     :data:`frf_dense.MP_MAX_DPS` digits: seen (|H| = ∞ is then the claim)."""
     import mpmath
 
@@ -214,10 +222,12 @@ def _mp_sees(el, group: np.ndarray, input: int, output: int) -> bool:
     while dps < MP_MAX_DPS:
         prev, dps = dps, min(2 * dps, MP_MAX_DPS)
         b = ratio(dps)
-        if b != 0 and abs(a - b) <= 1e-6 * b:  # settled: a true residue
-            return True
+        if b != 0 and abs(a - b) <= 1e-6 * b:  # settled: a true residue (below VISIBLE: none float64 shows)
+            return bool(b >= VISIBLE)
         if b == 0 or (b < a * mpmath.mpf(10) ** (-(prev // 2)) and b < mpmath.mpf(10) ** (-(dps // 2))):
             return False  # noise falling with the digits: an exact node
+        if dps >= VISIBLE_DPS and b < VISIBLE * mpmath.mpf(10) ** -30:  # settled or not, far below VISIBLE
+            return False
         a = b
     return True
 
