@@ -147,15 +147,24 @@ class Model:
         #: Modal damping ratios ζⱼ, one per mode in ascending ω order ([damping] modal), else None.
         self.modal_zeta = None if damping is None or damping.modal is None else \
             tuple(e.to_sympy(sym) for e in damping.modal) * (scene.n if len(damping.modal) == 1 else 1)
-        #: The static equilibrium (scenes with potentials; None otherwise: x = 0, or the linear sag).
-        self.equilibrium = self._equilibrium() if scene.has_potential else None
+        #: The static equilibrium (scenes with potentials, and cubic springs under constant loads; None
+        #: otherwise: x = 0, or the linear sag).
+        self.equilibrium = self._equilibrium() if scene.has_potential or self._cubic_loaded() else None
         if self.equilibrium is not None:
             self.springs = tuple((a, b, stiff if k is None else k, k3, key) for (a, b, k, k3, key), stiff
                                  in zip(self.springs, self.equilibrium.stiffness))
 
-    def _equilibrium(self):
-        """Solve for the static equilibrium (:func:`derive.equilibrium.solve`), or refuse in one line."""
-        from .equilibrium import solve
+    def constant_loads(self) -> tuple[list[sp.Expr], list[str]]:
+        """The constant force on each coordinate and the scene keys it comes from: gravity ``m g``, the constant
+        part of every force (a force free of t, or the constant term of a constant + harmonic one) and of a
+        ground acceleration given by an expression (``-m a_g``: coordinates are relative to the ground)."""
+        from .forcing import decompose
+
+        def constant(expr):
+            if not expr.has(self.t):
+                return expr
+            parts = decompose(expr, self.t)
+            return sp.Integer(0) if parts is None else parts[0]
 
         loads = [sp.Integer(0)] * self.scene.n
         keys = []
@@ -163,18 +172,42 @@ class Model:
             loads = [m * self.g for m in self.masses]
             keys.append("gravity")
         for on, f, key in self.forces:
-            if not f.has(self.t):
-                loads[on] += f
+            c = constant(f)
+            if c != 0:
+                loads[on] += c
                 keys.append(key)
+        if self.ground is not None:
+            c = constant(self.ground)
+            if c != 0:
+                loads = [ld - m * c for ld, m in zip(loads, self.masses)]
+                keys.append("ground.acceleration")
+        return loads, keys
+
+    def _cubic_loaded(self) -> bool:
+        """Whether a cubic (k3) spring meets a constant load (then its equilibrium is solved as a potential's)."""
+        return any(s.k3 is not None for s in self.scene.springs) and any(ld != 0 for ld in self.constant_loads()[0])
+
+    def _equilibrium(self):
+        """Solve for the static equilibrium (:func:`derive.equilibrium.solve`), or refuse in one line.
+
+        A cubic (k3) spring away from x = 0 becomes the law it is, ``k d²/2 + k3 d⁴/4`` (its equations of motion
+        are the same): the modes are then those of the linearisation about x_eq (K_t = k + 3 k3 d² per spring),
+        as for a potential. Without potentials, an equilibrium at x = 0 keeps the cubic springs as they are
+        (None: the linearisation about x = 0)."""
+        from .equilibrium import solve
+
+        loads, keys = self.constant_loads()
         pieces = [(c, [self.masses[i] for i in c]) for c in self.free_components]
         eq = solve(self.scene.file, self.scene.n, [(a, b, law) for (a, b, *_), law in zip(self.springs, self.laws)],
                    loads, self.params, self.scene.parameters, pieces, load_keys=" and ".join(keys) or "springs")
-        if not eq.at_rest:
-            cubic = next((key for *_, k3, key in self.springs if k3 is not None), None)
-            if cubic is not None:
-                raise SceneError(self.scene.file, f"{cubic}.k3", "a cubic (k3) spring in a scene whose equilibrium is "
-                                 "away from x = 0; accepted: write that spring as a potential, "
-                                 "potential = \"k*d**2/2 + k3*d**4/4\"")
+        if eq.at_rest:
+            return eq if self.scene.has_potential else None
+        cubic = [j for j, (*_, k3, _) in enumerate(self.springs) if k3 is not None]
+        if cubic:
+            self.laws = tuple(SpringLaw(law.key, law.energy, given=True, cubic=True) if j in cubic else law
+                              for j, law in enumerate(self.laws))
+            self.springs = tuple((a, b, None, None, key) if j in cubic else (a, b, k, k3, key)
+                                 for j, (a, b, k, k3, key) in enumerate(self.springs))
         return eq
 
     @property

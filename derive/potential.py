@@ -35,12 +35,15 @@ class SpringLaw:
     energy : sympy.Expr
         V(d) in the parameters (and ``i`` in a chain), as written.
     given : bool
-        Whether the scene wrote it as a potential (False for k/k3 springs).
+        Whether it enters the equations as a law (a potential; False for k/k3 springs taken as k and k3).
+    cubic : bool
+        A k/k3 spring taken as its law ``k d²/2 + k3 d⁴/4`` (given): its equilibrium is away from d = 0.
     """
 
     key: str
     energy: sp.Expr
     given: bool = True
+    cubic: bool = False
     d: sp.Symbol = field(default=D, repr=False)
 
     @cached_property
@@ -70,6 +73,8 @@ class SpringLaw:
     @property
     def where(self) -> str:
         """The key error messages name."""
+        if self.cubic:
+            return f"{self.key}.k3"
         return f"{self.key}.potential" if self.given else f"{self.key}.k"
 
     def polynomial_degree(self) -> int | None:

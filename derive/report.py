@@ -236,7 +236,9 @@ def effect_notes(model: Model) -> list[str]:
     """Plain-language notes on the effects a scene declares."""
     notes = []
     if model.equilibrium is not None:
-        notes.append("spring potentials: modes are those of the linearisation about the static equilibrium "
+        what = ("cubic springs under constant loads (each as its energy k d^2/2 + k3 d^4/4)"
+                if any(law.cubic for law in model.laws) and not model.scene.has_potential else "spring potentials")
+        notes.append(f"{what}: modes are those of the linearisation about the static equilibrium "
                      "x_eq (K = Hessian of V there); the exact modal solution does not apply (integrators only)"
                      if not model.linear else "spring potentials: all quadratic with V'(0) = 0, i.e. linear springs")
     if model.g is not None and model.equilibrium is None:

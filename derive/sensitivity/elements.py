@@ -125,6 +125,11 @@ def element_law(model, parameters: tuple[str, ...]) -> ElementLaw:
         raise SceneError(scene.file, "springs", "sensitivities need springs given by k (linear, or cubic: the "
                                                 "linear part is what the modes see); this scene has spring "
                                                 "potentials; accepted: k (and k3) springs")
+    if getattr(model, "equilibrium", None) is not None:  # cubic springs under constant loads: K = K_t at x_eq
+        raise SceneError(scene.file, "springs", "sensitivities need the modes' stiffness as a function of the "
+                                                "parameters; this scene's cubic (k3) springs are linearised about "
+                                                "a static equilibrium solved numerically (k + 3 k3 d^2 there); "
+                                                "accepted: k (and k3) springs without constant loads")
     syms = model.params
     if scene.chain is not None:
         masses = [[_pair(model.mass, syms[p])] for p in parameters]

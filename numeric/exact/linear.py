@@ -62,6 +62,8 @@ MP_MAX_STATES = 64
 #: 4-mass scene with gravity, a force and ground motion at 1e10 mass contrast; 1.4e-13 refined).
 REFINE_ALL_STATES = 16
 MP_DIGITS = 40
+#: Most digits the change ``(exp(A t) − I) z0`` is carried to in mpmath (:meth:`AugmentedLinear._change_digits`).
+MP_CHANGE_DIGITS = 1200
 _EPS = float(np.finfo(float).eps)
 
 
@@ -427,20 +429,71 @@ class AugmentedLinear:
         size = z0.shape[0]
         Z = np.empty((t.shape[0], size))
         D = np.empty((t.shape[0], size))
+        digits = self._change_digits(z0, x0, v0, t, h)
+        flow = self._flow if digits is None else (lambda ti, z: self._flow_mp(ti, z, digits))
         if h is None:
             for i, ti in enumerate(t):
-                E, d = self._flow(ti, z0)
+                E, d = flow(ti, z0)
                 Z[i], D[i] = E @ z0, d
         else:
-            Eh, dh = self._flow(h, z0)
+            Eh, dh = flow(h, z0)
             for i0 in range(0, t.shape[0], anchor):
-                E, d = self._flow(t[i0], z0)
+                E, d = flow(t[i0], z0)
                 z = E @ z0
                 Z[i0], D[i0] = z, d
                 for i in range(i0 + 1, min(i0 + anchor, t.shape[0])):
                     z, d = Eh @ z, Eh @ d + dh
                     Z[i], D[i] = z, d
         return Z, D
+
+    def _change_digits(self, z0: np.ndarray, x0: np.ndarray, v0: np.ndarray, t: np.ndarray,
+                       h: float | None) -> int | None:
+        """Working digits for the change ``(exp(A t) − I) z0`` in mpmath (:meth:`_flow_mp`), or None where
+        float64 (:meth:`_flow`) holds it to 1e-12 of the motion.
+
+        float64 errs by about ε·‖z0‖ in every component of the change (the eigenvectors, or scaling and
+        squaring, mix the components); a mode's position is that over its ω̂. A scene released far from
+        its equilibrium on a slow mode (a 1e60 kg mass on a 1e-100 N/m spring, damped: sag 1e161 m,
+        ω = 1e-80/s) has ‖z0‖/ω̂ = 1e161 m where it moves by centimetres: the change must be carried to
+        that many more digits. The motion's scale is the larger of |x0| and the first sample's
+        |v0| t + |a0| t²/2 (a0 the initial acceleration). Small states only (:data:`MP_MAX_STATES`)."""
+        n = self.n
+        size = z0.shape[0]
+        if size > MP_MAX_STATES or t.shape[0] == 0:
+            return None
+        aphi = np.abs(self.shapes)
+        eig = self._eigen
+        if eig is not None:  # V expm1(Λt) V⁻¹ z0: each component errs by ε |V| |V⁻¹ z0| (decoupled modes apart)
+            lam, V, W = eig
+            err = 4 * _EPS * (np.abs(V) @ (np.abs(W) @ np.abs(z0)))
+        else:
+            err = np.full(size, _EPS * float(np.max(np.abs(z0))))
+        reach = float(np.max(aphi @ (err[:n] / self.scale), initial=0.0))
+        if reach == 0.0 or not np.isfinite(reach):
+            return None
+        first = float(h) if h is not None else float(np.min(np.abs(t[t != 0]), initial=0.0))
+        acc = self.A[n:2 * n] @ z0  # modal acceleration q̈(0)
+        motion = max(float(np.max(np.abs(x0), initial=0.0)),
+                     float(np.max(aphi @ (np.abs(z0[n:2 * n]) * first + np.abs(acc) * first * first / 2), initial=0.0)))
+        if not motion > 0 or reach <= 1e-12 * motion:
+            return None
+        digits = 30 + int(np.ceil(np.log10(reach / (_EPS * motion))))
+        return digits if digits <= MP_CHANGE_DIGITS else None
+
+    def _flow_mp(self, t: float, z0: np.ndarray, digits: int) -> tuple[np.ndarray, np.ndarray]:
+        """:meth:`_flow` with the change ``(exp(A t) − I) z0`` from mpmath's expm at ``digits`` digits (A, z0
+        and t taken exactly as the float64 values they are), then rounded: accurate to the size of each
+        component of the change, where float64 is accurate to ‖z0‖ only."""
+        import mpmath
+
+        size = z0.shape[0]
+        with mpmath.workdps(digits):
+            Et = mpmath.expm(mpmath.matrix(self.A.tolist()) * mpmath.mpf(float(t)))
+            zm = [mpmath.mpf(float(v)) for v in z0]
+            d = np.array([float(mpmath.fsum((Et[i, j] - (1 if i == j else 0)) * zm[j] for j in range(size)))
+                          for i in range(size)])
+            E = np.array([[float(Et[i, j]) for j in range(size)] for i in range(size)])
+        return E, d
 
     def _input_values(self, a: float, b: float, tol: float) -> tuple[np.ndarray, np.ndarray]:
         """One-sided limits ``u(a⁺)`` and ``u(b⁻)`` of every input, shape (m,) each."""
