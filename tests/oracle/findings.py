@@ -253,7 +253,7 @@ c = "c"
 [gravity]
 g = "g"
 '''), new="modes --json of a damped potential scene has no 'equilibrium' (README: --json adds it; "
-          "derive/report.py modes_json overwrites `extra` with the damping fields)"),
+          "derive/report.py modes_json overwrites `extra` with the damping fields)", failing=False),
     Case("N2_cubic_under_gravity", scene("cubic_sag", {"m": 1.0, "k": 2.0, "kappa": 0.5, "g": -1.0}, '''
 [masses]
 p = "m"

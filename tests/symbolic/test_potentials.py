@@ -220,6 +220,44 @@ def test_modes_json_of_a_potential_chain(capsys):
     assert "Static equilibrium: x = 0" in out and "stiffness about it k(i) = V''(0) = a*b" in out
 
 
+DAMPED_HANG = """name = "eqjson"
+
+[parameters]
+m = 1.0
+k = 2.0
+beta = 0.5
+g = -1.0
+c = 0.1
+
+[masses]
+p = "m"
+[[springs]]
+between = ["wall", "p"]
+potential = "k*d**2/2 + beta*d**4/4"
+[[dampers]]
+between = ["p", "wall"]
+c = "c"
+[gravity]
+g = "g"
+"""
+
+
+def test_modes_json_of_a_damped_potential_scene_keeps_its_equilibrium(scene_from_text):
+    """Oracle N1: the damping fields were put in place of the equilibrium (they must sit beside it)."""
+    import springchain
+
+    data = json.loads(json.dumps(springchain.modes(scene_from_text(DAMPED_HANG, "eqjson.toml")).to_json()))
+    # independent reference: k d + beta d^3 = m g (d = x, one spring to the wall), mpmath at 50 digits
+    with mpmath.workdps(50):
+        d = mpmath.findroot(lambda d: 2 * d + mpmath.mpf("0.5") * d**3 + 1, -0.5)
+        k_eq = 2 + 3 * mpmath.mpf("0.5") * d**2
+        zeta = mpmath.mpf("0.1") / (2 * mpmath.sqrt(k_eq))
+    assert np.allclose(data["equilibrium"]["x_value"], [float(d)], rtol=4e-16, atol=0)
+    assert data["damping"]["proportional"] is True
+    assert data["modes"][0]["omega2_value"] == pytest.approx(float(k_eq), rel=4e-16)
+    assert data["modes"][0]["damping_ratio"] == pytest.approx(float(zeta), rel=4e-16)
+
+
 # -- generated forces = the SymPy derivative, on potentials this file did not write -----------------------
 def _block(draw):
     s = draw(st.sampled_from(["1/2", "3/4", "1", "3/2", "2"]))
