@@ -232,14 +232,17 @@ MAX_MODES_LISTED = 40
 MODES_LISTED_EACH_END = 10
 
 
-def chain_mode_records(model: ChainModel, modes: ChainModes, omega2_values=None) -> tuple[list[dict], str]:
+def chain_mode_records(model: ChainModel, modes: ChainModes, omega2_values=None,
+                       shape_values=None) -> tuple[list[dict], str]:
     """Mode records in the schema of non-chain scenes (``omega2``, ``omega2_value``,
     ``multiplicity``, ``shape``), ascending; for long chains only both ends of the spectrum.
 
     ``omega2_values`` are the n values of the generated module's ``omega2()`` (needed for a
     non-uniform chain; a uniform one evaluates its closed form). ``shape`` is the closed-form
     shape as a function of the mass index ``i`` (None without a closed form); ``shape_value``
-    lists its values only for chains of at most MAX_MODES_LISTED masses.
+    lists its values only for chains of at most MAX_MODES_LISTED masses: of the closed form, or for a
+    chain without one the rows of ``shape_values`` (n × n, ascending ω², from the numeric side:
+    :func:`numeric.structural.modal_quantities.chain_mode_shapes`).
     """
     import numpy as np
 
@@ -288,6 +291,8 @@ def chain_mode_records(model: ChainModel, modes: ChainModes, omega2_values=None)
                 f = sp.lambdify(model.i, shape, "numpy")
                 idx = np.arange(n, dtype=float)
                 rec["shape_value"] = [float(v) for v in np.broadcast_to(np.asarray(f(idx), dtype=float), (n,))]
+        elif shape_values is not None and n <= MAX_MODES_LISTED:
+            rec["shape_value"] = [float(v) for v in shape_values[p]]
         records.append(rec)
     return records, note
 
@@ -374,7 +379,7 @@ def _damping_ratios(model: ChainModel, records: list[dict], damped) -> str:
 
 
 def chain_report(model: ChainModel, modes: ChainModes, omega2_values=None, damped=None,
-                 participation=None) -> tuple[str, dict]:
+                 participation=None, shape_values=None) -> tuple[str, dict]:
     """Text and JSON description of a chain's derivation and spectrum.
 
     The JSON has the top-level shape of non-chain scenes (``scene, parameters, masses, modes,
@@ -385,6 +390,7 @@ def chain_report(model: ChainModel, modes: ChainModes, omega2_values=None, dampe
     ``participation``: a :class:`~.participation.Participation` of every mode (ascending ω, the
     records' order) for a chain whose supports move, printed and added to the records as for
     ``[masses]`` scenes; without it such a chain gets a note saying where participation is.
+    ``shape_values``: the mode shapes of a chain without closed-form modes (see :func:`chain_mode_records`).
     """
     sc, ch = model.scene, model.chain
     force = sp.factor_terms(model.interior_equation())
@@ -414,7 +420,7 @@ def chain_report(model: ChainModel, modes: ChainModes, omega2_values=None, dampe
     notes = list(modes.notes) + (["cubic springs: modes of the linearization; no exact solution"]
                                  if model.k3 is not None else []) + law_notes
     lines += [f"    note: {note}" for note in notes]
-    records, listed_note = chain_mode_records(model, modes, omega2_values)
+    records, listed_note = chain_mode_records(model, modes, omega2_values, shape_values)
     zeta_note = _damping_ratios(model, records, damped) if damping_data is not None and records else ""
     if zeta_note:
         notes.append(zeta_note)
