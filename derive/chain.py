@@ -145,16 +145,25 @@ def chain_equilibrium(model: ChainModel) -> sp.Expr:
     """
     from .accurate import exact_values
     from .equilibrium import check_law
+    from .forcing import constant_part
 
     ch, law, file = model.chain, model.law, model.scene.file
     key = "chain.potential"
     tension = sp.simplify(law.force.subs(D, 0))
-    loads = [k for k, present in (("gravity", model.g is not None),
-                                  ("forces", any(not f.has(model.t) for _, f, _ in model.forces))) if present]
+    # a constant load, or the constant part of one that varies with t ('0.5 + 0.5*sin(2*t)': its mean 0.5)
+    loads = ([("gravity", "gravity")] if model.g is not None else []) + [
+        (key, "force") for _, f, key in model.forces if constant_part(f, model.t) != 0] + (
+        [("ground.acceleration", "ground acceleration")]
+        if model.ground is not None and constant_part(model.ground, model.t) != 0 else [])
     if loads:
-        raise SceneError(file, loads[0], "a constant load on a chain with a potential moves its equilibrium away "
+        key, what = loads[0]
+        varying = what != "gravity" and (model.ground if key.startswith("ground") else
+                                         next(f for _, f, k in model.forces if k == key)).has(model.t)
+        raise SceneError(file, key, "a constant load on a chain with a potential"
+                         + (f" (the constant part of the {what})" if varying else "") + " moves its equilibrium away "
                          "from x = 0, which is not supported yet for [chain] scenes; accepted: the same "
-                         "scene as [masses] with [[springs]] (solved by Newton), or loads that vary with t")
+                         "scene as [masses] with [[springs]] (solved by Newton), or loads that vary with t "
+                         "about a zero mean")
     closed = ch.left is End.RING or (ch.left is End.WALL and ch.right is End.WALL)
     if tension != 0 and not (closed and not tension.has(model.i)):
         raise SceneError(file, key, f"V'(0) = {sp.sstr(tension)} is not 0: the springs are pre-stressed at rest, "

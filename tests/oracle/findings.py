@@ -429,7 +429,7 @@ f = "0.5 + 0.5*sin(2*t)"
 '''), features=frozenset({"form:chain", "potential:fput_beta", "force:harmonic2"}),
          new="a [chain] with a potential and a force with a constant part ('0.5 + 0.5*sin(2*t)'): not refused "
              "(f = '0.5' and gravity are, in one line: 'not supported yet for [chain] scenes'); modes prints the "
-             "modes about x = 0 (omega^2 0.198, 1.555, 3.247; about the equilibrium 0.259, 2.034, ...)"),
+             "modes about x = 0 (omega^2 0.198, 1.555, 3.247; about the equilibrium 0.259, 2.034, ...)", failing=False),
     Case("N11_ground_constant_potential_equilibrium", scene("gpot", {"m": 1.0, "k": 2.0, "beta": 0.5, "A": -1.0}, '''
 [masses]
 p = "m"

@@ -75,6 +75,16 @@ REFUSED = {
                                ("chain.potential", "V'(0) = -k is not 0")),
     "chain_gravity": (chain_text("chain_gravity", {"m": 1, "k": 1, "g": 1}, 10, "k*d**2/2 + d**4",
                                  extra='[gravity]\ng = "g"'), ("gravity", "constant load on a chain")),
+    # oracle N10: a load that varies with t about a nonzero mean is a constant load plus a zero-mean one
+    "chain_force_mean": (chain_text("chain_force_mean", {"m": 1, "k": 1}, 3, "k*d**2/2 + d**4", right="free",
+                                    extra='[[forces]]\non = 2\nf = "0.5 + 0.5*sin(2*t)"'),
+                         ("forces[0]", "constant load on a chain", "constant part of the force")),
+    "chain_force_square": (chain_text("chain_force_square", {"m": 1, "k": 1}, 3, "k*d**2/2 + d**4", right="free",
+                                      extra='[[forces]]\non = 1\nf = "sin(t)**2"'),
+                           ("forces[0]", "constant load on a chain", "constant part of the force")),
+    "chain_ground_mean": (chain_text("chain_ground_mean", {"m": 1, "k": 1}, 3, "k*d**2/2 + d**4", right="free",
+                                     extra='[ground]\nacceleration = "1 + cos(t)"'),
+                          ("ground.acceleration", "constant load on a chain", "ground acceleration")),
     "param_d": (masses_toml("param_d", {"d": 1}, {"p": "1"}, [("wall", "p", "d*x")]),
                 ("parameters.d", "d is the spring's extension")),
     "param_log": (masses_toml("param_log", {"log": 1}, {"p": "1"}, [("wall", "p", "log(1 + d)")]),
@@ -99,6 +109,20 @@ def test_refusals_are_one_line(case, tmp_path, capsys):
         status, _, err = run_cli([command[0], path, *command[1:]], capsys)
         one_line_error(status, err, str(path), *parts)
     assert not (tmp_path / "gen").exists() or not any((tmp_path / "gen").iterdir())
+
+
+def test_chain_potential_with_zero_mean_loads_is_linearised_about_zero(capsys, tmp_path):
+    """Loads with no constant part (cos(t)*sin(t) = sin(2t)/2, cos(3t + 1)) leave a potential chain's
+    equilibrium at x = 0: modes are those of k = V''(0), by hand ω_j² = 4 k sin²(π(2j − 1)/(2(2n + 1)))/m."""
+    path = tmp_path / "zm.toml"
+    path.write_text(chain_text("zm", {"m": 1, "k": 1}, 3, "k*d**2/2 + d**4", right="free",
+                               extra='[[forces]]\non = 2\nf = "cos(t)*sin(t)"\n[ground]\n'
+                                     'acceleration = "cos(3*t + 1)"'))
+    status, out, err = run_cli(["modes", path, "--json"], capsys)
+    assert status == 0, err
+    got = [r["omega2_value"] for r in json.loads(out)["modes"]]
+    ref = [4 * mpmath.sin(mpmath.pi * (2 * j - 1) / 14) ** 2 for j in (1, 2, 3)]
+    assert np.allclose(got, [float(v) for v in ref], rtol=4e-16, atol=0)
 
 
 # -- exact symbolic results on small cases ----------------------------------------------------------
