@@ -145,16 +145,25 @@ def chain_equilibrium(model: ChainModel) -> sp.Expr:
     """
     from .accurate import exact_values
     from .equilibrium import check_law
+    from .forcing import constant_part
 
     ch, law, file = model.chain, model.law, model.scene.file
     key = "chain.potential"
     tension = sp.simplify(law.force.subs(D, 0))
-    loads = [k for k, present in (("gravity", model.g is not None),
-                                  ("forces", any(not f.has(model.t) for _, f, _ in model.forces))) if present]
+    # a constant load, or the constant part of one that varies with t ('0.5 + 0.5*sin(2*t)': its mean 0.5)
+    loads = ([("gravity", "gravity")] if model.g is not None else []) + [
+        (key, "force") for _, f, key in model.forces if constant_part(f, model.t) != 0] + (
+        [("ground.acceleration", "ground acceleration")]
+        if model.ground is not None and constant_part(model.ground, model.t) != 0 else [])
     if loads:
-        raise SceneError(file, loads[0], "a constant load on a chain with a potential moves its equilibrium away "
+        key, what = loads[0]
+        varying = what != "gravity" and (model.ground if key.startswith("ground") else
+                                         next(f for _, f, k in model.forces if k == key)).has(model.t)
+        raise SceneError(file, key, "a constant load on a chain with a potential"
+                         + (f" (the constant part of the {what})" if varying else "") + " moves its equilibrium away "
                          "from x = 0, which is not supported yet for [chain] scenes; accepted: the same "
-                         "scene as [masses] with [[springs]] (solved by Newton), or loads that vary with t")
+                         "scene as [masses] with [[springs]] (solved by Newton), or loads that vary with t "
+                         "about a zero mean")
     closed = ch.left is End.RING or (ch.left is End.WALL and ch.right is End.WALL)
     if tension != 0 and not (closed and not tension.has(model.i)):
         raise SceneError(file, key, f"V'(0) = {sp.sstr(tension)} is not 0: the springs are pre-stressed at rest, "
@@ -232,14 +241,17 @@ MAX_MODES_LISTED = 40
 MODES_LISTED_EACH_END = 10
 
 
-def chain_mode_records(model: ChainModel, modes: ChainModes, omega2_values=None) -> tuple[list[dict], str]:
+def chain_mode_records(model: ChainModel, modes: ChainModes, omega2_values=None,
+                       shape_values=None) -> tuple[list[dict], str]:
     """Mode records in the schema of non-chain scenes (``omega2``, ``omega2_value``,
     ``multiplicity``, ``shape``), ascending; for long chains only both ends of the spectrum.
 
     ``omega2_values`` are the n values of the generated module's ``omega2()`` (needed for a
     non-uniform chain; a uniform one evaluates its closed form). ``shape`` is the closed-form
     shape as a function of the mass index ``i`` (None without a closed form); ``shape_value``
-    lists its values only for chains of at most MAX_MODES_LISTED masses.
+    lists its values only for chains of at most MAX_MODES_LISTED masses: of the closed form, or for a
+    chain without one the rows of ``shape_values`` (n × n, ascending ω², from the numeric side:
+    :func:`numeric.structural.modal_quantities.chain_mode_shapes`).
     """
     import numpy as np
 
@@ -288,6 +300,8 @@ def chain_mode_records(model: ChainModel, modes: ChainModes, omega2_values=None)
                 f = sp.lambdify(model.i, shape, "numpy")
                 idx = np.arange(n, dtype=float)
                 rec["shape_value"] = [float(v) for v in np.broadcast_to(np.asarray(f(idx), dtype=float), (n,))]
+        elif shape_values is not None and n <= MAX_MODES_LISTED:
+            rec["shape_value"] = [float(v) for v in shape_values[p]]
         records.append(rec)
     return records, note
 
@@ -374,7 +388,7 @@ def _damping_ratios(model: ChainModel, records: list[dict], damped) -> str:
 
 
 def chain_report(model: ChainModel, modes: ChainModes, omega2_values=None, damped=None,
-                 participation=None) -> tuple[str, dict]:
+                 participation=None, shape_values=None) -> tuple[str, dict]:
     """Text and JSON description of a chain's derivation and spectrum.
 
     The JSON has the top-level shape of non-chain scenes (``scene, parameters, masses, modes,
@@ -385,6 +399,7 @@ def chain_report(model: ChainModel, modes: ChainModes, omega2_values=None, dampe
     ``participation``: a :class:`~.participation.Participation` of every mode (ascending ω, the
     records' order) for a chain whose supports move, printed and added to the records as for
     ``[masses]`` scenes; without it such a chain gets a note saying where participation is.
+    ``shape_values``: the mode shapes of a chain without closed-form modes (see :func:`chain_mode_records`).
     """
     sc, ch = model.scene, model.chain
     force = sp.factor_terms(model.interior_equation())
@@ -414,7 +429,7 @@ def chain_report(model: ChainModel, modes: ChainModes, omega2_values=None, dampe
     notes = list(modes.notes) + (["cubic springs: modes of the linearization; no exact solution"]
                                  if model.k3 is not None else []) + law_notes
     lines += [f"    note: {note}" for note in notes]
-    records, listed_note = chain_mode_records(model, modes, omega2_values)
+    records, listed_note = chain_mode_records(model, modes, omega2_values, shape_values)
     zeta_note = _damping_ratios(model, records, damped) if damping_data is not None and records else ""
     if zeta_note:
         notes.append(zeta_note)

@@ -120,9 +120,22 @@ def _modal_damping(model: Model, dps: int):
             for i in range(n):
                 Phi[i, j] = s[i]
         G = mpmath.zeros(n, n)
-        if model.C is not None:
-            C = mpmath.matrix([[mp_value(model.C[i, j].xreplace(subs), dps) for j in range(n)] for i in range(n)])
+        if model.dampers:  # the dashpots' C from their elements, at this precision
+            C = mpmath.zeros(n, n)
+            for a, b, c, _ in model.dampers:
+                cv = mp_value(c.xreplace(subs), dps)
+                for i, si in ((a, 1), (b, -1)):
+                    for j, sj in ((a, 1), (b, -1)):
+                        if i >= 0 and j >= 0:
+                            C[i, j] += si * sj * cv
             G = Phi.T * C * Phi
+        if model.rayleigh is not None:
+            # Φᵀ(αM + βK)Φ = α + βω² on the diagonal by definition (M-orthonormal Φ of this K): the K of
+            # model.C holds an equilibrium stiffness rounded to 17 digits, and β times it (SymPy Floats)
+            # is not βK at this precision, an off-diagonal of ~1e-20 that read as non-proportional
+            alpha, beta = (mp_value(e.xreplace(subs), dps) for e in model.rayleigh)
+            for j in range(n):
+                G[j, j] += alpha + beta * w2[j]
         if model.modal_zeta is not None:
             for j in range(n):
                 G[j, j] += 2 * mp_value(model.modal_zeta[j].xreplace(subs), dps) * mpmath.sqrt(max(w2[j], 0))  # ω² noise < 0

@@ -65,6 +65,22 @@ def decompose(expr: sp.Expr, t: sp.Symbol) -> tuple[sp.Expr, list[Harmonic]] | N
     return const, harmonics
 
 
+def constant_part(expr: sp.Expr, t: sp.Symbol) -> sp.Expr:
+    """The constant part of ``expr`` (its mean over t): ``A`` of a constant + harmonic form (:func:`decompose`),
+    else the terms free of t once the trigonometric functions are written as exponentials (``sin(t)**2`` has
+    1/2, ``1 + exp(-t)`` has 1). A static load: it moves a potential scene's equilibrium as a constant force."""
+    if not expr.has(t):
+        return expr
+    parts = decompose(expr, t)
+    if parts is not None:
+        return parts[0]
+    const = sp.Integer(0)
+    for term in sp.Add.make_args(sp.expand(expr.rewrite(sp.exp))):
+        if not term.has(t):
+            const += term
+    return sp.simplify(const)
+
+
 def harmonics_by_mass(forces, t: sp.Symbol):
     """Constant parts and harmonics of forces ``[(on, f(t)), ...]`` on single masses, or None if
     any force is not constant + harmonic.

@@ -22,7 +22,7 @@ the whole participation of the eigenspace and the others none.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import mpmath
 import sympy as sp
@@ -130,10 +130,32 @@ def chain_note(model) -> list[str]:
             "FILE` prints Gamma and the effective mass of every mode (spring-factor SVD; chains up to 2000 masses)"]
 
 
+def signed_as_printed(p: Participation, records: list[dict]) -> Participation:
+    """``p`` with each mass-normalised shape (and Γ, its closed forms) signed as the record's ``shape_value``
+    (modes of multiplicity one; the README: "its sign that of the printed shape"). The numeric side signs a
+    chain's shapes by their first component, while a free–wall chain's closed-form shape is positive at the
+    wall end: without this, Γ and ``shape_mass_normalised`` could be the negatives of the printed shape's."""
+    shapes, gamma = list(p.shapes), list(p.gamma)
+    g_expr, s_expr = list(p.gamma_expr), list(p.shape_expr)
+    for j, rec in enumerate(records[: len(gamma)]):
+        printed = rec.get("shape_value")
+        if rec.get("multiplicity", 1) != 1 or not printed or len(printed) != len(shapes[j]):
+            continue
+        if math.fsum(a * b for a, b in zip(printed, shapes[j])) < 0:
+            shapes[j] = tuple(-c for c in shapes[j])
+            gamma[j] = -gamma[j]
+            g_expr[j] = None if g_expr[j] is None else -g_expr[j]
+            s_expr[j] = None if s_expr[j] is None else tuple(-c for c in s_expr[j])
+    return replace(p, shapes=tuple(shapes), gamma=tuple(gamma), gamma_expr=tuple(g_expr),
+                   shape_expr=tuple(s_expr))
+
+
 def chain_section(model, p: Participation | None, records: list[dict]) -> tuple[list[str], list[str], dict]:
     """A chain report's participation: ``(text lines, notes, top-level JSON)``; the table (and the
-    per-mode JSON fields, added to ``records`` in place) when ``p`` covers every record, else the note."""
+    per-mode JSON fields, added to ``records`` in place) when ``p`` covers every record, else the note.
+    Each shape and Γ is signed as the record's printed shape (:func:`signed_as_printed`)."""
     if p is not None and len(records) == len(p.gamma):
+        p = signed_as_printed(p, records)
         return [""] + text_lines(p), [], json_fields(p, records)
     notes = chain_note(model)
     return [line for note in notes for line in ("", note)], notes, {}

@@ -177,7 +177,7 @@ def modes_json(model: Model, modes: ModeSet) -> dict:
     if model.damped:
         from .damping_report import damped_modes, json_fields
 
-        extra = json_fields(damped_modes(model, modes), records)
+        extra.update(json_fields(damped_modes(model, modes), records))
         if model.rayleigh_targets is not None:
             from .rayleigh_targets import model_fit
 

@@ -59,6 +59,19 @@ def _chain_damped(scene: Scene, model):
     return chain_damped_rows(system_of(scene)[0])
 
 
+def _chain_shapes(scene: Scene, chain_modes):
+    """The mode shapes of a chain without closed-form modes whose modes are all listed (at most
+    ``MAX_MODES_LISTED`` masses), one row per mode in ascending ω² (:func:`numeric.structural.
+    modal_quantities.chain_mode_shapes`); else None (a closed form gives its own values)."""
+    from .derive.chain import MAX_MODES_LISTED
+
+    if chain_modes.omega2 is not None or scene.chain.n > MAX_MODES_LISTED:
+        return None
+    from .numeric.structural.modal_quantities import chain_mode_shapes
+
+    return chain_mode_shapes(system_of(scene)[0])[1]
+
+
 def _chain_participation(scene: Scene, model):
     """Γⱼ, Mⱼ* and mass-normalised shapes of an open chain with a wall end or ``[ground]`` whose modes are
     all listed (at most ``MAX_MODES_LISTED`` masses), from
@@ -100,7 +113,14 @@ class Modes:
         from .derive.chain import chain_report
 
         return chain_report(self.model, self.modes, _chain_omega2(self.scene, self.modes),
-                            _chain_damped(self.scene, self.model), self.participation)
+                            _chain_damped(self.scene, self.model), self._chain_participation,
+                            _chain_shapes(self.scene, self.modes))
+
+    @functools.cached_property
+    def _chain_participation(self):
+        """A chain's participation as the numeric side computes it (signed as its report prints it by
+        :attr:`participation`), computed once."""
+        return _chain_participation(self.scene, self.model)
 
     @functools.cached_property
     def bands(self):
@@ -187,7 +207,8 @@ class Modes:
         from .derive import participation as part
 
         if self.chain:
-            return _chain_participation(self.scene, self.model)
+            p = self._chain_participation
+            return None if p is None else part.signed_as_printed(p, self._chain_report[1]["modes"])
         if not part.applies(self.model):
             return None
         return part.participation(self.model, self.modes)

@@ -174,11 +174,10 @@ def exact_modes(el: Elements, omega: np.ndarray) -> ExactModes | None:
 __all__ = ["ExactModes", "exact_modes", "MP_MAX_MASSES"]
 
 
-def chain_participation(system) -> tuple[np.ndarray, list[float], np.ndarray, float]:
-    """``(ω², Γ, shapes, total mass)`` of an open chain (a :class:`~springchain.numeric.system.System`) from the
-    spring-factor SVD: shapes mass-normalised, shape (n, n) one row per mode, each signed so that its first
-    non-negligible component is positive (as ``rsa``); Γⱼ = Σ mᵢφᵢⱼ by compensated sums, and for a free–free
-    chain Γ = (√M, 0, …, 0) exactly by structure (r = 1 is its rigid mode)."""
+def _signed_spectrum(system):
+    """``(elements, spectrum, shapes)`` of a chain: the accurate spectrum (:func:`numeric.modes.spectrum.spectrum`)
+    and its mass-normalised shapes as columns, each signed so that its first non-negligible component is
+    positive."""
     from ..modes.spectrum import spectrum
 
     el = Elements.from_system(system)
@@ -186,6 +185,23 @@ def chain_participation(system) -> tuple[np.ndarray, list[float], np.ndarray, fl
     phi = spec.shapes
     first = np.argmax(np.abs(phi) > 1e-12 * np.max(np.abs(phi), axis=0, keepdims=True), axis=0)
     phi = phi * np.where(phi[first, np.arange(phi.shape[1])] < 0, -1.0, 1.0)[None, :]
+    return el, spec, phi
+
+
+def chain_mode_shapes(system) -> tuple[np.ndarray, np.ndarray]:
+    """``(ω², shapes)`` of a chain (open or ring) without closed-form modes, from the accurate spectrum:
+    shapes (n, n) one row per mode in ascending ω², mass-normalised (φᵀMφ = 1), the first non-negligible
+    component of each positive (as :func:`chain_participation`); inside a repeated ω² an orthonormal basis."""
+    _, spec, phi = _signed_spectrum(system)
+    return spec.omega2, phi.T
+
+
+def chain_participation(system) -> tuple[np.ndarray, list[float], np.ndarray, float]:
+    """``(ω², Γ, shapes, total mass)`` of an open chain (a :class:`~springchain.numeric.system.System`) from the
+    spring-factor SVD: shapes mass-normalised, shape (n, n) one row per mode, each signed so that its first
+    non-negligible component is positive (as ``rsa``); Γⱼ = Σ mᵢφᵢⱼ by compensated sums, and for a free–free
+    chain Γ = (√M, 0, …, 0) exactly by structure (r = 1 is its rigid mode)."""
+    el, spec, phi = _signed_spectrum(system)
     m = np.asarray(el.masses, dtype=float)
     total = math.fsum(m)
     if spec.rigid:

@@ -205,6 +205,51 @@ def test_rayleigh_zeta_closed_form_and_value(tmp_path, capsys):
         assert rec["omega_damped"] == pytest.approx(wj * np.sqrt(1 - (a / (2 * wj) + b * wj / 2) ** 2), rel=1e-13)
 
 
+PRESTRESSED = """name = "ray7"
+[parameters]
+m = 1.0
+k = 4.0
+T = 0.01
+c = CUBIC
+[masses]
+a = "m"
+p = "m"
+q = "m"
+[[springs]]
+between = ["wall", "a"]
+k = "k"
+[[springs]]
+between = ["a", "p"]
+potential = "T*d + k*d**2/2 + c*d**4/4"
+[damping]
+rayleigh = ["0.1", "0.01"]
+"""
+
+
+@pytest.mark.parametrize("cubic", ["0.0", "30.0"])
+def test_rayleigh_on_a_prestressed_potential_is_proportional(tmp_path, capsys, cubic):
+    """Oracle N9: C = αM + βK is proportional by construction, also when a pre-stressed potential moves x_eq
+    (K there holds an equilibrium stiffness: with c = 30 not a round number). Reference by hand in mpmath:
+    T + k d + c d³ = 0 for the spring a–p (p carries no other spring), k_eq = k + 3 c d², the modes of
+    K = [[k + k_eq, −k_eq, 0], [−k_eq, k_eq, 0], [0, 0, 0]] (M = I; q is free), ζ = α/(2ω) + βω/2."""
+    import mpmath
+
+    data = modes_json(PRESTRESSED.replace("CUBIC", cubic), tmp_path, capsys)
+    assert data["damping"] == {"model": "rayleigh", "proportional": True}
+    assert "complex_modes" not in data
+    with mpmath.workdps(50):
+        c = mpmath.mpf(cubic)
+        d = mpmath.findroot(lambda d: mpmath.mpf("0.01") + 4 * d + c * d**3, 0)
+        ke = 4 + 3 * c * d**2
+        w2 = sorted(mpmath.eigsy(mpmath.matrix([[4 + ke, -ke, 0], [-ke, ke, 0], [0, 0, 0]]), eigvals_only=True))
+        zeta = [None] + [mpmath.mpf("0.1") / (2 * mpmath.sqrt(w)) + mpmath.mpf("0.01") * mpmath.sqrt(w) / 2
+                         for w in w2[1:]]
+    assert data["equilibrium"]["x_value"] == pytest.approx([0.0, float(d), 0.0], rel=1e-14, abs=1e-300)
+    got = [r["damping_ratio"] for r in data["modes"]]
+    assert got[0] is None  # the free mass q: a rigid mode
+    assert got[1:] == pytest.approx([float(z) for z in zeta[1:]], rel=1e-14)
+
+
 def test_modal_zeta_is_reported_as_given(tmp_path, capsys):
     data = modes_json(three_mass_text(MODAL), tmp_path, capsys)
     assert [r["damping_ratio"] for r in data["modes"]] == pytest.approx([0.02, 0.05, 0.1], rel=1e-15)

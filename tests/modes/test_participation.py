@@ -150,3 +150,74 @@ def test_chain_scenes_say_where_participation_is(tmp_path):
     assert len(note) == 1 and "springchain rsa" in note[0] and note[0] in m.to_text()
     free = sc.modes("chain100k")
     assert not any(n.startswith("Modal participation") for n in free.to_json()["notes"])
+
+
+# -- [chain] modes --json: shape_value of every short chain, Γ signed as the printed shape (oracle N8) -------
+def _chain_text(name, n, mass, left, right):
+    return (f'name = "{name}"\n[parameters]\nm = 1.0\nk = 1.0\n[chain]\nn = {n}\nmass = "{mass}"\nk = "k"\n'
+            f'left = "{left}"\nright = "{right}"\n')
+
+
+def _parallel(a, b):
+    """|cos| of the angle between two vectors (1 = parallel)."""
+    dot = math.fsum(x * y for x, y in zip(a, b))
+    return abs(dot) / math.sqrt(math.fsum(x * x for x in a) * math.fsum(y * y for y in b))
+
+
+def test_free_wall_chain_shapes_in_mass_order_and_gamma_signed_as_printed(tmp_path):
+    """A free–wall chain: shape_value in mass order (mass 0 at the free end), shape_mass_normalised and Γ
+    with the sign of shape_value (README: Γ of the mass-normalised shape, 'its sign that of the printed
+    shape'); references by hand: φⱼ(i) ∝ sin(π(n − i)(2j − 1)/(2n + 1)) (i' = n − i counted from the wall),
+    ω² = 4 sin²(π(2j − 1)/(2(2n + 1))), Γ = Σ φ with φ normalised, in mpmath."""
+    n = 5
+    path = tmp_path / "fw.toml"
+    path.write_text(_chain_text("fw", n, "m", "free", "wall"))
+    m = sc.modes(str(path))
+    data = m.to_json()
+    recs = data["modes"]
+    assert len(recs) == n
+    with mpmath.workdps(40):
+        for j, rec in enumerate(recs, start=1):
+            w2 = 4 * mpmath.sin(mpmath.pi * (2 * j - 1) / (2 * (2 * n + 1))) ** 2
+            assert rec["omega2_value"] == pytest.approx(float(w2), rel=1e-14)
+            ref = [mpmath.sin(mpmath.pi * (n - i) * (2 * j - 1) / (2 * n + 1)) for i in range(n)]
+            # the printed shape is the hand formula itself (same order, same sign)
+            assert max(abs(float(a) - b) for a, b in zip(ref, rec["shape_value"])) <= 1e-14
+            norm = mpmath.sqrt(mpmath.fsum(c * c for c in ref))
+            phi = [float(c / norm) for c in ref]
+            assert max(abs(a - b) for a, b in zip(phi, rec["shape_mass_normalised"])) <= 1e-14, (j, rec)
+            gamma = float(mpmath.fsum(ref) / norm)
+            assert abs(rec["participation_factor"] - gamma) <= 1e-14, (j, rec["participation_factor"], gamma)
+    # the API's participation is the report's
+    assert [rec["participation_factor"] for rec in recs] == list(m.participation.gamma)
+    assert [rec["shape_mass_normalised"] for rec in recs] == [list(s) for s in m.participation.shapes]
+
+
+@pytest.mark.parametrize("left,right", [("wall", "free"), ("free", "free"), ("ring", "ring"), ("wall", "wall")])
+def test_index_dependent_chain_lists_shape_value(tmp_path, left, right):
+    """An index-dependent [chain] of at most 40 masses (no closed form) lists shape_value too (README), from
+    the accurate spectrum: each parallel to the mpmath eigenvector of its (simple) ω², in mass order."""
+    n = 5
+    path = tmp_path / "idx.toml"
+    path.write_text(_chain_text("idx", n, "m*(1 + i % 2) + i/4", left, right))
+    data = sc.modes(str(path)).to_json()
+    masses = [(1 + i % 2) + i / 4 for i in range(n)]
+    springs = [(i, i + 1, 1.0) for i in range(n - 1)]
+    if left == "wall":
+        springs.append((-1, 0, 1.0))
+    if right == "wall":
+        springs.append((n - 1, -1, 1.0))
+    if left == "ring":
+        springs.append((n - 1, 0, 1.0))
+    w2, S = mp_reference(masses, springs)
+    recs = data["modes"]
+    assert len(recs) == n
+    for j, rec in enumerate(recs):
+        assert rec["omega2_value"] == pytest.approx(float(w2[j]), rel=1e-13, abs=1e-15)
+        sv = rec["shape_value"]
+        assert len(sv) == n
+        ref = [float(S[i, j]) for i in range(n)]
+        assert _parallel(sv, ref) >= 1 - 1e-13, (j, sv, ref)
+        if "shape_mass_normalised" in rec:  # the same vector, the same sign
+            assert _parallel(sv, rec["shape_mass_normalised"]) >= 1 - 1e-13
+            assert math.fsum(a * b for a, b in zip(sv, rec["shape_mass_normalised"])) > 0

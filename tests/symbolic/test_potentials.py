@@ -75,6 +75,16 @@ REFUSED = {
                                ("chain.potential", "V'(0) = -k is not 0")),
     "chain_gravity": (chain_text("chain_gravity", {"m": 1, "k": 1, "g": 1}, 10, "k*d**2/2 + d**4",
                                  extra='[gravity]\ng = "g"'), ("gravity", "constant load on a chain")),
+    # oracle N10: a load that varies with t about a nonzero mean is a constant load plus a zero-mean one
+    "chain_force_mean": (chain_text("chain_force_mean", {"m": 1, "k": 1}, 3, "k*d**2/2 + d**4", right="free",
+                                    extra='[[forces]]\non = 2\nf = "0.5 + 0.5*sin(2*t)"'),
+                         ("forces[0]", "constant load on a chain", "constant part of the force")),
+    "chain_force_square": (chain_text("chain_force_square", {"m": 1, "k": 1}, 3, "k*d**2/2 + d**4", right="free",
+                                      extra='[[forces]]\non = 1\nf = "sin(t)**2"'),
+                           ("forces[0]", "constant load on a chain", "constant part of the force")),
+    "chain_ground_mean": (chain_text("chain_ground_mean", {"m": 1, "k": 1}, 3, "k*d**2/2 + d**4", right="free",
+                                     extra='[ground]\nacceleration = "1 + cos(t)"'),
+                          ("ground.acceleration", "constant load on a chain", "ground acceleration")),
     "param_d": (masses_toml("param_d", {"d": 1}, {"p": "1"}, [("wall", "p", "d*x")]),
                 ("parameters.d", "d is the spring's extension")),
     "param_log": (masses_toml("param_log", {"log": 1}, {"p": "1"}, [("wall", "p", "log(1 + d)")]),
@@ -99,6 +109,20 @@ def test_refusals_are_one_line(case, tmp_path, capsys):
         status, _, err = run_cli([command[0], path, *command[1:]], capsys)
         one_line_error(status, err, str(path), *parts)
     assert not (tmp_path / "gen").exists() or not any((tmp_path / "gen").iterdir())
+
+
+def test_chain_potential_with_zero_mean_loads_is_linearised_about_zero(capsys, tmp_path):
+    """Loads with no constant part (cos(t)*sin(t) = sin(2t)/2, cos(3t + 1)) leave a potential chain's
+    equilibrium at x = 0: modes are those of k = V''(0), by hand ω_j² = 4 k sin²(π(2j − 1)/(2(2n + 1)))/m."""
+    path = tmp_path / "zm.toml"
+    path.write_text(chain_text("zm", {"m": 1, "k": 1}, 3, "k*d**2/2 + d**4", right="free",
+                               extra='[[forces]]\non = 2\nf = "cos(t)*sin(t)"\n[ground]\n'
+                                     'acceleration = "cos(3*t + 1)"'))
+    status, out, err = run_cli(["modes", path, "--json"], capsys)
+    assert status == 0, err
+    got = [r["omega2_value"] for r in json.loads(out)["modes"]]
+    ref = [4 * mpmath.sin(mpmath.pi * (2 * j - 1) / 14) ** 2 for j in (1, 2, 3)]
+    assert np.allclose(got, [float(v) for v in ref], rtol=4e-16, atol=0)
 
 
 # -- exact symbolic results on small cases ----------------------------------------------------------
@@ -218,6 +242,44 @@ def test_modes_json_of_a_potential_chain(capsys):
     assert any("linearisation" in note for note in data["notes"])
     status, out, _ = run_cli(["modes", "toda"], capsys)
     assert "Static equilibrium: x = 0" in out and "stiffness about it k(i) = V''(0) = a*b" in out
+
+
+DAMPED_HANG = """name = "eqjson"
+
+[parameters]
+m = 1.0
+k = 2.0
+beta = 0.5
+g = -1.0
+c = 0.1
+
+[masses]
+p = "m"
+[[springs]]
+between = ["wall", "p"]
+potential = "k*d**2/2 + beta*d**4/4"
+[[dampers]]
+between = ["p", "wall"]
+c = "c"
+[gravity]
+g = "g"
+"""
+
+
+def test_modes_json_of_a_damped_potential_scene_keeps_its_equilibrium(scene_from_text):
+    """Oracle N1: the damping fields were put in place of the equilibrium (they must sit beside it)."""
+    import springchain
+
+    data = json.loads(json.dumps(springchain.modes(scene_from_text(DAMPED_HANG, "eqjson.toml")).to_json()))
+    # independent reference: k d + beta d^3 = m g (d = x, one spring to the wall), mpmath at 50 digits
+    with mpmath.workdps(50):
+        d = mpmath.findroot(lambda d: 2 * d + mpmath.mpf("0.5") * d**3 + 1, -0.5)
+        k_eq = 2 + 3 * mpmath.mpf("0.5") * d**2
+        zeta = mpmath.mpf("0.1") / (2 * mpmath.sqrt(k_eq))
+    assert np.allclose(data["equilibrium"]["x_value"], [float(d)], rtol=4e-16, atol=0)
+    assert data["damping"]["proportional"] is True
+    assert data["modes"][0]["omega2_value"] == pytest.approx(float(k_eq), rel=4e-16)
+    assert data["modes"][0]["damping_ratio"] == pytest.approx(float(zeta), rel=4e-16)
 
 
 # -- generated forces = the SymPy derivative, on potentials this file did not write -----------------------
