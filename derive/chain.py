@@ -133,6 +133,47 @@ class ChainModel:
         return 1 if (self.chain.left is not End.WALL and self.chain.right is not End.WALL) else 0
 
 
+def _constant_loads(model: ChainModel) -> list[tuple[str, str]]:
+    """The scene keys of constant loads, and of the constant part of loads that vary with t
+    ('0.5 + 0.5*sin(2*t)': its mean 0.5), as (key, what)."""
+    from .forcing import constant_part
+
+    return ([("gravity", "gravity")] if model.g is not None else []) + [
+        (key, "force") for _, f, key in model.forces if constant_part(f, model.t) != 0] + (
+        [("ground.acceleration", "ground acceleration")]
+        if model.ground is not None and constant_part(model.ground, model.t) != 0 else [])
+
+
+def _refuse_constant_loads(model: ChainModel, springs: str, what_for: str) -> None:
+    """One line (SceneError) when a constant load moves the equilibrium of a chain with ``springs``."""
+    loads = _constant_loads(model)
+    if not loads:
+        return
+    key, what = loads[0]
+    varying = what != "gravity" and (model.ground if key.startswith("ground") else
+                                     next(f for _, f, k in model.forces if k == key)).has(model.t)
+    raise SceneError(model.scene.file, key, f"a constant load on a chain with {springs}"
+                     + (f" (the constant part of the {what})" if varying else "") + " moves its equilibrium away "
+                     f"from x = 0{what_for}, which is not supported yet for [chain] scenes; accepted: the same "
+                     "scene as [masses] with [[springs]] (solved by Newton), or loads that vary with t "
+                     "about a zero mean")
+
+
+def check_linear_outputs(scene) -> None:
+    """:func:`check_modes_apply` for a scene (modes, frf, rsa, state space, sensitivities: every output of
+    the linearisation); nothing to check for other scenes."""
+    if scene.chain is not None and scene.chain.k3 is not None:
+        check_modes_apply(ChainModel(scene))
+
+
+def check_modes_apply(model: ChainModel) -> None:
+    """Refuse (one line) the modes of a chain with cubic springs under a constant load: they are those of
+    the linearisation about the static equilibrium, which a [chain] does not solve (about x = 0 they would
+    be silently wrong). Its simulation is unaffected (the equations of motion hold the loads)."""
+    if model.k3 is not None:
+        _refuse_constant_loads(model, "cubic (k3) springs", " (its modes are those about the equilibrium)")
+
+
 def chain_equilibrium(model: ChainModel) -> sp.Expr:
     """The tension V'(0) of a potential chain at rest, after checking x_eq = 0 is a stable equilibrium.
 
@@ -145,25 +186,11 @@ def chain_equilibrium(model: ChainModel) -> sp.Expr:
     """
     from .accurate import exact_values
     from .equilibrium import check_law
-    from .forcing import constant_part
 
     ch, law, file = model.chain, model.law, model.scene.file
     key = "chain.potential"
     tension = sp.simplify(law.force.subs(D, 0))
-    # a constant load, or the constant part of one that varies with t ('0.5 + 0.5*sin(2*t)': its mean 0.5)
-    loads = ([("gravity", "gravity")] if model.g is not None else []) + [
-        (key, "force") for _, f, key in model.forces if constant_part(f, model.t) != 0] + (
-        [("ground.acceleration", "ground acceleration")]
-        if model.ground is not None and constant_part(model.ground, model.t) != 0 else [])
-    if loads:
-        key, what = loads[0]
-        varying = what != "gravity" and (model.ground if key.startswith("ground") else
-                                         next(f for _, f, k in model.forces if k == key)).has(model.t)
-        raise SceneError(file, key, "a constant load on a chain with a potential"
-                         + (f" (the constant part of the {what})" if varying else "") + " moves its equilibrium away "
-                         "from x = 0, which is not supported yet for [chain] scenes; accepted: the same "
-                         "scene as [masses] with [[springs]] (solved by Newton), or loads that vary with t "
-                         "about a zero mean")
+    _refuse_constant_loads(model, "a potential", "")
     closed = ch.left is End.RING or (ch.left is End.WALL and ch.right is End.WALL)
     if tension != 0 and not (closed and not tension.has(model.i)):
         raise SceneError(file, key, f"V'(0) = {sp.sstr(tension)} is not 0: the springs are pre-stressed at rest, "

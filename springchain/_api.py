@@ -285,6 +285,10 @@ def modes(scene: str | Path | Scene) -> Modes:
     sc = load(scene)
     with phase(f"deriving {sc.name!r}"):
         d = derive(sc)
+    if sc.chain is not None:
+        from .derive.chain import check_modes_apply
+
+        check_modes_apply(d.model)  # a cubic chain under a constant load: one line
     return Modes(sc, d.model, d.modes)
 
 

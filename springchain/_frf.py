@@ -9,6 +9,7 @@ import math
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from ._modules import check_linear_outputs
 from ._defaults import DEFAULT_OUT
 from .derive.scene import Scene
 
@@ -240,6 +241,7 @@ def frf(scene: str | Path | Scene, input, output, omega_min: float | None = None
     from .numeric.frf.response import frequency_response
 
     sc = load(scene)
+    check_linear_outputs(sc)  # a cubic [chain] under a constant load: one line
     i, o = mass_index(sc, input, "input"), mass_index(sc, output, "output")
     lo, hi = _check_omega(omega_min, "omega_min"), _check_omega(omega_max, "omega_max")
     if isinstance(points, bool) or not isinstance(points, int) or not 2 <= points <= MAX_POINTS:

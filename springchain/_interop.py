@@ -12,6 +12,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ._modules import check_linear_outputs
 from .derive.scene import Scene
 
 FORMS = ("scipy", "control", "matrices")
@@ -133,6 +134,7 @@ def state_space(scene: str | Path | Scene, inputs, outputs, *, form: str | None 
     if form is not None and form not in FORMS:
         raise RunRefused(f"form {form!r}; accepted: {', '.join(FORMS)}", quantity="form")
     sc = load(scene)
+    check_linear_outputs(sc)  # a cubic [chain] under a constant load: one line
     form = form or ("matrices" if sc.chain is not None else "scipy")
     ins, outs = _inputs(sc, inputs), _outputs(sc, outputs)
     if sparse is None:

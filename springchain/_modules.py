@@ -31,6 +31,17 @@ def derive(scene: Scene):
     return _derive(scene, bundled=is_bundled(scene.file))
 
 
+def check_linear_outputs(scene: Scene) -> None:
+    """Refuse in one line the outputs of the linearisation (modes, frf, rsa, state space, sensitivities)
+    of a cubic ``[chain]`` under a constant load (:func:`springchain.derive.chain.check_linear_outputs`);
+    SymPy is imported only for such chains."""
+    if scene.chain is None or scene.chain.k3 is None:
+        return
+    from .derive.chain import check_linear_outputs as check  # SymPy (~0.5 s): only for cubic chains
+
+    check(scene)
+
+
 def generated_dir() -> Path:
     """The folder of the checked-in generated modules (``springchain.generated``)."""
     from . import generated

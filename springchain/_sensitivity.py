@@ -11,6 +11,7 @@ import math
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from ._modules import check_linear_outputs
 from ._scenes import load
 from .derive.errors import SceneError, show
 from .derive.scene import Scene
@@ -303,6 +304,7 @@ def sensitivities(scene: str | Path | Scene, parameters=None, modes=None) -> Sen
     import numpy as np
 
     sc = load(scene)
+    check_linear_outputs(sc)  # a cubic [chain] under a constant load: one line
     setup = Setup(sc, parameters)
     wanted = None
     if modes is not None:

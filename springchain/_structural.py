@@ -14,6 +14,7 @@ import math
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from ._modules import check_linear_outputs
 from .derive.errors import SceneError
 from .derive.scene import Scene
 
@@ -395,6 +396,7 @@ def rsa(scene, spectrum, combine: str = "cqc") -> RSA:
     if combine not in {c.value for c in Combination}:
         raise RunRefused(f"combine {combine!r}: accepted: 'srss' or 'cqc'", quantity="combine")
     sc = load(scene)
+    check_linear_outputs(sc)  # a cubic [chain] under a constant load: one line
     system, _ = _system(sc)
     modes = ModalProperties.from_system(system)
     notes = []
