@@ -109,7 +109,9 @@ def refine_small(A: np.ndarray, lam: np.ndarray, V: np.ndarray, threshold: float
     import mpmath
 
     size = A.shape[0]
-    lam, V = lam.copy(), V.copy()
+    # complex copies: LAPACK returns real arrays when every eigenvalue is real (a free mass with a
+    # dashpot to the wall: λ = 0 and −c/m), and a refined pair is stored as complex
+    lam, V = np.array(lam, dtype=complex), np.array(V, dtype=complex)
     with mpmath.workdps(MP_DIGITS):
         Am = mpmath.matrix(A.tolist())
         for j in slow:  # a loop over the few slow eigenpairs
