@@ -513,7 +513,7 @@ rayleigh_targets = {zeta = [0.05, 0.05], modes = [1, 2]}
 '''), outputs=("cli",), cli=("modes", "{scene}", "--json"), timeout=20.0,
          new="'springchain modes --json' hangs (> 80 s; stack: sympy radsimp in derive/rayleigh_targets.py "
              "closed_form) on three masses with linear springs, Rayleigh damping from targets and parameters that "
-             "are generic floats (the same scene with round values: 3 s). Found by the generator"),
+             "are generic floats (the same scene with round values: 3 s). Found by the generator", failing=False),
     Case("N15_overdamped_chain_zeta", scene("odc", {"m": 1.0, "k": 1.0, "c": 3.0}, '''
 [chain]
 n = 3
