@@ -60,6 +60,14 @@ class Caps:
     sensitivity_simplify_ops: int = 60
     #: Sensitivities: largest shape component (ops) whose derivative is sought in closed form.
     sensitivity_shape_ops: int = 40
+    #: Rayleigh targets (equal ζ): largest α = 2ζω_aω_b/(ω_a + ω_b) (ops, before simplifying) whose
+    #: denominator SymPy's ``radsimp`` rationalises (3 masses with closed-form ω: 85-89; 2 general masses
+    #: of 5 symbols: 257, 1.5 s).
+    rayleigh_ops: int = 300
+    #: Rayleigh targets (equal ζ): deepest nesting of radicals with symbols in ω_a + ω_b that ``radsimp``
+    #: is asked to rationalise (ω = √ω² of a quadratic's root: 2; a spring k = "sqrt(k)" inside that root:
+    #: 3, where each squaring multiplies sums of nested radicals: > 80 s on 3 masses of 5 generic floats).
+    rayleigh_radical_depth: int = 2
     #: Numeric route: most masses whose fallback modes come from mpmath (beyond: spring-factor SVD).
     mpmath_modes: int = 16
     #: Printing: longest closed form a text report prints (characters, about two terminal lines).

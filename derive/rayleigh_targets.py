@@ -12,7 +12,8 @@ and, for equal targets ζ_a = ζ_b = ζ, the cancellation-free α = 2ζ ω_a ω_
 The scene's ``[damping] rayleigh_targets = {zeta = [ζ_a, ζ_b], modes = [a, b]}`` enters the
 model as two symbols α_R, β_R (:data:`ALPHA`, :data:`BETA`): the derivation reads
 ``- α_R*m*v_floor1 - β_R*(...)``, and their definition is printed beside it in closed form (from
-the closed-form ω, where it exists) with the values. The values are computed on the accurate
+the closed-form ω, where it exists; for equal targets, whose α and β are rationalised, within the work
+caps :attr:`~derive.caps.Caps.rayleigh_ops` and :attr:`~derive.caps.Caps.rayleigh_radical_depth`) with the values. The values are computed on the accurate
 route (the dynamical matrix assembled exactly, ``mpmath.eigsy`` at increasing precision until
 α, β are settled to float64; past :data:`~derive.accurate.MAX_MPMATH_MODES` masses the
 spring-factor SVD). The generated module computes them at call time from its own accurate
@@ -32,7 +33,9 @@ from .printing import closed, latex
 
 from .accurate import (MAX_DPS, MAX_MPMATH_MODES, eig_dynamical, certified, dynamical_bound, exact_values,
                        omega2_value, value)
+from .caps import CAPS
 from .errors import SceneError
+from .work import ops, radical_depth
 from .model_cache import cached_on
 
 #: The model's symbols for the coefficients (non-ASCII: no parameter can take these names).
@@ -186,7 +189,13 @@ def closed_form(model, mode_set, zeta_targets, modes) -> tuple[sp.Expr, sp.Expr]
     za, zb = zeta_targets
     equal = sp.simplify(za - zb) == 0
     alpha, beta = formula(wa, wb, za, zb, equal)
-    return sp.factor(sp.radsimp(alpha)) if equal else alpha, sp.factor(sp.radsimp(beta)) if equal else beta
+    if not equal:
+        return alpha, beta
+    # rationalising ω_a + ω_b squares sums of nested radicals: a work cap on its size, never a clock
+    # (past it the values come from the accurate route alone, and the report's closed-form line says so)
+    if ops(alpha) > CAPS.rayleigh_ops or radical_depth(wa + wb) > CAPS.rayleigh_radical_depth:
+        return None
+    return sp.factor(sp.radsimp(alpha)), sp.factor(sp.radsimp(beta))
 
 
 def fit(model, mode_set, zeta_targets, modes) -> RayleighFit:

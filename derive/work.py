@@ -70,6 +70,19 @@ def ops(expr) -> int:
     return int(sp.count_ops(expr))
 
 
+def radical_depth(expr) -> int:
+    """Deepest nesting of radicals (powers with a non-integer rational exponent) whose base has symbols:
+    ``sqrt(a + sqrt(b))`` has 2, ``sqrt(a + sqrt(b + sqrt(c)))`` 3, ``sqrt(2)*x`` 0 (a size measured before
+    simplifying)."""
+    if not getattr(expr, "args", ()):
+        return 0
+    inner = max(radical_depth(a) for a in expr.args)
+    if (isinstance(expr, sp.Pow) and expr.exp.is_Rational and not expr.exp.is_Integer
+            and expr.base.free_symbols):
+        return inner + 1
+    return inner
+
+
 #: Most decimal digits (numerator and denominator) of an exact number in the matrices whose
 #: characteristic polynomial is factored: literals such as ``2e-70`` are exact rationals, and their
 #: products in a determinant run to hundreds of digits, where factoring takes seconds and the closed
@@ -134,4 +147,4 @@ def check(size: int, cap: int) -> None:
         raise WorkCapExceeded(f"{size} > {cap}")
 
 
-__all__ = ["WorkCapExceeded", "NumbersTooLong", "MAX_NUMBER_DIGITS", "number_digits", "SymbolicNumbersFailed", "sympy_numbers", "MAX_DET_TERMS", "det_terms_bound", "monomials", "ops", "check"]
+__all__ = ["WorkCapExceeded", "NumbersTooLong", "MAX_NUMBER_DIGITS", "number_digits", "SymbolicNumbersFailed", "sympy_numbers", "MAX_DET_TERMS", "det_terms_bound", "monomials", "ops", "radical_depth", "check"]

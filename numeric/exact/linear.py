@@ -111,7 +111,9 @@ def refine_small(A: np.ndarray, lam: np.ndarray, V: np.ndarray, threshold: float
     import mpmath
 
     size = A.shape[0]
-    lam, V = lam.copy(), V.copy()
+    # complex copies: LAPACK returns real arrays when every eigenvalue is real (a free mass with a
+    # dashpot to the wall: λ = 0 and −c/m), and a refined pair is stored as complex
+    lam, V = np.array(lam, dtype=complex), np.array(V, dtype=complex)
     with mpmath.workdps(MP_DIGITS):
         Am = mpmath.matrix(A.tolist())
         for j in slow:  # a loop over the few slow eigenpairs
@@ -400,6 +402,8 @@ class AugmentedLinear:
         """:meth:`states` on a simulation's grid: the uniform part propagated between anchors, a shorter
         last interval on its own."""
         t = np.asarray(t, dtype=float)
+        if self.inputs:  # stepped over the union of t and the tables' rows from t = 0: any grid at once
+            return self.states(x0, v0, t)
         if t.shape[0] < 3 or abs((t[-1] - t[-2]) - (t[1] - t[0])) <= 1e-12 * abs(t[1] - t[0]):
             return self.states(x0, v0, t, float(t[1] - t[0]) if t.shape[0] > 1 else None)
         Z, D = self.states(x0, v0, t[:-1], float(t[1] - t[0]))
@@ -508,19 +512,21 @@ class AugmentedLinear:
         return np.array(right), np.array(left)
 
     def _solve_inputs(self, x0: np.ndarray, v0: np.ndarray, t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """The states ``(Z, D)`` at ``t`` of the first-order-hold solution on the union of ``t`` and the
-        tables' rows (see module docstring)."""
+        """The states ``(Z, D)`` at ``t`` (times ≥ 0, ascending) of the first-order-hold solution on the
+        union of 0, ``t`` and the tables' rows (see module docstring): stepped from the initial state at
+        t = 0 whatever the first requested time."""
         size, m = self.A.shape[0], len(self.inputs)
         z0 = self._initial(x0, v0)
         B = np.zeros((size, m))
         for j, (_, _, direction) in enumerate(self.inputs):
             B[self.n:2 * self.n, j] = direction
         tol = SNAP * max(1.0, float(np.max(np.abs(t))))
+        times = np.union1d([0.0], t)  # the initial state is at t = 0
         knots = np.concatenate([tt for tt, _, _ in self.inputs])
-        knots = knots[(knots > t[0]) & (knots < t[-1])]
-        near = np.clip(np.searchsorted(t, knots), 1, t.shape[0] - 1)
-        gap = np.minimum(np.abs(knots - t[near - 1]), np.abs(t[near] - knots))
-        grid = np.union1d(t, knots[gap > tol])  # a row within rounding of an output time is that time
+        knots = knots[(knots > times[0]) & (knots < times[-1])]
+        near = np.clip(np.searchsorted(times, knots), 1, max(times.shape[0] - 1, 1))
+        gap = np.minimum(np.abs(knots - times[near - 1]), np.abs(times[np.minimum(near, times.shape[0] - 1)] - knots))
+        grid = np.union1d(times, knots[gap > tol])  # a row within rounding of an output time is that time
         out = np.searchsorted(grid, t)  # rows of grid that are output times
         flows: dict[float, np.ndarray] = {}
         Z = np.empty((grid.shape[0], size))  # the state and its change z − z(0) (see _physical)

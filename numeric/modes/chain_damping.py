@@ -17,8 +17,9 @@ masses, as :mod:`derive.damping_report` does for ``[masses]`` scenes past mpmath
 all but confined away from every dashpot at a contrast of 1e10, ζ = 1e-34; or a light mode beside a
 heavy dashpot, whose ε‖G‖ is large), a chain of at most :data:`MP_MAX` masses takes ζ from the state
 matrix's eigenvalues in mpmath, settled by doubling the digits; what stays unsettled, or a longer
-chain's, is NaN (said, not printed); rigid modes have ζ None; an overdamped pair (two real eigenvalues r₁, r₂)
-gives ω_n = √(r₁r₂), ζ = −(r₁ + r₂)/(2ω_n), ω_d = 0. Longer chains are the caller's to refuse
+chain's, is NaN (said, not printed); rigid modes have ζ None; an overdamped pair (two real eigenvalues r₁, r₂
+of one mode: the one that carries most of their eigenvectors, :func:`_real_pairs`) gives ω_n = √(r₁r₂),
+ζ = −(r₁ + r₂)/(2ω_n), ω_d = 0. Longer chains are the caller's to refuse
 (a Rayleigh-only chain has ζ_j = α/(2ω_j) + βω_j/2 in closed form at any length).
 """
 
@@ -77,7 +78,7 @@ def damped_rows(masses: np.ndarray, spring_ends: np.ndarray, stiffness: np.ndarr
         lam, V = scipy.linalg.eig(A)
         refined = A.shape[0] <= REFINE_MAX_STATES
         if refined:
-            lam, _ = refine_small(A, lam, V.astype(complex), -1.0)  # (all-real λ: V comes real)
+            lam, V = refine_small(A, lam, V.astype(complex), -1.0)  # (all-real λ: V comes real)
         # oscillatory: relative to |λ| (a light mode's λ ~ 1e-11 beside λ ~ 1 is no zero)
         osc = sorted((v for v in lam if v.imag > 1e-12 * abs(v)), key=abs)
         # G's entries are float64 products of the modes (normwise accurate): Re λ is known to about
@@ -87,19 +88,57 @@ def damped_rows(masses: np.ndarray, spring_ends: np.ndarray, stiffness: np.ndarr
         floor = RESOLVED * _EPS * norm
         rows += [(float(abs(v)), float(-v.real / abs(v)) if -v.real > floor else float("nan"), float(v.imag))
                  for v in osc]
-        real = sorted((float(v.real) for v in lam if abs(v.imag) <= 1e-12 * abs(v)), key=abs)
-        zeros = int(np.count_nonzero(w[kept] == 0))  # a damped rigid mode: λ = 0 (by structure) and -g
-        rows += [(0.0, None, 0.0)] * zeros
-        rest = sorted(real[zeros:], key=lambda r: -r)
-        while len(rest) >= 2:  # overdamped: real pairs, slowest with fastest
-            r1, r2 = rest.pop(0), rest.pop(-1)
-            wn = float(np.sqrt(r1 * r2)) if r1 * r2 > 0 else 0.0  # (a pair with a rounding zero: no ω_n)
-            rows.append((wn, float(-(r1 + r2) / (2 * wn)), 0.0) if wn > 0 else (0.0, None, 0.0))
+        real_at = np.flatnonzero(np.abs(lam.imag) <= 1e-12 * np.abs(lam))
+        pairs = _real_pairs(lam.real[real_at], V[:, real_at], m)
+        if pairs is not None:  # each mode's own two real eigenvalues (by the eigenvectors' modal weights)
+            for j, (r1, r2) in pairs:
+                rows.append(_overdamped_row(r1, r2) if w[kept[j]] > 0 else (0.0, None, 0.0))
+        else:  # modes mixed beyond telling apart: a damped rigid mode takes λ = 0 and −g, then slowest with fastest
+            real = sorted((float(v) for v in lam.real[real_at]), key=abs)
+            zeros = int(np.count_nonzero(w[kept] == 0))
+            rows += [(0.0, None, 0.0)] * zeros
+            rest = sorted(real[zeros:], key=lambda r: -r)
+            while len(rest) >= 2:
+                r1, r2 = rest.pop(0), rest.pop(-1)
+                rows.append(_overdamped_row(r1, r2))
     rows.sort(key=lambda r: r[0])
     rows = rows[:n]
     if el.n <= MP_MAX and any(z is not None and z != z for _, z, _ in rows):
         rows = _settle_unresolved(el, rows)
     return rows
+
+
+def _overdamped_row(r1: float, r2: float) -> tuple:
+    """``(ω_n, ζ, 0)`` of an overdamped pair of real eigenvalues: ω_n = √(r₁r₂), ζ = −(r₁ + r₂)/(2ω_n)
+    (a pair with a rounding zero has no ω_n: a rigid row)."""
+    wn = float(np.sqrt(r1 * r2)) if r1 * r2 > 0 else 0.0
+    return (wn, float(-(r1 + r2) / (2 * wn)), 0.0) if wn > 0 else (0.0, None, 0.0)
+
+
+def _real_pairs(real: np.ndarray, vectors: np.ndarray, m: int) -> list[tuple] | None:
+    """The real eigenvalues of the modal state matrix ``[[0, Ω], [−Ω, −G]]`` (2m states) grouped by mode:
+    ``[(j, (r₁, r₂)), …]`` with j the mode (0 … m−1) whose coordinates ``(ω̂ q_j, q̇_j)`` carry the most
+    of each eigenvector, two per mode (an optimal assignment), or None when some mode gets only one.
+
+    With proportional damping (G diagonal) each eigenvector lies in one mode and the pair is that mode's
+    roots of λ² + g_j λ + ω_j² = 0 exactly; pairing by value (the slowest with the fastest) mixed modes
+    (a chain with C = 3M: the ω² = 1 mode's −0.38 taken with the rigid mode's −3, ζ = 1.58 for 1.5).
+    """
+    if real.shape[0] == 0:
+        return []
+    from scipy.optimize import linear_sum_assignment
+
+    weight = np.abs(vectors[:m]) ** 2 + np.abs(vectors[m:2 * m]) ** 2  # (m, R)
+    weight = weight / np.maximum(np.sum(weight, axis=0), np.finfo(float).tiny)
+    cost = -np.repeat(weight.T, 2, axis=1)  # (R, 2m): two slots per mode
+    rows, cols = linear_sum_assignment(cost)
+    mode_of = {int(r): int(c) // 2 for r, c in zip(rows, cols)}
+    groups: dict[int, list[float]] = {}
+    for r in range(real.shape[0]):
+        groups.setdefault(mode_of[r], []).append(float(real[r]))
+    if any(len(g) != 2 for g in groups.values()):
+        return None
+    return [(j, tuple(g)) for j, g in sorted(groups.items())]
 
 
 def _mp_eigenvalues(el, dps: int) -> list:

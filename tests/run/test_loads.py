@@ -244,6 +244,21 @@ def test_exact_matches_dop853_reference(tmp_path, name):
     assert np.max(np.abs(runs["modal"].v - vr)) <= 1e-8 * np.max(np.abs(vr))
 
 
+@pytest.mark.parametrize("name", ["table-force-damped", "table-force-jumps", "ground-table", "chain-loads"])
+def test_exact_last_frame_off_the_recording_stride_with_tables(tmp_path, name):
+    """Steps not a multiple of record_every: the last frame (t = steps·h, a shorter last interval) is the
+    state there, not the initial state (oracle finding N5: the tables' first-order hold restarted at it)."""
+    path = _case(tmp_path, name)
+    scene, system = scene_and_system(path)
+    steps, every = 400, 7  # 400 = 57·7 + 1
+    run = run_methods(system, scene.x0, scene.v0, scene.dt, steps, ["modal"], record_every=every)["modal"]
+    assert abs(run.t[-1] - steps * scene.dt) <= 1e-12 * steps * scene.dt and run.t[-1] - run.t[-2] < every * scene.dt
+    rhs, n, knots, *_ = reference(path)
+    xr, vr = dop853_piecewise(rhs, n, scene.x0, scene.v0, run.t, knots)
+    assert np.max(np.abs(run.x - xr)) <= 1e-8 * np.max(np.abs(xr))
+    assert np.max(np.abs(run.v - vr)) <= 1e-8 * np.max(np.abs(vr))
+
+
 @pytest.mark.parametrize("name", ["table-force-damped", "ground-expression", "ground-table", "chain-loads",
                                   "chain-gravity"])
 def test_verlet_is_second_order_against_reference(tmp_path, name):

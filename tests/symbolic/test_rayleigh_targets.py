@@ -255,3 +255,63 @@ def test_json_nulls_a_closed_form_past_its_limit_with_a_note(tmp_path, monkeypat
     assert any(n.startswith("damping.rayleigh_coefficients.alpha_expr: closed form of 641 characters") for n in notes)
     assert any(n.startswith("modes[0].effective_mass_expr") for n in notes)
     assert "too long for --json as well" in m.to_text()
+
+
+NESTED = """name = "v3"
+[parameters]
+K = 4.809548920040937
+m = 0.040160135993826354
+k = 13.948993900564439
+E = 0.3578227611390599
+F0 = 18.974974538670008
+[masses]
+atom = "K"
+q = "0.5*K"
+floor2 = "m*K"
+[[springs]]
+between = ["wall", "atom"]
+k = "k*K"
+[[springs]]
+between = ["q", "floor2"]
+k = "F0"
+[[springs]]
+between = ["wall", "floor2"]
+k = "sqrt(k)"
+[[springs]]
+between = ["floor2", "wall"]
+k = "0.5*E"
+[damping]
+rayleigh_targets = {zeta = [0.05, 0.05], modes = [1, 2]}
+"""
+
+
+@pytest.mark.timeout(120, method="thread")
+def test_nested_radicals_past_the_cap_give_values_only(tmp_path):
+    """Equal targets where ω_a + ω_b nests radicals three deep (a spring k = "sqrt(k)" inside a quadratic's
+    root): rationalising it ran > 80 s (oracle finding N14). Past CAPS.rayleigh_radical_depth α_R, β_R
+    are values from the accurate route (against the 2 x 2 solve here), and the closed-form line says so."""
+    from springchain.derive.caps import CAPS
+
+    assert CAPS.rayleigh_radical_depth == 2
+    m = sc.modes(str(_write(tmp_path, "", "v3.toml", NESTED)))
+    data = m.to_json()
+    fit = data["damping"]["rayleigh_coefficients"]
+    assert fit["alpha_expr"] is None and fit["beta_expr"] is None
+    K, mm, k, E, F0 = 4.809548920040937, 0.040160135993826354, 13.948993900564439, 0.3578227611390599, \
+        18.974974538670008
+    alpha, beta, w = _reference([K, 0.5 * K, mm * K],
+                                [(-1, 0, k * K), (1, 2, F0), (-1, 2, float(mpmath.sqrt(k))), (2, -1, 0.5 * E)],
+                                "0.05", "0.05", 1, 2)
+    assert fit["alpha"] == pytest.approx(alpha, rel=1e-13)
+    assert fit["beta"] == pytest.approx(beta, rel=1e-13)
+    assert "values only" in m.to_text().split("closed form: ")[-1].split("\n")[0] and "Rayleigh α_R" in m.to_text()
+
+
+def test_radical_depth_measures_nesting_of_symbolic_radicals():
+    from springchain.derive.work import radical_depth
+
+    a, b, c = sp.symbols("a b c", positive=True)
+    assert radical_depth(sp.sqrt(2) * a + 1) == 0
+    assert radical_depth(sp.sqrt(a) + sp.sqrt(b)) == 1
+    assert radical_depth(sp.sqrt(a + sp.sqrt(b))) == 2
+    assert radical_depth(sp.sqrt(a + sp.sqrt(b + sp.sqrt(c))) + a) == 3
