@@ -16,9 +16,11 @@ play, the rounding of the extensions formed from x (:meth:`PathProblem.floor`), 
 from __future__ import annotations
 
 import functools
+import warnings
 from dataclasses import dataclass
 
 import mpmath
+
 import numpy as np
 import scipy.linalg
 import sympy as sp
@@ -640,7 +642,8 @@ def _positive(problem: PathProblem, x: np.ndarray, ill: bool) -> bool:
 
 def _lu(problem: PathProblem, x: np.ndarray):
     """LU factors of the float64 augmented Hessian at x, or None where it is singular or not finite."""
-    with np.errstate(all="ignore"):
+    with np.errstate(all="ignore"), warnings.catch_warnings():
+        warnings.simplefilter("ignore", scipy.linalg.LinAlgWarning)  # singular: handled below, never shown
         try:
             lu = scipy.linalg.lu_factor(problem.augmented(problem.hessian(np.asarray(x, dtype=float))),
                                         check_finite=True)
