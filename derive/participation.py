@@ -17,6 +17,12 @@ that the spring-factor SVD of the generated modules with compensated sums. Close
 the closed-form shapes, modes of multiplicity one) are given where they agree with the values
 to 1e-12 and stay readable. Inside a repeated ω the basis is rotated so that one shape carries
 the whole participation of the eigenspace and the others none.
+
+Structural zeros are exact (0.0, never rounding noise such as 1e-74): each piece of the spring
+graph is diagonalised on its own, and an elastic mode of a free piece (no spring to a wall) has
+Γ = 0 exactly — its momentum, 1ᵀM_pφ_p = 1ᵀK_pφ_p/ω² = 0, also inside a repeated ω whose basis
+mixes pieces; a free piece's rigid mode is 1_p/√M_p; the shapes of a rotated repeated ω other than
+the first have Γ = 0 exactly (see :func:`_values_mp`).
 """
 
 from __future__ import annotations
@@ -142,8 +148,8 @@ def signed_as_printed(p: Participation, records: list[dict]) -> Participation:
         if rec.get("multiplicity", 1) != 1 or not printed or len(printed) != len(shapes[j]):
             continue
         if math.fsum(a * b for a, b in zip(printed, shapes[j])) < 0:
-            shapes[j] = tuple(-c for c in shapes[j])
-            gamma[j] = -gamma[j]
+            shapes[j] = tuple(-c + 0.0 for c in shapes[j])
+            gamma[j] = -gamma[j] + 0.0  # a structural 0 stays 0, never -0
             g_expr[j] = None if g_expr[j] is None else -g_expr[j]
             s_expr[j] = None if s_expr[j] is None else tuple(-c for c in s_expr[j])
     return replace(p, shapes=tuple(shapes), gamma=tuple(gamma), gamma_expr=tuple(g_expr),
@@ -162,24 +168,74 @@ def chain_section(model, p: Participation | None, records: list[dict]) -> tuple[
 
 
 # -- values -------------------------------------------------------------------------------------
+def _pieces(model: Model) -> list[tuple[list[int], bool]]:
+    """Every connected piece of the spring graph as ``(mass indices, free)``; ``free``: no spring to a wall."""
+    free = {tuple(sorted(c)) for c in model.free_components}
+    return [(list(c), tuple(sorted(c)) in free) for c in model.components]
+
+
+def _piece_springs(model: Model, piece: list[int], subs) -> list:
+    """The springs of ``piece`` with local mass indices (a wall stays -1), exact values."""
+    local = {g: i for i, g in enumerate(piece)}
+    out = []
+    for a, b, k, _, _ in model.springs:
+        if a in local or b in local:
+            out.append((local.get(a, -1), local.get(b, -1), k.xreplace(subs)))
+    return out
+
+
 def _values_mp(model: Model, dps: int, n_rigid: int, bound):
     """(ω², Γ, shapes) at working precision ``dps`` (mpmath), repeated ω rotated (see module docstring);
-    ``bound`` bounds ‖D‖ (:func:`accurate.dynamical_bound`), for telling a repeated ω from a close pair."""
+    ``bound`` bounds ‖D‖ (:func:`accurate.dynamical_bound`), for telling a repeated ω from a close pair.
+
+    Structural zeros (README: a quantity that is exactly 0 prints 0). K and M are block diagonal over the
+    pieces of the spring graph, so each piece is diagonalised on its own (its modes are exactly 0 on every
+    other mass) and Γⱼ = Σ over pieces of φⱼᵀ M_p 1_p:
+
+    - a free piece (no spring to a wall) has K_p 1_p = 0, so for any ω² > 0 eigenvector restricted to it,
+      ω² 1ᵀM_pφ_p = 1ᵀK_pφ_p = 0: its contribution to Γ is exactly 0 for every elastic mode. This holds for
+      any basis of a repeated ω, one mixing pieces included, because (K − ω²M)φ = 0 holds piece by piece;
+    - its rigid mode is exactly 1_p/√M_p (ω² = 0, not eigsy's), with Γ = √M_p (M_p the piece's mass);
+    - a walled piece's Γ is Σ mᵢφᵢ over the piece at ``dps`` digits.
+
+    Inside a repeated ω (the rigid modes of several free pieces, or equal ω on several pieces) the first
+    vector is the projection of r onto the eigenspace, normalised: its Γ is the norm of that projection,
+    √Σ Γ², and every other vector is M-orthogonal to it, so its Γ is exactly 0. With the rigid modes this
+    gives the first rigid shape 1_F/√M_F (F: all free masses), Γ = √M_F, and Γ = 0 for the others.
+    """
     subs = exact_values(model.params, model.scene.parameters)
     n = model.scene.n
     masses = [m.xreplace(subs) for m in model.masses]
-    springs = [(a, b, k.xreplace(subs)) for a, b, k, _, _ in model.springs]
-    w2, shapes = eig_dynamical(masses, springs, n, dps)
     with mpmath.workdps(dps):
-        w2 = [mpmath.mpf(0) if j < n_rigid else w for j, w in enumerate(w2)]
         m = [mpmath.mpf(x.p) / x.q if isinstance(x, sp.Rational) else mpmath.mpf(str(sp.N(x, dps + 10)))
              for x in masses]
-        phis = [list(s) for s in shapes]
+        rigid, elastic = [], []  # (ω², shape on all masses, Γ)
+        for piece, free in _pieces(model):
+            w2p, shp = eig_dynamical([masses[i] for i in piece], _piece_springs(model, piece, subs), len(piece), dps)
+            modes = list(zip(w2p, shp))
+            if free:
+                # the rigid mode by structure; eigsy's lowest value (its rounding of 0) is dropped
+                mp_ = mpmath.fsum(m[i] for i in piece)
+                phi = [mpmath.mpf(0)] * n
+                for i in piece:
+                    phi[i] = 1 / mpmath.sqrt(mp_)
+                rigid.append((mpmath.mpf(0), phi, mpmath.sqrt(mp_)))
+                modes = modes[1:]
+            for w, s in modes:
+                phi = [mpmath.mpf(0)] * n
+                for i, c in zip(piece, s):
+                    phi[i] = c
+                g = mpmath.mpf(0) if free else mpmath.fsum(m[i] * phi[i] for i in piece)
+                elastic.append((w, phi, g))
+        elastic.sort(key=lambda t: t[0])
+        w2 = [t[0] for t in rigid + elastic]
+        phis = [t[1] for t in rigid + elastic]
+        gamma = [t[2] for t in rigid + elastic]
         for cl in clusters(w2, n_rigid, bound, dps):
             if len(cl) < 2:
                 continue
             # rotate: first vector along the projection of r onto the eigenspace, the rest M-orthogonal to it
-            g = [mpmath.fsum(m[i] * phis[j][i] for i in range(n)) for j in cl]
+            g = [gamma[j] for j in cl]
             norm = mpmath.sqrt(mpmath.fsum(x * x for x in g))
             if norm == 0:
                 continue
@@ -195,7 +251,7 @@ def _values_mp(model: Model, dps: int, n_rigid: int, bound):
                     basis.append([x / nv for x in v])
             for a, j in enumerate(cl):
                 phis[j] = basis[a]
-        gamma = [mpmath.fsum(m[i] * phi[i] for i in range(n)) for phi in phis]
+                gamma[j] = norm if a == 0 else mpmath.mpf(0)
         return w2, gamma, phis, m
 
 
@@ -228,20 +284,64 @@ def _accurate_values(model: Model):
 
 
 def _spring_factor_values(model: Model):
+    """(ω², Γ, shapes, total mass) from the spring-factor SVD, piece by piece (structural zeros as in
+    :func:`_values_mp`: Γ = 0 exactly for the elastic modes of a free piece, √M_p for its rigid mode;
+    each mode exactly 0 off its piece). Rigid modes first (one per free piece), then ascending ω²."""
     import numpy as np
 
     from .spring_factor import accurate_modes_function
 
     subs = exact_values(model.params, model.scene.parameters)
     masses = [float(m.xreplace(subs)) for m in model.masses]
-    ends = tuple((a, b) for a, b, *_ in model.springs)
-    ks = [float(k.xreplace(subs)) for _, _, k, _, _ in model.springs]
-    run = accurate_modes_function(len(masses), ends, tuple(tuple(sorted(p)) for p in model.free_components))
-    w2, shapes = run(masses, ks)  # M-orthonormal physical shapes, columns
-    shapes = np.asarray(shapes, dtype=float)
-    gamma = [math.fsum(mi * c for mi, c in zip(masses, shapes[:, j])) for j in range(shapes.shape[1])]
-    return ([float(w) for w in w2], gamma, [shapes[:, j].tolist() for j in range(shapes.shape[1])],
-            math.fsum(masses))
+    n = len(masses)
+    rigid, elastic = [], []
+    for piece, free in _pieces(model):
+        springs = _piece_springs(model, piece, subs)
+        run = accurate_modes_function(len(piece), tuple((a, b) for a, b, _ in springs),
+                                      (tuple(range(len(piece))),) if free else ())
+        w2p, shp = run([masses[i] for i in piece], [float(k) for _, _, k in springs])
+        shp = np.asarray(shp, dtype=float)
+        for j in range(shp.shape[1]):
+            phi = [0.0] * n
+            for i, c in zip(piece, shp[:, j]):
+                phi[i] = float(c)
+            if free and j == 0:  # RIGID_PIECES first: ω² exactly 0
+                rigid.append((0.0, phi, math.sqrt(math.fsum(masses[i] for i in piece))))
+            else:
+                g = 0.0 if free else math.fsum(masses[i] * phi[i] for i in piece)
+                elastic.append((float(w2p[j]), phi, g))
+    elastic.sort(key=lambda t: t[0])
+    modes = _rotated_rigid(rigid, masses) + elastic
+    return [t[0] for t in modes], [t[2] for t in modes], [t[1] for t in modes], math.fsum(masses)
+
+
+def _rotated_rigid(rigid: list, masses: list) -> list:
+    """The rigid modes of several free pieces rotated as a repeated ω (module docstring): the first
+    1_F/√M_F with Γ = √M_F, then a weighted Helmert basis (amplitude √(M_k/(S_{k-1}S_k)) on pieces 1…k−1
+    and −S_{k-1} times that over M_k on piece k, S_k the mass of pieces 1…k): M-orthonormal, no
+    subtraction, and each M-orthogonal to 1_F, so Γ = 0 exactly."""
+    if len(rigid) < 2:
+        return rigid
+    n = len(masses)
+    piece = [[i for i in range(n) if phi[i] != 0.0] for _, phi, _ in rigid]
+    mass = [math.fsum(masses[i] for i in p) for p in piece]
+    total = math.fsum(mass)
+    first = [0.0] * n
+    for p in piece:
+        for i in p:
+            first[i] = 1.0 / math.sqrt(total)
+    out = [(0.0, first, math.sqrt(total))]
+    for k in range(1, len(piece)):
+        below, upto = math.fsum(mass[:k]), math.fsum(mass[: k + 1])
+        c = math.sqrt(mass[k] / below / upto)
+        phi = [0.0] * n
+        for p in piece[:k]:
+            for i in p:
+                phi[i] = c
+        for i in piece[k]:
+            phi[i] = -c * (below / mass[k])
+        out.append((0.0, phi, 0.0))
+    return out
 
 
 # -- closed forms -------------------------------------------------------------------------------
@@ -306,8 +406,8 @@ def _participation(model: Model, modes: ModeSet | None) -> Participation:
             printed = [value(c, subs) if not isinstance(c, float) else c for c in shape]
             dot = math.fsum(float(mi) * p * q for mi, p, q in zip(mass_values, printed, phis[j]))
             if dot < 0:
-                phis[j] = [-c for c in phis[j]]
-                gamma[j] = -gamma[j]
+                phis[j] = [-c + 0.0 for c in phis[j]]
+                gamma[j] = -gamma[j] + 0.0  # + 0.0: a structural 0 stays 0, never -0
     g_expr, m_expr, s_expr = _closed_forms(model, modes, records) if len(records) == n else ([None] * n,) * 3
     # keep a closed form only where it agrees with the accurate value
     for j in range(n):
