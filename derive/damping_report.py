@@ -15,7 +15,10 @@ the spring-factor route, :func:`_rows_float`):
 ζⱼ = Gⱼⱼ/(2ωⱼ), ω_d = √(ω² − Gⱼⱼ²/4). Closed forms: Rayleigh ζⱼ = α/(2ωⱼ) + βωⱼ/2, modal
 the given ratio, dashpots φⱼᵀCφⱼ/(2ωⱼ φⱼᵀMφⱼ) from the closed-form shapes; their sum when
 several are declared. Otherwise the **complex modes** are the eigenvalues
-λ = −σ ± iω_d of the state-space matrix [[0, I], [−diag(ω²), −G]] (ω_n = |λ|, ζ = σ/ω_n).
+λ = −σ ± iω_d of the state-space matrix [[0, I], [−diag(ω²), −G]] (ω_n = |λ|, ζ = σ/ω_n); an overdamped
+mode has two real eigenvalues r₁, r₂ (ω_n = √(r₁r₂), ζ = −(r₁ + r₂)/(2ω_n), ω_d = 0), grouped by the undamped
+mode that carries most of their eigenvectors, two per mode (:func:`_real_pairs`; a rigid mode's λ = 0 and −g
+make a rigid row).
 """
 
 from __future__ import annotations
@@ -256,10 +259,11 @@ def _value_pairs(real: list, tiny) -> list[tuple]:
 
 def _mp_weights(real: list, w2: list, G: list, dps: int):
     """The modal weights of the eigenvectors of the real eigenvalues r (rows of an (R, m) float array): the
-    null space of Q(r) = r² I + r G + diag(ω²) (symmetric, in the M-orthonormal modal coordinates, so
-    q = ΦᵀMx) by ``mpmath.eigsy`` at ``dps`` digits — the eigenvectors of its eigenvalues within
-    10^(−dps/2) of the scale r² + |r|‖G‖ + max ω² (at least the smallest one) — and each mode's share
-    Σ q_j² of it (1 in all; a null space of two dimensions, two modes with the same root, shares 2)."""
+    null vector of Q(r) = r² I + r G + diag(ω²) (symmetric, in the M-orthonormal modal coordinates, so
+    q = ΦᵀMx) and each mode's share q_j² of it. By two steps of inverse iteration at ``dps`` digits
+    (``mpmath.lu_solve`` at r shifted by 10^(−dps/4), one factorisation); where that elimination finds Q
+    singular, ``mpmath.eigsy``: the eigenvectors of the eigenvalues within 10^(−dps/2) of the scale
+    r² + |r|‖G‖ + max ω² (at least the smallest one), a null space of two dimensions sharing 2."""
     import numpy as np
 
     m = len(w2)
@@ -267,10 +271,24 @@ def _mp_weights(real: list, w2: list, G: list, dps: int):
     with mpmath.workdps(dps):
         gnorm = max([sum(abs(G[i][j]) for j in range(m)) for i in range(m)] + [mpmath.mpf(0)])
         wmax = max([abs(w) for w in w2] + [mpmath.mpf(0)])
+        big = max([abs(r) for r in real] + [mpmath.mpf(1)])
+
+        def Q(r):
+            return mpmath.matrix([[r * G[i][j] + ((r * r + w2[i]) if i == j else 0) for j in range(m)]
+                                  for i in range(m)])
+
         for k, r in enumerate(real):
-            Q = mpmath.matrix([[r * G[i][j] + ((r * r + w2[i]) if i == j else 0) for j in range(m)]
-                               for i in range(m)])
-            E, U = mpmath.eigsy(Q)
+            try:
+                A = Q(r + mpmath.mpf(10) ** (-(dps // 4)) * (abs(r) or big))
+                x = mpmath.matrix([1 + mpmath.mpf(i) / (m + 1) for i in range(m)])  # (fixed, not special)
+                for _ in range(2):
+                    x = mpmath.lu_solve(A, x)
+                    x /= mpmath.norm(x)
+                out[k] = [float(x[j] ** 2) for j in range(m)]
+                continue
+            except ZeroDivisionError:  # Q singular at this precision: the null space from eigsy
+                pass
+            E, U = mpmath.eigsy(Q(r))
             cut = mpmath.mpf(10) ** (-(dps // 2)) * (r * r + abs(r) * gnorm + wmax)
             low = min(range(m), key=lambda i: abs(E[i]))
             for i in range(m):
