@@ -15,7 +15,10 @@ the spring-factor route, :func:`_rows_float`):
 ζⱼ = Gⱼⱼ/(2ωⱼ), ω_d = √(ω² − Gⱼⱼ²/4). Closed forms: Rayleigh ζⱼ = α/(2ωⱼ) + βωⱼ/2, modal
 the given ratio, dashpots φⱼᵀCφⱼ/(2ωⱼ φⱼᵀMφⱼ) from the closed-form shapes; their sum when
 several are declared. Otherwise the **complex modes** are the eigenvalues
-λ = −σ ± iω_d of the state-space matrix [[0, I], [−diag(ω²), −G]] (ω_n = |λ|, ζ = σ/ω_n).
+λ = −σ ± iω_d of the state-space matrix [[0, I], [−diag(ω²), −G]] (ω_n = |λ|, ζ = σ/ω_n); an overdamped
+mode has two real eigenvalues r₁, r₂ (ω_n = √(r₁r₂), ζ = −(r₁ + r₂)/(2ω_n), ω_d = 0), grouped by the undamped
+mode that carries most of their eigenvectors, two per mode (:func:`_real_pairs`; a rigid mode's λ = 0 and −g
+make a rigid row).
 """
 
 from __future__ import annotations
@@ -215,18 +218,132 @@ def _rows_at(model: Model, dps: int, w2G=None) -> tuple[list[tuple], bool]:
         tiny = mpmath.mpf(10) ** (-(dps // 2)) * scale
         cplx = sorted((l for l in lam if mpmath.im(l) > tiny), key=abs)
         undamped = {id(l) for l in lam if mpmath.re(l) == 0}
-        real = sorted((mpmath.re(l) for l in lam if abs(mpmath.im(l)) <= tiny), key=lambda r: -r)
         rows = [(float(abs(l)), 0.0 if id(l) in undamped else float(-mpmath.re(l) / abs(l)), float(mpmath.im(l)),
                  complex(float(mpmath.re(l)), float(mpmath.im(l)))) for l in cplx]
-        zeros = [r for r in real if abs(r) <= tiny]
-        rest = [r for r in real if abs(r) > tiny]
-        rows += [(0.0, None, 0.0, None)] * (len(zeros) // 2 or (1 if zeros else 0))
-        while len(rest) >= 2:  # overdamped: real pairs, slowest with fastest
-            r1, r2 = rest.pop(0), rest.pop(-1)
-            wn = mpmath.sqrt(r1 * r2)
-            rows.append((float(wn), float(-(r1 + r2) / (2 * wn)), 0.0, None))
+        # the real eigenvalues of the damped modes (kept) grouped by mode (:func:`_real_pairs`); the
+        # undamped rigid modes' λ = 0 (two each) are one rigid row each
+        real = [mpmath.re(l) for l in lam[:2 * m] if abs(mpmath.im(l)) <= tiny]
+        rows += [(0.0, None, 0.0, None)] * sum(1 for j in free if w2[j] == 0)
+        weights = _mp_weights(real, [w2[i] for i in kept], [[G[i, j] for j in kept] for i in kept], dps) \
+            if real else None
+        pairs = _real_pairs(weights, m) if real else []
+        if pairs is not None:
+            rows += [_overdamped_row(real[a], real[b], w2[kept[j]] > 0, tiny) for j, (a, b) in pairs]
+        else:
+            rows += _value_pairs(real, tiny)
         rows.sort(key=lambda r: r[0])
         return rows[:n], False
+
+
+def _overdamped_row(r1, r2, elastic: bool, tiny) -> tuple:
+    """``(ω_n, ζ, 0, None)`` of two real eigenvalues of one mode: ω_n = √(r₁r₂), ζ = −(r₁ + r₂)/(2ω_n); a rigid
+    row (ζ None) for a rigid mode's pair (λ = 0 and −g) or a pair with a zero."""
+    if not elastic or abs(r1) <= tiny or abs(r2) <= tiny or r1 * r2 <= 0:
+        return (0.0, None, 0.0, None)
+    wn = mpmath.sqrt(r1 * r2) if isinstance(r1, mpmath.mpf) else (r1 * r2) ** 0.5
+    return (float(wn), float(-(r1 + r2) / (2 * wn)), 0.0, None)
+
+
+def _value_pairs(real: list, tiny) -> list[tuple]:
+    """The fallback when the eigenvectors do not tell the modes apart (:func:`_real_pairs` None): zeros make
+    rigid rows (two per row), the rest are paired by value, the slowest with the fastest."""
+    real = sorted(real, key=lambda r: -r)
+    zeros = [r for r in real if abs(r) <= tiny]
+    rest = [r for r in real if abs(r) > tiny]
+    rows = [(0.0, None, 0.0, None)] * (len(zeros) // 2 or (1 if zeros else 0))
+    while len(rest) >= 2:
+        r1, r2 = rest.pop(0), rest.pop(-1)
+        rows.append(_overdamped_row(r1, r2, True, tiny))
+    return rows
+
+
+def _mp_weights(real: list, w2: list, G: list, dps: int):
+    """The modal weights of the eigenvectors of the real eigenvalues r (rows of an (R, m) float array): the
+    null vector of Q(r) = r² I + r G + diag(ω²) (symmetric, in the M-orthonormal modal coordinates, so
+    q = ΦᵀMx) and each mode's share q_j² of it. By two steps of inverse iteration at ``dps`` digits
+    (``mpmath.lu_solve`` at r shifted by 10^(−dps/4), one factorisation); where that elimination finds Q
+    singular, ``mpmath.eigsy``: the eigenvectors of the eigenvalues within 10^(−dps/2) of the scale
+    r² + |r|‖G‖ + max ω² (at least the smallest one), a null space of two dimensions sharing 2."""
+    import numpy as np
+
+    m = len(w2)
+    out = np.zeros((len(real), m))
+    with mpmath.workdps(dps):
+        gnorm = max([sum(abs(G[i][j]) for j in range(m)) for i in range(m)] + [mpmath.mpf(0)])
+        wmax = max([abs(w) for w in w2] + [mpmath.mpf(0)])
+        big = max([abs(r) for r in real] + [mpmath.mpf(1)])
+
+        def Q(r):
+            return mpmath.matrix([[r * G[i][j] + ((r * r + w2[i]) if i == j else 0) for j in range(m)]
+                                  for i in range(m)])
+
+        for k, r in enumerate(real):
+            try:
+                A = Q(r + mpmath.mpf(10) ** (-(dps // 4)) * (abs(r) or big))
+                x = mpmath.matrix([1 + mpmath.mpf(i) / (m + 1) for i in range(m)])  # (fixed, not special)
+                for _ in range(2):
+                    x = mpmath.lu_solve(A, x)
+                    x /= mpmath.norm(x)
+                out[k] = [float(x[j] ** 2) for j in range(m)]
+                continue
+            except ZeroDivisionError:  # Q singular at this precision: the null space from eigsy
+                pass
+            E, U = mpmath.eigsy(Q(r))
+            cut = mpmath.mpf(10) ** (-(dps // 2)) * (r * r + abs(r) * gnorm + wmax)
+            low = min(range(m), key=lambda i: abs(E[i]))
+            for i in range(m):
+                if i == low or abs(E[i]) <= cut:
+                    out[k] += [float(U[j, i] ** 2) for j in range(m)]
+    return out
+
+
+def _float_weights(real: list, w2, G):
+    """:func:`_mp_weights` in float64 (``numpy.linalg.eigh``; a null space within 1e-9 of the scale)."""
+    import numpy as np
+
+    m = w2.shape[0]
+    out = np.zeros((len(real), m))
+    gnorm = float(np.max(np.sum(np.abs(G), axis=1), initial=0.0))
+    wmax = float(np.max(np.abs(w2), initial=0.0))
+    for k, r in enumerate(real):
+        E, U = np.linalg.eigh(r * r * np.eye(m) + r * G + np.diag(w2))
+        near = np.abs(E) <= 1e-9 * (r * r + abs(r) * gnorm + wmax)
+        near[np.argmin(np.abs(E))] = True
+        out[k] = np.sum(U[:, near] ** 2, axis=1)
+    return out
+
+
+def _real_pairs(weights, m: int) -> list[tuple] | None:
+    """The real eigenvalues of the damped modal problem grouped two by two by mode (the convention for the
+    ζ of overdamped modes): ``[(j, (a, b)), …]``, j the mode (0 … m−1 of the modes passed) and a, b the
+    indices of its two real eigenvalues, or None when some mode would get only one (then the caller pairs
+    by value, :func:`_value_pairs`).
+
+    Each real eigenvalue r goes to the mode with the largest share of its eigenvector in the undamped
+    modes, |φ_jᵀMv|² / Σ_i |φ_iᵀMv|² (``weights``, rows of shares), two per mode: an optimal assignment
+    (``scipy.optimize.linear_sum_assignment`` with each mode taken twice, most total share). With
+    proportional damping each eigenvector lies in one mode and the pair is that mode's roots of
+    λ² + g_j λ + ω_j² = 0 exactly; nearly proportional damping keeps that grouping. Pairing by value (the
+    slowest with the fastest) mixed modes: three masses with C ≈ 3M paired the ω² = 1 mode's −0.38 with
+    the rigid mode's −3 (ζ 1.586 for ≈ 1.5). The same convention as ``numeric.modes.chain_damping`` for
+    ``[chain]`` scenes (which weighs the balanced coordinates (ω_j q_j, q̇_j) instead).
+    """
+    import numpy as np
+    from scipy.optimize import linear_sum_assignment
+
+    weights = np.asarray(weights, dtype=float)
+    if weights.shape[0] == 0:
+        return []
+    if weights.shape[0] > 2 * m:
+        return None
+    weights = weights / np.maximum(np.sum(weights, axis=1, keepdims=True), np.finfo(float).tiny)
+    rows, cols = linear_sum_assignment(-np.repeat(weights, 2, axis=1))  # (R, 2m): two slots per mode
+    groups: dict[int, list[int]] = {}
+    for r, c in zip(rows, cols):
+        groups.setdefault(int(c) // 2, []).append(int(r))
+    if any(len(g) != 2 for g in groups.values()):
+        return None
+    return [(j, tuple(sorted(g))) for j, g in sorted(groups.items())]
 
 
 def _rows_float(model: Model) -> tuple[list[tuple], bool]:
@@ -341,14 +458,13 @@ def _float_complex_rows(w2, G) -> tuple[list[tuple], bool]:
     rows = [(float(abs(v)), float(-v.real / abs(v)), float(v.imag), complex(v))
             for v in sorted([v for v in lam if v.imag > tiny], key=abs)]
     rows += [(float(v.imag), 0.0, float(v.imag), v) for v in undamped]
-    real = sorted((v.real for v in lam if abs(v.imag) <= tiny), key=lambda r: -r)
-    zeros = [r for r in real if abs(r) <= tiny] + [0.0] * (2 * sum(1 for j in free if w2[j] == 0))
-    rest = [r for r in real if abs(r) > tiny]
-    rows += [(0.0, None, 0.0, None)] * (len(zeros) // 2 or (1 if zeros else 0))
-    while len(rest) >= 2:  # overdamped: real pairs, slowest with fastest
-        r1, r2 = rest.pop(0), rest.pop(-1)
-        wn = float(np.sqrt(r1 * r2))
-        rows.append((wn, float(-(r1 + r2) / (2 * wn)), 0.0, None))
+    real = [float(v.real) for v in lam if abs(v.imag) <= tiny]
+    rows += [(0.0, None, 0.0, None)] * sum(1 for j in free if w2[j] == 0)
+    pairs = _real_pairs(_float_weights(real, w2[kept], G[np.ix_(kept, kept)]), m) if real else []
+    if pairs is not None:  # each mode's own two real eigenvalues (:func:`_real_pairs`)
+        rows += [_overdamped_row(real[a], real[b], w2[kept[j]] > 0, tiny) for j, (a, b) in pairs]
+    else:
+        rows += _value_pairs(real, tiny)
     rows.sort(key=lambda r: r[0])
     return rows[:n], False
 
