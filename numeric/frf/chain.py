@@ -373,6 +373,8 @@ def mp_chain_receptance(el: ChainElements, omega: float, input: int, output: int
             cur = _mp_sweep(el, mpmath.mpf(omega), input, output, mpmath)
             if prev is not None and abs(cur - prev) <= MP_AGREE * abs(cur):
                 return mp_split(cur, mpmath) if scaled else complex(cur)
+            if prev is not None and complex(cur) == 0 and complex(prev) == 0:  # shrinking with the digits below
+                return (0j, 0) if scaled else 0j  # float64's range: an exact 0 (a part's exact resonance, NUDGE)
         if dps >= MP_MAX_DPS:
             raise RunRefused(f"frequency response of a chain at ω = {omega:.6g} rad/s: H did not settle within "
                              f"{MP_MAX_DPS} digits", quantity="frf")
