@@ -53,6 +53,8 @@ class FrequencyResponse:
     connected: bool = True
     #: Local maxima ``(ω, |H|)`` attributed to no resonance.
     extra_peaks: list = field(default_factory=list, repr=False)
+    #: arg H [rad] per frequency (None: from H): right also where |H| is below float64's range and H is 0.
+    angle: object = field(default=None, repr=False)
 
     @property
     def magnitude(self):
@@ -63,10 +65,11 @@ class FrequencyResponse:
 
     @property
     def phase(self):
-        """Phase of H [degrees], unwrapped along ω, ndarray, shape (W,)."""
+        """Phase of H [degrees], unwrapped along ω, ndarray, shape (W,) (where |H| is below float64's range and
+        printed as 0, the phase of the exact H)."""
         import numpy as np
 
-        return np.degrees(np.unwrap(np.angle(self.H)))
+        return np.degrees(np.unwrap(np.angle(self.H) if self.angle is None else self.angle))
 
     def to_json(self) -> dict:
         """Exactly what ``springchain frf ... --json`` prints."""
@@ -287,7 +290,7 @@ def frf(scene: str | Path | Scene, input, output, omega_min: float | None = None
     notes += list(response.notes)
     name = lambda k: str(k) if sc.chain is not None else sc.mass_names[k]  # noqa: E731
     return FrequencyResponse(sc, name(i), name(o), response.omega, response.H, response.resonances, tf, notes,
-                             response.connected, list(response.extra_peaks))
+                             response.connected, list(response.extra_peaks), response.angle)
 
 
 def _chain_modes(sc: Scene, system) -> list | None:

@@ -25,6 +25,7 @@ closing spring makes a loop) goes through the tridiagonal solve of :mod:`numeric
 from __future__ import annotations
 
 import functools
+import math
 
 import numpy as np
 
@@ -99,8 +100,29 @@ def _nonzero(s, a, b):
     return s
 
 
-def _receptance_impl(m, gk, gc, zk, zc, omega, i, o, out):
-    """H(ω_w) = X_o / F_i for each ω_w (the sweep of the module docstring); out complex (W,)."""
+def _renorm(x):
+    """``(m, k)`` with ``x = m · 2**k`` exactly and ``max(|Re m|, |Im m|)`` in [1/2, 1) (``x`` 0 or not
+    finite: ``(x, 0)``): a power of two carried apart, so products of transmissibilities never
+    underflow (a far transfer above the band: |H| below 1e-308, its phase still known)."""
+    a = max(abs(x.real), abs(x.imag))
+    if not (0.0 < a < np.inf):
+        return x, 0
+    k = math.frexp(a)[1]
+    return complex(math.ldexp(x.real, -k), math.ldexp(x.imag, -k)), k
+
+
+def _pow2(k):
+    """``2.0**k`` as a float, 0 below the float64 range and inf above it (never an OverflowError)."""
+    if k > 1023:
+        return np.inf
+    if k < -1074:
+        return 0.0
+    return math.ldexp(1.0, k)
+
+
+def _receptance_impl(m, gk, gc, zk, zc, omega, i, o, out, expo):
+    """H(ω_w) = out_w · 2**expo_w = X_o / F_i for each ω_w (the sweep of the module docstring): the complex
+    mantissa ``out`` (W,) and the binary exponent ``expo`` (W,) int64, carried apart (:func:`_renorm`)."""
     n = m.shape[0]
     for w in range(omega.shape[0]):
         om = omega[w]
@@ -108,27 +130,34 @@ def _receptance_impl(m, gk, gc, zk, zc, omega, i, o, out):
         # left of i (and the transmissibilities towards o < i)
         e = complex(gk[0] - om2 * m[0], om * gc[0])
         prod_left = complex(1.0, 0.0)
+        k_left = 0
         for p in range(1, i + 1):
             z = complex(zk[p], om * zc[p])
             u = _nonzero(z + e, z, e)  # z = 0 (no link): u = 1, nothing passes
             if p > o:
-                prod_left *= z / u
+                prod_left, d = _renorm(prod_left * (z / u))
+                k_left += d
             e = complex(gk[p] - om2 * m[p], om * gc[p]) + z * e / u
         # right of i (and towards o > i)
         t = complex(0.0, 0.0)
         prod_right = complex(1.0, 0.0)
+        k_right = 0
         if i < n - 1:
             f = complex(gk[n - 1] - om2 * m[n - 1], om * gc[n - 1])
             for p in range(n - 1, i, -1):
                 z = complex(zk[p], om * zc[p])
                 u = _nonzero(z + f, z, f)
                 if p <= o:
-                    prod_right *= z / u
+                    prod_right, d = _renorm(prod_right * (z / u))
+                    k_right += d
                 if p - 1 > i:
                     f = complex(gk[p - 1] - om2 * m[p - 1], om * gc[p - 1]) + z * f / u
                 else:
                     t = z * f / u
-        out[w] = (1.0 / _nonzero(e + t, e, t)) * prod_left * prod_right
+        x0, k0 = _renorm(1.0 / _nonzero(e + t, e, t))
+        h, d = _renorm(x0 * prod_left * prod_right)
+        out[w] = h
+        expo[w] = k0 + k_left + k_right + d
 
 
 @functools.lru_cache(maxsize=1)
@@ -139,18 +168,22 @@ def _kernel():
         import numba
         from numba.extending import register_jitable
 
-        register_jitable(_nonzero)  # callable from the compiled sweep
+        for helper in (_nonzero, _renorm, _pow2):  # callable from the compiled sweep
+            register_jitable(helper)
         return numba.njit(cache=True)(_receptance_impl)
     return _receptance_impl
 
 
-def _certified_impl(m, gk, gc, zk, zc, omega, i, o, out, bound):
-    """H(ω_w) and a bound on its error per frequency: every rounding of the sweep is a relative change
-    of an element by at most γ, so ``|ΔH| ≤ γ Σ_e |p_e ∂H/∂p_e|`` with ``∂H/∂k = −(bᵀx)(bᵀy)`` for a
-    link (x, y: the responses to unit forces on the input and the output), ``ω² m x_p y_p`` for a
-    mass, ``g x_p y_p`` for the ground; ``bound`` gets that sum (times γ: the caller's). The
-    responses come from the left and right dynamic stiffnesses ``e``, ``f`` by transmissibilities,
-    the link stretches ``x_p − x_{p−1}`` likewise (no difference of two displacements is formed)."""
+def _certified_impl(m, gk, gc, zk, zc, omega, i, o, out, expo, bound, bexpo):
+    """H(ω_w) = out_w · 2**expo_w and a bound on its error per frequency, bound_w · 2**bexpo_w: every
+    rounding of the sweep is a relative change of an element by at most γ, so
+    ``|ΔH| ≤ γ Σ_e |p_e ∂H/∂p_e|`` with ``∂H/∂k = −(bᵀx)(bᵀy)`` for a link (x, y: the responses to unit
+    forces on the input and the output), ``ω² m x_p y_p`` for a mass, ``g x_p y_p`` for the ground;
+    ``bound`` gets that sum (times γ: the caller's). The responses come from the left and right
+    dynamic stiffnesses ``e``, ``f`` by transmissibilities, the link stretches ``x_p − x_{p−1}``
+    likewise (no difference of two displacements is formed); x and y are carried as mantissas with
+    binary exponents (:func:`_renorm`: far from the force they fall below 1e-308), and the sum is
+    taken relative to ``2**bexpo``, the scale of |y_i| = |H|."""
     n = m.shape[0]
     a = np.empty(n, dtype=np.complex128)
     z = np.empty(n, dtype=np.complex128)
@@ -158,8 +191,10 @@ def _certified_impl(m, gk, gc, zk, zc, omega, i, o, out, bound):
     f = np.empty(n, dtype=np.complex128)
     ue = np.empty(n, dtype=np.complex128)  # 1 / (z_p + e_{p−1}) and 1 / (z_p + f_p): one division each,
     uf = np.empty(n, dtype=np.complex128)  # shared by the sweeps and both responses
-    ay = np.empty(n)  # |y_p| and |y_p − y_{p−1}| of the response to the unit force on the output
-    sy = np.zeros(n)
+    ay = np.empty(n)  # |y_p| and |y_p − y_{p−1}| of the response to the unit force on the output,
+    sy = np.zeros(n)  # as mantissas with binary exponents
+    ay_k = np.zeros(n, dtype=np.int64)
+    sy_k = np.zeros(n, dtype=np.int64)
     for w in range(omega.shape[0]):
         om = omega[w]
         om2 = om * om
@@ -178,39 +213,58 @@ def _certified_impl(m, gk, gc, zk, zc, omega, i, o, out, bound):
         t = complex(0.0, 0.0)
         if o < n - 1:
             t = z[o + 1] * f[o + 1] * uf[o + 1]
-        y = 1.0 / _nonzero(e[o] + t, e[o], t)
+        y0, y0_k = _renorm(1.0 / _nonzero(e[o] + t, e[o], t))
+        y, yk = y0, y0_k
         ay[o] = abs(y)
+        ay_k[o] = yk
         for p in range(o + 1, n):
-            sy[p] = abs(y * f[p] * uf[p])
-            y = y * z[p] * uf[p]
+            s, d = _renorm(y * f[p] * uf[p])
+            sy[p] = abs(s)
+            sy_k[p] = yk + d
+            y, d = _renorm(y * z[p] * uf[p])
+            yk += d
             ay[p] = abs(y)
-        y = 1.0 / _nonzero(e[o] + t, e[o], t)
+            ay_k[p] = yk
+        y, yk = y0, y0_k
         for p in range(o, 0, -1):
-            sy[p] = abs(y * e[p - 1] * ue[p])
-            y = y * z[p] * ue[p]
+            s, d = _renorm(y * e[p - 1] * ue[p])
+            sy[p] = abs(s)
+            sy_k[p] = yk + d
+            y, d = _renorm(y * z[p] * ue[p])
+            yk += d
             ay[p - 1] = abs(y)
+            ay_k[p - 1] = yk
+        ref = ay_k[i]  # |y_i| = |H| (Z symmetric): the scale of every term of the sum
         t = complex(0.0, 0.0)
         if i < n - 1:
             t = z[i + 1] * f[i + 1] * uf[i + 1]
-        x0 = 1.0 / _nonzero(e[i] + t, e[i], t)
-        total = (om2 * m[i] + gk[i] + om * gc[i]) * abs(x0) * ay[i]
-        x = x0
+        x0, x0_k = _renorm(1.0 / _nonzero(e[i] + t, e[i], t))
+        total = (om2 * m[i] + gk[i] + om * gc[i]) * abs(x0) * ay[i] * _pow2(x0_k + ay_k[i] - ref)
+        x, xk = x0, x0_k
         for p in range(i + 1, n):
-            total += (zk[p] + om * zc[p]) * abs(x * f[p] * uf[p]) * sy[p]
-            x = x * z[p] * uf[p]
-            total += (om2 * m[p] + gk[p] + om * gc[p]) * abs(x) * ay[p]
+            s, d = _renorm(x * f[p] * uf[p])
+            total += (zk[p] + om * zc[p]) * abs(s) * sy[p] * _pow2(xk + d + sy_k[p] - ref)
+            x, d = _renorm(x * z[p] * uf[p])
+            xk += d
+            total += (om2 * m[p] + gk[p] + om * gc[p]) * abs(x) * ay[p] * _pow2(xk + ay_k[p] - ref)
             if p == o:
                 out[w] = x
-        x = x0
+                expo[w] = xk
+        x, xk = x0, x0_k
         for p in range(i, 0, -1):
-            total += (zk[p] + om * zc[p]) * abs(x * e[p - 1] * ue[p]) * sy[p]
-            x = x * z[p] * ue[p]
-            total += (om2 * m[p - 1] + gk[p - 1] + om * gc[p - 1]) * abs(x) * ay[p - 1]
+            s, d = _renorm(x * e[p - 1] * ue[p])
+            total += (zk[p] + om * zc[p]) * abs(s) * sy[p] * _pow2(xk + d + sy_k[p] - ref)
+            x, d = _renorm(x * z[p] * ue[p])
+            xk += d
+            total += (om2 * m[p - 1] + gk[p - 1] + om * gc[p - 1]) * abs(x) * ay[p - 1] * _pow2(xk + ay_k[p - 1] - ref)
             if p - 1 == o:
                 out[w] = x
+                expo[w] = xk
         if o == i:
             out[w] = x0
+            expo[w] = x0_k
         bound[w] = total
+        bexpo[w] = ref
 
 
 @functools.lru_cache(maxsize=1)
@@ -221,7 +275,8 @@ def _certified_kernel():
         import numba
         from numba.extending import register_jitable
 
-        register_jitable(_nonzero)  # callable from the compiled sweep
+        for helper in (_nonzero, _renorm, _pow2):  # callable from the compiled sweep
+            register_jitable(helper)
         return numba.njit(cache=True)(_certified_impl)
     return _certified_impl
 
@@ -237,8 +292,16 @@ MP_BUDGET = 20_000
 MP_AGREE = 1e-15
 
 
+def unscale(mantissa: np.ndarray, expo: np.ndarray) -> np.ndarray:
+    """``mantissa · 2**expo`` as float64 complex, shape (W,) (subnormal or 0 below the range, inf above)."""
+    expo = np.asarray(expo, dtype=np.int64)
+    with np.errstate(all="ignore"):
+        return np.ldexp(mantissa.real, expo) + 1j * np.ldexp(mantissa.imag, expo)
+
+
 def chain_receptance(el: ChainElements, omega: np.ndarray, input: int, output: int,
-                     certify: bool = False, notes: list | None = None, budget: dict | None = None) -> np.ndarray:
+                     certify: bool = False, notes: list | None = None, budget: dict | None = None,
+                     scaled: bool = False):
     """``H(iω) = X_output / F_input`` of an open chain, shape (W,), complex (module docstring).
 
     Parameters
@@ -256,28 +319,29 @@ def chain_receptance(el: ChainElements, omega: np.ndarray, input: int, output: i
     budget : dict, optional
         ``{"left": mass-frequencies}`` shared by the calls of one response (default: a fresh
         :data:`MP_BUDGET`); decremented here.
+    scaled : bool
+        Return ``(mantissa, expo)`` with ``H = mantissa · 2**expo`` (complex (W,), int64 (W,)): H
+        below the float64 range (a far transfer above the band) keeps its phase in the mantissa.
     """
     omega = np.ascontiguousarray(np.asarray(omega, dtype=float).reshape(-1))
     out = np.empty(omega.shape[0], dtype=complex)
+    expo = np.zeros(omega.shape[0], dtype=np.int64)
     if not certify:
-        _kernel()(el.mass, el.ground_k, el.ground_c, el.link_k, el.link_c, omega, int(input), int(output), out)
-        return out
+        _kernel()(el.mass, el.ground_k, el.ground_c, el.link_k, el.link_c, omega, int(input), int(output), out,
+                  expo)
+        return (out, expo) if scaled else unscale(out, expo)
     bound = np.empty(omega.shape[0])
+    bexpo = np.zeros(omega.shape[0], dtype=np.int64)
     _certified_kernel()(el.mass, el.ground_k, el.ground_c, el.link_k, el.link_c, omega, int(input), int(output),
-                        out, bound)
-    with np.errstate(all="ignore"):
-        rel = GAMMA * bound / np.abs(out)
-    under = (out == 0) & (bound == 0)  # |H| below float64's range (an evanescent far transfer): 0 it stays
-    if np.any(under) and notes is not None:
-        note = ("|H| is below the float64 range (under 1e-308: printed as 0) at some frequencies (a far transfer "
-                "above the band of the chain)")
-        notes[:] = [n for n in notes if n != note] + [note]
-    bad = np.flatnonzero(~(rel <= CERTIFIED) & ~under)
+                        out, expo, bound, bexpo)
+    with np.errstate(all="ignore"):  # both relative to their own powers of two
+        rel = GAMMA * np.ldexp(bound, bexpo - expo) / np.abs(out)
+    bad = np.flatnonzero(~(rel <= CERTIFIED))
     budget = {} if budget is None else budget
     left = budget.setdefault("left", MP_BUDGET)
     allowed = max(0, left // max(el.n, 1))
     for j in bad[:allowed].tolist():
-        out[j] = mp_chain_receptance(el, float(omega[j]), int(input), int(output))
+        out[j], expo[j] = mp_chain_receptance(el, float(omega[j]), int(input), int(output), scaled=True)
     budget["left"] = left - el.n * min(allowed, bad.size)
     rest = bad[allowed:]
     if rest.size and notes is not None:
@@ -287,14 +351,13 @@ def chain_receptance(el: ChainElements, omega: np.ndarray, input: int, output: i
                 f"limit of the dynamic-stiffness sweep of {el.n} masses (ε/ζ near a light resonance, ε/gap near "
                 f"an undamped one; extended precision takes at most {MP_BUDGET:,} mass-frequencies)")
         notes[:] = [n for n in notes if not n.startswith("H near resonances is certified to")] + [note]
-    return out
+    return (out, expo) if scaled else unscale(out, expo)
 
 
-def mp_chain_receptance(el: ChainElements, omega: float, input: int, output: int) -> complex:
+def mp_chain_receptance(el: ChainElements, omega: float, input: int, output: int, scaled: bool = False):
     """The sweep of :func:`_receptance_impl` in mpmath (element values read exactly), doubling the digits
-    from 30 beyond the decades the element terms span until two agree to :data:`MP_AGREE`."""
-    import math
-
+    from 30 beyond the decades the element terms span until two agree to :data:`MP_AGREE`; with
+    ``scaled``, ``(mantissa, expo)`` as :func:`chain_receptance` (H below 1e-308 keeps its phase)."""
     import mpmath
 
     from .dense import MP_MAX_DPS
@@ -307,13 +370,26 @@ def mp_chain_receptance(el: ChainElements, omega: float, input: int, output: int
     prev = None
     while True:
         with mpmath.workdps(dps):
-            cur = complex(_mp_sweep(el, mpmath.mpf(omega), input, output, mpmath))
-        if prev is not None and abs(cur - prev) <= MP_AGREE * abs(cur):
-            return cur
+            cur = _mp_sweep(el, mpmath.mpf(omega), input, output, mpmath)
+            if prev is not None and abs(cur - prev) <= MP_AGREE * abs(cur):
+                return mp_split(cur, mpmath) if scaled else complex(cur)
+            if prev is not None and complex(cur) == 0 and complex(prev) == 0:  # shrinking with the digits below
+                return (0j, 0) if scaled else 0j  # float64's range: an exact 0 (a part's exact resonance, NUDGE)
         if dps >= MP_MAX_DPS:
             raise RunRefused(f"frequency response of a chain at ω = {omega:.6g} rad/s: H did not settle within "
                              f"{MP_MAX_DPS} digits", quantity="frf")
         prev, dps = cur, min(2 * dps, MP_MAX_DPS)
+
+
+def mp_split(value, mpmath) -> tuple[complex, int]:
+    """An mpmath complex as ``(mantissa, k)``, ``value = mantissa · 2**k``, the mantissa's larger part in
+    [1/2, 1) (0: ``(0, 0)``)."""
+    value = mpmath.mpc(value)
+    a = max(abs(value.real), abs(value.imag))
+    if a == 0:
+        return 0j, 0
+    k = int(mpmath.frexp(a)[1])
+    return complex(mpmath.ldexp(value.real, -k), mpmath.ldexp(value.imag, -k)), k
 
 
 def _mp_sweep(el: ChainElements, om, i: int, o: int, mpmath):
@@ -347,4 +423,4 @@ def _mp_sweep(el: ChainElements, om, i: int, o: int, mpmath):
     return left * right / nonzero(e + t, e, t)
 
 
-__all__ = ["ChainElements", "chain_elements", "chain_receptance", "mp_chain_receptance"]
+__all__ = ["ChainElements", "chain_elements", "chain_receptance", "mp_chain_receptance", "mp_split", "unscale"]

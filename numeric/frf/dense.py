@@ -206,8 +206,13 @@ class DenseReceptance:
 
     # -- the answer ---------------------------------------------------------------------------------
     def receptance(self, omega: np.ndarray, input: int, output: int, certify: bool = True,
-                   notes: list | None = None) -> np.ndarray:
+                   notes: list | None = None, scaled: bool = False):
         """``H(iω) = X_output / F_input``, shape (W,), complex: certified float64 or mpmath.
+
+        With ``scaled``, ``(mantissa, expo)``, ``H = mantissa · 2**expo`` (complex (W,), int64 (W,)): a
+        certified value whose |H| is below the smallest normal float64 (a subnormal has lost digits,
+        0 has lost everything) is solved in mpmath (:func:`mp_solvable` scenes) and split there, so
+        its phase and magnitude are kept; other scenes keep the float64 value's.
 
         With ``notes`` (certified calls), one line is added where H itself is sensitive to the last
         bit of the element values (:meth:`rounding_sensitivity` above :data:`SENSITIVE`): the value
@@ -223,7 +228,7 @@ class DenseReceptance:
         x = self.solve(omega, input)
         H = x[:, output].copy()
         if not certify or omega.shape[0] == 0:
-            return H
+            return _split(H) if scaled else H
         row = x if output == input else self.solve(omega, output)
         bad = np.flatnonzero(~(self.error_bound(x, row, *self.residual(omega, x, input)) <= CERTIFIED * np.abs(H)))
         x_lo = np.zeros_like(x)  # corrections, kept apart from x: x + x_lo is a double-length solution
@@ -270,7 +275,14 @@ class DenseReceptance:
                         "dashpot value changes in its last bit (float64 rounding of the scene's expressions): the "
                         "values are exact for the elements as rounded, the scene itself is that sensitive there")
                 notes[:] = [n for n in notes if not n.startswith("|H| at some frequencies moves by up to")] + [note]
-        return H
+        if not scaled:
+            return H
+        mantissa, expo = _split(H)
+        with np.errstate(all="ignore"):
+            under = np.flatnonzero(np.abs(H) < np.finfo(float).tiny)
+        if under.size and mp_solvable(self.el):  # below the float64 range: its digits (and, at 0, its phase) in mpmath
+            mantissa[under], expo[under] = mp_receptance(self.el, omega[under], input, output, scaled=True)
+        return mantissa, expo
 
     def rounding_sensitivity(self, omega: np.ndarray, x: np.ndarray, y: np.ndarray) -> np.ndarray:
         """``ε Σ_e |p_e ∂H/∂p_e|`` over the masses, springs and dashpots (and Rayleigh's α, β): the first-order
@@ -422,7 +434,7 @@ def _mp_solve(el: Elements, omega: float, i: int, o: int, dps: int) -> complex:
                 for b in range(n):
                     if G[a, b]:
                         add(a, b, iw * G[a, b])
-        return complex(sparse_solve(Z, i, mpmath)[o])
+        return mpmath.mpc(sparse_solve(Z, i, mpmath)[o])  # exact beyond float64's range (its phase below 1e-308)
 
 
 def sparse_solve(rows: list[dict], i: int, mpmath) -> list:
@@ -492,7 +504,7 @@ def mp_start_digits(el: Elements, omega: float) -> int:
     return int(min(MP_MAX_DPS, 30 + math.ceil(decades)))
 
 
-def _mp_settled(el: Elements, omega: float, input: int, output: int) -> complex:
+def _mp_settled(el: Elements, omega: float, input: int, output: int):
     """H at one ω, doubling the digits from :func:`mp_start_digits` until two agree to :data:`MP_AGREE`
     (a pivot mpmath calls singular at some precision is retried at the next)."""
     dps, prev = mp_start_digits(el, omega), None
@@ -509,13 +521,32 @@ def _mp_settled(el: Elements, omega: float, input: int, output: int) -> complex:
         prev, dps = cur, min(2 * dps, MP_MAX_DPS)
 
 
-def mp_receptance(el: Elements, omega: np.ndarray, input: int, output: int) -> np.ndarray:
+def mp_receptance(el: Elements, omega: np.ndarray, input: int, output: int, scaled: bool = False):
     """H at each ω by Gaussian elimination in mpmath on Z assembled exactly from the elements,
-    doubling the precision from :func:`mp_start_digits` until two results agree to :data:`MP_AGREE`."""
+    doubling the precision from :func:`mp_start_digits` until two results agree to :data:`MP_AGREE`;
+    with ``scaled``, ``(mantissa, expo)`` as :meth:`DenseReceptance.receptance`."""
+    import mpmath
+
+    from .chain import mp_split
+
     out = np.empty(len(omega), dtype=complex)
+    expo = np.zeros(len(omega), dtype=np.int64)
     for j, w in enumerate(np.asarray(omega, dtype=float).tolist()):  # frequencies that failed the certificate
-        out[j] = _mp_settled(el, w, input, output)
-    return out
+        value = _mp_settled(el, w, input, output)
+        if scaled:
+            out[j], expo[j] = mp_split(value, mpmath)
+        else:
+            out[j] = complex(value)
+    return (out, expo) if scaled else out
+
+
+def _split(H: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Float64 H as ``(mantissa, expo)`` (exact: a power of two taken out; 0 and non-finite kept)."""
+    a = np.maximum(np.abs(H.real), np.abs(H.imag))
+    ok = np.isfinite(a) & (a > 0)
+    expo = np.where(ok, np.frexp(np.where(ok, a, 1.0))[1], 0).astype(np.int64)
+    with np.errstate(all="ignore"):
+        return np.ldexp(H.real, -expo) + 1j * np.ldexp(H.imag, -expo), expo
 
 
 __all__ = ["DenseReceptance", "mp_receptance", "mp_solvable", "CERTIFIED", "MPMATH_MAX_MASSES"]

@@ -38,7 +38,7 @@ import scipy.linalg
 
 from ...generated.contract import MAX_DENSE, End
 from ..errors import RunRefused
-from .dense import MPMATH_MAX_MASSES, dense_chunk
+from .dense import MPMATH_MAX_MASSES, _split, dense_chunk
 from .table import (NARROW_ZETA, NODE_FLOAT, REPEATED, SETTLE_MAX, Resonance, attribute, connected,
                         local_maxima, sees)
 from ..system import System
@@ -157,7 +157,8 @@ def operator(system: System) -> Operator:
 
 
 # -- solves -------------------------------------------------------------------------------------------
-def receptance(op: Operator, omega: np.ndarray, input: int, output: int, certify: bool = True) -> np.ndarray:
+def receptance(op: Operator, omega: np.ndarray, input: int, output: int, certify: bool = True,
+               scaled: bool = False):
     """``H(iω) = X_output / F_input`` of ``(K − ω²M + iωC) X = e_input``.
 
     Parameters
@@ -171,28 +172,45 @@ def receptance(op: Operator, omega: np.ndarray, input: int, output: int, certify
         ``[masses]`` scenes: certify each value to 1e-10 (refinement, mpmath where needed); False
         gives the float64 modal solve alone (the peak search's trials).
 
+    scaled : bool
+        Return ``(mantissa, expo)``, ``H = mantissa · 2**expo`` (complex (W,), int64 (W,), the mantissa's
+        larger part in [1/2, 1)): where |H| is below the float64 range its phase is still that of the
+        mantissa (open chains carry the exponent through their sweep; ``[masses]`` scenes solve such
+        frequencies in mpmath, :meth:`numeric.frf.dense.DenseReceptance.receptance`).
+
     Returns
     -------
-    ndarray, shape (W,), complex
+    ndarray, shape (W,), complex (or the pair above)
     """
+    from .chain import unscale
+
     omega = np.asarray(omega, dtype=float).reshape(-1)
     with np.errstate(all="ignore"):  # float64 overflow is caught below (dense: by its certificate)
-        H = _receptance(op, omega, input, output, certify)
+        H = _receptance(op, omega, input, output, certify, scaled)
+    if scaled:
+        H, expo = H
+        with np.errstate(all="ignore"):
+            big = np.isfinite(H) & ~np.isfinite(unscale(H, expo))
+        H = np.where(big, np.inf, H)
     if certify and not np.all(np.isfinite(H)):
         bad = int(np.argmax(~np.isfinite(H)))
         raise RunRefused(f"frequency response at ω = {omega[bad]:.6g} rad/s: H overflows float64 on this route "
                          "(element values near the 1e±150 limits multiplied by ω²); a [masses] scene of at most "
                          f"{MPMATH_MAX_MASSES} masses is solved in extended precision", quantity="frf")
-    return H
+    return (H, expo) if scaled else H
 
 
-def _receptance(op: Operator, omega: np.ndarray, input: int, output: int, certify: bool) -> np.ndarray:
+def _receptance(op: Operator, omega: np.ndarray, input: int, output: int, certify: bool, scaled: bool = False):
     if op.dense is not None:
-        return op.dense.receptance(omega, input, output, certify=certify, notes=op.notes if certify else None)
+        return op.dense.receptance(omega, input, output, certify=certify, notes=op.notes if certify else None,
+                                   scaled=scaled)
     if op.chain is not None:
         from .chain import chain_receptance
 
-        return chain_receptance(op.chain, omega, input, output, certify=certify, notes=op.notes, budget=op.budget)
+        return chain_receptance(op.chain, omega, input, output, certify=certify, notes=op.notes, budget=op.budget,
+                                scaled=scaled)
+    if scaled:
+        return _split(_receptance(op, omega, input, output, certify))
     if op.banded:
         return _receptance_banded(op, omega, input, output)
     n = op.n
@@ -456,6 +474,9 @@ class Response:
     connected: bool = True
     extra_peaks: list = field(default_factory=list, repr=False)
     notes: list = field(default_factory=list, repr=False)
+    #: arg H [rad] per frequency, shape (W,) (None: ``np.angle(H)``): right also where |H| is below the
+    #: float64 range and H is 0 (from the mantissa of :func:`receptance` with ``scaled``).
+    angle: np.ndarray | None = field(default=None, repr=False)
 
     @property
     def magnitude(self) -> np.ndarray:
@@ -465,7 +486,7 @@ class Response:
     @property
     def phase(self) -> np.ndarray:
         """Phase of H in degrees, unwrapped along ω, shape (W,)."""
-        return np.degrees(np.unwrap(np.angle(self.H)))
+        return np.degrees(np.unwrap(np.angle(self.H) if self.angle is None else self.angle))
 
 
 def _grid(lo: float, hi: float, points: int, res: list[Resonance]) -> np.ndarray:
@@ -537,8 +558,9 @@ def frequency_response(system: System, input: int, output: int, omega_min: float
             if r.undamped or r.narrow:
                 extra = extra[np.abs(extra / r.omega_d - 1) >= (UNDAMPED_GAP if r.participates else SILENT_GAP)]
         grid = np.union1d(grid, extra)
-    H = receptance(op, grid, input, output)
+    mantissa, expo = receptance(op, grid, input, output, scaled=True)
     notes = []
+    H, angle = _below_range(mantissa, expo, notes)
     top = hi
     elastic = natural[natural > 0]
     if op.banded and elastic.shape[0] > MAX_REFINED:
@@ -556,8 +578,9 @@ def frequency_response(system: System, input: int, output: int, omega_min: float
         h_p = np.array([h for _, h in peaks], dtype=complex)
         keep = ~np.isin(w_p, grid)
         grid, H = np.concatenate([grid, w_p[keep]]), np.concatenate([H, h_p[keep]])
+        angle = np.concatenate([angle, np.angle(h_p[keep])])
         order = np.argsort(grid, kind="stable")
-        grid, H = grid[order], H[order]
+        grid, H, angle = grid[order], H[order], angle[order]
     if how == "float64" and any(not r.participates for r in inside):
         notes.append(f"nodes at the input or output judged in float64 (residue below {NODE_FLOAT:g} of the mode's "
                      f"largest): scenes of more than {SETTLE_MAX} masses are not settled in mpmath")
@@ -565,4 +588,25 @@ def frequency_response(system: System, input: int, output: int, omega_min: float
         notes.append("nodes at the input or output not checked (more than 400 masses): an undamped mode with a "
                      "node there is listed with |H| = ∞ though |H| is finite at it")
     notes += list(dict.fromkeys(op.notes))  # a float64 limit a solve met (each once)
-    return Response(grid, H, inside, True, extra, notes)
+    return Response(grid, H, inside, True, extra, notes, angle)
+
+
+#: Smallest normal float64: a |H| below it is printed as 0 (a subnormal has lost digits), with a note.
+TINY = float(np.finfo(float).tiny)
+#: The note of :func:`_below_range` (its start is what tests and callers look for).
+BELOW_RANGE = "|H| is below the float64 range"
+
+
+def _below_range(mantissa: np.ndarray, expo: np.ndarray, notes: list) -> tuple[np.ndarray, np.ndarray]:
+    """H from its mantissa and exponent, 0 where |H| is below the smallest normal float64 (subnormals too:
+    their digits are lost), and arg H from the mantissa (exact there as well); one note when any is."""
+    from .chain import unscale
+
+    H = unscale(mantissa, expo)
+    with np.errstate(all="ignore"):
+        under = (np.abs(H) < TINY) & (mantissa != 0)
+    H = np.where(under, 0.0, H)
+    if np.any(under):
+        notes.append(f"{BELOW_RANGE} (under {TINY:.3g}, the smallest normal float64: printed as 0; the phase is "
+                     f"exact) at {int(under.sum())} of {H.shape[0]} frequencies (a far, strongly attenuated transfer)")
+    return H, np.angle(mantissa)
