@@ -130,6 +130,7 @@ def compute(system: System, derivs: ElementDerivatives, wanted: np.ndarray | Non
                  "elements; Nelson's systems through the modal corrector")
     d = derivatives(stencil, k, modes, solve, derivs)
     d_w2, d_phi = _settle(d.d_omega2, d.d_shapes, modes.omega2_values, masses, derivs.values)
+    d_w2 = _resolve_small(d_w2, d.shapes, modes.omega2_values, ends, derivs, _simple(modes.cluster))
     return ModeSensitivities(tuple(derivs.parameters), tuple(derivs.values), modes.index, modes.omega2_values,
                              modes.shape_values, modes.cluster, modes.rigid, d_w2, d_phi, d.shapes,
                              modes.settled, route)
@@ -152,6 +153,50 @@ def _settle(d_w2: np.ndarray, d_phi: np.ndarray, omega2: np.ndarray, masses: np.
     return d_w2, d_phi
 
 
+
+
+def _simple(cluster: np.ndarray) -> np.ndarray:
+    """Whether each mode's ω² is simple (its cluster label shared with no other mode), shape (J,)."""
+    labels, counts = np.unique(cluster, return_counts=True)
+    return np.isin(cluster, labels[counts == 1])
+
+
+#: Entries of (parameters × springs × modes) evaluated at once by :func:`_resolve_small`.
+_CHUNK = 4_000_000
+
+
+def _resolve_small(d_w2: np.ndarray, shapes: np.ndarray, omega2: np.ndarray, ends: np.ndarray,
+                   derivs: ElementDerivatives, simple: np.ndarray) -> np.ndarray:
+    """A derivative :func:`_settle` set to 0 (below double-double's resolution of ω²/p) that is not 0:
+    for a simple ω², ``∂ω²/∂p = Σ_s ∂k_s/∂p (φ_a − φ_b)² − ω² Σ_i ∂m_i/∂p φ_i²`` from the refined
+    M-normalised shape, which is accurate component by component — each term relative to itself, so a
+    spring whose stretch is 1e-20 of the shape's scale still gives its (φ_a − φ_b)². Kept where it is
+    above 64 times its own rounding bound (stretches formed in float64, terms of both signs summed),
+    else the 0 stays. ``shapes`` (P, N, J), ``omega2`` (J,), ``ends`` (S, 2) with −1 a wall."""
+    cols = np.flatnonzero((d_w2 == 0).any(axis=0) & simple)
+    if not cols.size:
+        return d_w2
+    ends = np.asarray(ends, dtype=np.intp).reshape(-1, 2)
+    a, b = ends[:, 0], ends[:, 1]
+    dk, dm = np.asarray(derivs.dk, dtype=float), np.asarray(derivs.dm, dtype=float)
+    P, S = dk.shape
+    out = d_w2.copy()
+    eps = float(np.finfo(float).eps)
+    step = max(1, _CHUNK // max(1, P * max(S, shapes.shape[1])))
+    for lo in range(0, cols.size, step):  # chunks of modes (no loop over masses or springs)
+        c = cols[lo:lo + step]
+        phi = shapes[:, :, c]  # (P, N, C)
+        pa = np.where((a >= 0)[None, :, None], phi[:, np.maximum(a, 0), :], 0.0)  # (P, S, C)
+        pb = np.where((b >= 0)[None, :, None], phi[:, np.maximum(b, 0), :], 0.0)
+        st = pa - pb
+        tk = dk[:, :, None] * st * st
+        tm = omega2[c][None, None, :] * dm[:, :, None] * phi * phi
+        value = tk.sum(axis=1) - tm.sum(axis=1)  # (P, C)
+        bound = 8 * eps * ((np.abs(dk)[:, :, None] * (np.abs(st) * (np.abs(pa) + np.abs(pb)) + st * st)).sum(axis=1)
+                           + np.abs(tm).sum(axis=1))
+        zero = out[:, c] == 0
+        out[:, c] = np.where(zero & (np.abs(value) > 64 * bound), value, out[:, c])
+    return out
 
 
 def mode_shapes(system: System, wanted: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:

@@ -262,3 +262,42 @@ def test_messages_name_the_flag_of_each_interface_and_modes_chooses_the_listed_m
     status, out, err = run_cli(["modes", path, "--sensitivity", "--modes", "20", "--json"], capsys)
     assert status == 0, err
     assert [rec["mode"] for rec in json.loads(out)["modes"]] == [20]
+
+
+def test_small_derivatives_are_resolved_relative_to_themselves(tmp_path):
+    """A new user's scene: the highest mode (ω² ≈ 8.6e14) barely stretches the soft springs kb, kc, whose
+    ∂ω²/∂k = (φ_a − φ_b)² are 4.3e-40 and 8.7e-12 — far below double-double's resolution of ω²/p (2.9e17)
+    — and were printed as 0. The reference: mpmath's eigenpairs of M^-1/2 K M^-1/2 at 120 digits from the
+    TOML values, (φ_a − φ_b)² with mass-normalised φ."""
+    import mpmath
+
+    text = scene_toml("s01", {"ka": 1e12, "kb": 1.0, "kc": 3e-3, "ma": 2e4, "mb": 5e-4},
+                      masses={"p": "ma", "q": "mb", "r": "ma", "s": "mb*7"},
+                      springs=[{"between": ["wall", "p"], "k": "ka"}, {"between": ["p", "q"], "k": "kb"},
+                               {"between": ["q", "r"], "k": "kc"}, {"between": ["r", "s"], "k": "ka*3"}])
+    path = tmp_path / "s01.toml"
+    path.write_text(text)
+    got = {m["mode"]: m["d_omega2"] for m in sc.sensitivities(path).to_json()["modes"]}
+    with mpmath.workdps(120):
+        F = lambda v: mpmath.mpf(v)  # noqa: E731
+        m = [F(2e4), F(5e-4), F(2e4), 7 * F(5e-4)]
+        springs = [(-1, 0, F(1e12)), (0, 1, F(1)), (1, 2, F(3e-3)), (2, 3, 3 * F(1e12))]
+        K = mpmath.zeros(4, 4)
+        for a, b, k in springs:
+            for i, si in ((a, 1), (b, -1)):
+                for j, sj in ((a, 1), (b, -1)):
+                    if i >= 0 and j >= 0:
+                        K[i, j] += si * sj * k
+        D = mpmath.matrix(4, 4)
+        for i in range(4):
+            for j in range(4):
+                D[i, j] = K[i, j] / mpmath.sqrt(m[i] * m[j])
+        lam, E = mpmath.eigsy(D)
+        order = sorted(range(4), key=lambda j: lam[j])
+        for pos, j in enumerate(order):
+            phi = [E[i, j] / mpmath.sqrt(m[i]) for i in range(4)]
+            wants = {"ka": phi[0] ** 2 + 3 * (phi[2] - phi[3]) ** 2,  # ka stands in two springs
+                     "kb": (phi[0] - phi[1]) ** 2, "kc": (phi[1] - phi[2]) ** 2}
+            for name, want in wants.items():
+                want = float(want)
+                assert abs(got[pos][name] - want) <= 1e-12 * abs(want), (pos, name, got[pos][name], want)
