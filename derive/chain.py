@@ -472,12 +472,8 @@ def chain_report(model: ChainModel, modes: ChainModes, omega2_values=None, dampe
                   + (f"  (multiplicity {r['multiplicity']})" if r["multiplicity"] > 1 else "")
                   + (f"   zeta = {r['damping_ratio']:.10g}   omega_d = {r['omega_damped']:.10g}"
                      if r.get("damping_ratio") is not None else "") for r in records]
-        if zeta_note:
-            lines.append(f"    note: {zeta_note}")
-        if listed_note:
-            lines.append(f"    note: {listed_note}")
-    elif listed_note:
-        lines.append(f"    note: {listed_note}")
+        lines += [f"    note: {zeta_note}"] if zeta_note else []
+    lines += [f"    note: {listed_note}"] if listed_note else []
     from .participation import chain_section
 
     part_lines, part_notes, extra = chain_section(model, participation, records)

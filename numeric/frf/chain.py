@@ -31,6 +31,7 @@ import numpy as np
 
 from ..io.array_record import array_record
 from ..errors import RunRefused
+from .scaled import mp_split, unscale
 
 
 @array_record
@@ -292,13 +293,6 @@ MP_BUDGET = 20_000
 MP_AGREE = 1e-15
 
 
-def unscale(mantissa: np.ndarray, expo: np.ndarray) -> np.ndarray:
-    """``mantissa · 2**expo`` as float64 complex, shape (W,) (subnormal or 0 below the range, inf above)."""
-    expo = np.asarray(expo, dtype=np.int64)
-    with np.errstate(all="ignore"):
-        return np.ldexp(mantissa.real, expo) + 1j * np.ldexp(mantissa.imag, expo)
-
-
 def chain_receptance(el: ChainElements, omega: np.ndarray, input: int, output: int,
                      certify: bool = False, notes: list | None = None, budget: dict | None = None,
                      scaled: bool = False):
@@ -381,17 +375,6 @@ def mp_chain_receptance(el: ChainElements, omega: float, input: int, output: int
         prev, dps = cur, min(2 * dps, MP_MAX_DPS)
 
 
-def mp_split(value, mpmath) -> tuple[complex, int]:
-    """An mpmath complex as ``(mantissa, k)``, ``value = mantissa · 2**k``, the mantissa's larger part in
-    [1/2, 1) (0: ``(0, 0)``)."""
-    value = mpmath.mpc(value)
-    a = max(abs(value.real), abs(value.imag))
-    if a == 0:
-        return 0j, 0
-    k = int(mpmath.frexp(a)[1])
-    return complex(mpmath.ldexp(value.real, -k), mpmath.ldexp(value.imag, -k)), k
-
-
 def _mp_sweep(el: ChainElements, om, i: int, o: int, mpmath):
     """One sweep at the current precision (the module docstring's recursion)."""
     mp = lambda v: mpmath.mpf(float(v))  # noqa: E731  (exact: 53 bits)
@@ -423,4 +406,4 @@ def _mp_sweep(el: ChainElements, om, i: int, o: int, mpmath):
     return left * right / nonzero(e + t, e, t)
 
 
-__all__ = ["ChainElements", "chain_elements", "chain_receptance", "mp_chain_receptance", "mp_split", "unscale"]
+__all__ = ["ChainElements", "chain_elements", "chain_receptance", "mp_chain_receptance"]

@@ -37,6 +37,7 @@ import numpy as np
 from ..io.array_record import array_record
 from ..modes.elements import Elements, incidence, modal_damping
 from ..errors import RunRefused
+from .scaled import mp_split, split
 from ..modes.spectrum import spectrum, stiffness_matrix
 
 #: Largest certified error of |H| (relative) accepted from the float64 route.
@@ -228,7 +229,7 @@ class DenseReceptance:
         x = self.solve(omega, input)
         H = x[:, output].copy()
         if not certify or omega.shape[0] == 0:
-            return _split(H) if scaled else H
+            return split(H) if scaled else H
         row = x if output == input else self.solve(omega, output)
         bad = np.flatnonzero(~(self.error_bound(x, row, *self.residual(omega, x, input)) <= CERTIFIED * np.abs(H)))
         x_lo = np.zeros_like(x)  # corrections, kept apart from x: x + x_lo is a double-length solution
@@ -277,7 +278,7 @@ class DenseReceptance:
                 notes[:] = [n for n in notes if not n.startswith("|H| at some frequencies moves by up to")] + [note]
         if not scaled:
             return H
-        mantissa, expo = _split(H)
+        mantissa, expo = split(H)
         with np.errstate(all="ignore"):
             under = np.flatnonzero(np.abs(H) < np.finfo(float).tiny)
         if under.size and mp_solvable(self.el):  # below the float64 range: its digits (and, at 0, its phase) in mpmath
@@ -527,7 +528,6 @@ def mp_receptance(el: Elements, omega: np.ndarray, input: int, output: int, scal
     with ``scaled``, ``(mantissa, expo)`` as :meth:`DenseReceptance.receptance`."""
     import mpmath
 
-    from .chain import mp_split
 
     out = np.empty(len(omega), dtype=complex)
     expo = np.zeros(len(omega), dtype=np.int64)
@@ -538,15 +538,6 @@ def mp_receptance(el: Elements, omega: np.ndarray, input: int, output: int, scal
         else:
             out[j] = complex(value)
     return (out, expo) if scaled else out
-
-
-def _split(H: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Float64 H as ``(mantissa, expo)`` (exact: a power of two taken out; 0 and non-finite kept)."""
-    a = np.maximum(np.abs(H.real), np.abs(H.imag))
-    ok = np.isfinite(a) & (a > 0)
-    expo = np.where(ok, np.frexp(np.where(ok, a, 1.0))[1], 0).astype(np.int64)
-    with np.errstate(all="ignore"):
-        return np.ldexp(H.real, -expo) + 1j * np.ldexp(H.imag, -expo), expo
 
 
 __all__ = ["DenseReceptance", "mp_receptance", "mp_solvable", "CERTIFIED", "MPMATH_MAX_MASSES"]

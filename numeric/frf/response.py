@@ -38,7 +38,8 @@ import scipy.linalg
 
 from ...generated.contract import MAX_DENSE, End
 from ..errors import RunRefused
-from .dense import MPMATH_MAX_MASSES, _split, dense_chunk
+from .dense import MPMATH_MAX_MASSES, dense_chunk
+from .scaled import split, unscale
 from .table import (NARROW_ZETA, NODE_FLOAT, REPEATED, SETTLE_MAX, Resonance, attribute, connected,
                         local_maxima, sees)
 from ..system import System
@@ -182,8 +183,6 @@ def receptance(op: Operator, omega: np.ndarray, input: int, output: int, certify
     -------
     ndarray, shape (W,), complex (or the pair above)
     """
-    from .chain import unscale
-
     omega = np.asarray(omega, dtype=float).reshape(-1)
     with np.errstate(all="ignore"):  # float64 overflow is caught below (dense: by its certificate)
         H = _receptance(op, omega, input, output, certify, scaled)
@@ -210,7 +209,7 @@ def _receptance(op: Operator, omega: np.ndarray, input: int, output: int, certif
         return chain_receptance(op.chain, omega, input, output, certify=certify, notes=op.notes, budget=op.budget,
                                 scaled=scaled)
     if scaled:
-        return _split(_receptance(op, omega, input, output, certify))
+        return split(_receptance(op, omega, input, output, certify))
     if op.banded:
         return _receptance_banded(op, omega, input, output)
     n = op.n
@@ -600,8 +599,6 @@ BELOW_RANGE = "|H| is below the float64 range"
 def _below_range(mantissa: np.ndarray, expo: np.ndarray, notes: list) -> tuple[np.ndarray, np.ndarray]:
     """H from its mantissa and exponent, 0 where |H| is below the smallest normal float64 (subnormals too:
     their digits are lost), and arg H from the mantissa (exact there as well); one note when any is."""
-    from .chain import unscale
-
     H = unscale(mantissa, expo)
     with np.errstate(all="ignore"):
         under = (np.abs(H) < TINY) & (mantissa != 0)
