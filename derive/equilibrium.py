@@ -50,6 +50,7 @@ from .scene_loader import MAX_MAGNITUDE, MIN_MAGNITUDE
 from .work import ops
 from .mp_eval import mp_function
 from .potential import SpringLaw
+from .expr import as_sympy
 
 
 @dataclass(frozen=True)
@@ -290,8 +291,8 @@ def _on_tree(file: str, problem: PathProblem, shape, springs, loads, subs: dict,
     masses = [sp.Integer(0)] * problem.n  # only the free pieces' are needed (their centres of mass)
     for piece, ms in pieces:
         for i, m in zip(piece, ms):
-            masses[i] = sp.sympify(m).subs(subs)
-    exact_loads = [sp.sympify(ld).subs(subs) for ld in loads]
+            masses[i] = as_sympy(m).subs(subs)
+    exact_loads = [as_sympy(ld).subs(subs) for ld in loads]
     found = solve_tree(shape, problem.n, [(F, S) for (_, _, F), (_, _, S) in zip(problem.fmp, problem.smp)],
                        lambda dps: [mp_vector(r, dps) for r in problem.values],
                        lambda dps: [mp_vector(v, dps) for v in exact_loads],

@@ -118,6 +118,16 @@ def _nesting(text: str) -> int:
     return deepest
 
 
+def as_sympy(value):
+    """A SymPy object from a SymPy object or a Python number, never from text: scene text reaches SymPy
+    only through :func:`parse_expression`'s whitelist of syntax-tree nodes (a ``str`` raises TypeError)."""
+    if isinstance(value, str):
+        raise TypeError("text is not converted to SymPy here; parse it with parse_expression")
+    import sympy as sp
+
+    return sp.sympify(value, strict=True)
+
+
 def accepted_form(allowed, functions: tuple[str, ...] = FUNCTIONS) -> str:
     """What an expression may contain, for messages."""
     names = ", ".join(sorted(allowed)) or "(none)"

@@ -15,6 +15,7 @@ from .modes import ModeSet
 from .closed_summary import closed_form_line, closed_form_parts
 from .sag import sag_note, static_sag
 from .printing import MATRIX_LATEX, MATRIX_TEXT, MAX_TEXT_CLOSED_FORM, ScenePrinter, closed, json_closed, latex, sstr
+from .expr import as_sympy
 
 MAX_MATRIX = 8  # larger matrices are described, not printed
 #: Larger scenes print T, V, R as element sums (first ... last) and sums in stored order.
@@ -112,13 +113,13 @@ def shape_values(model: Model, shape) -> list[float]:
     as 0). Numeric fallback shapes are floats already.
     """
     subs = _values(model)
-    pivot = next((i for i, c in enumerate(shape) if not isinstance(c, float) and sp.sympify(c).is_Number
+    pivot = next((i for i, c in enumerate(shape) if not isinstance(c, float) and as_sympy(c).is_Number
                   and c != 0), None)
     if pivot is None:
         return [_num(c, model) for c in shape]
     masses = [value(m, subs) for m in model.masses]
     scale = abs(float(shape[pivot])) * masses[pivot] ** 0.5
-    return [c if isinstance(c, float) else value(sp.sympify(c), subs, floor=1e-20 * scale / masses[j] ** 0.5)
+    return [c if isinstance(c, float) else value(as_sympy(c), subs, floor=1e-20 * scale / masses[j] ** 0.5)
             for j, c in enumerate(shape)]
 
 

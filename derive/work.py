@@ -24,6 +24,7 @@ from math import comb
 import sympy as sp
 
 from .caps import CAPS
+from .expr import as_sympy
 
 #: Largest bound on the terms of a characteristic polynomial that is expanded and factored
 #: (bundled scenes: at most 36; a general 4-mass chain with 9 distinct symbols: 400, ~1.5 s;
@@ -98,7 +99,7 @@ def number_digits(exprs) -> int:
     """The most decimal digits (numerator plus denominator) of a rational number in ``exprs``."""
     out = 0
     for e in exprs:
-        for r in sp.sympify(e).atoms(sp.Rational):
+        for r in as_sympy(e).atoms(sp.Rational):
             out = max(out, len(str(abs(r.p))) + len(str(r.q)))
     return out
 

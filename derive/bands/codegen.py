@@ -29,6 +29,7 @@ from ..errors import SceneError
 from ..module_text import function
 from .dispersion import Dispersion, dispersion
 from .model import band_cell
+from ..expr import as_sympy
 
 #: Two branches of one quadratic closer than this (relative) take the Hellmann–Feynman group velocity: the closed
 #: form divides by the root of their discriminant, whose rounding error grows as 1/gap² (1e-12 relative at 1e-2).
@@ -73,8 +74,8 @@ def band_section(c) -> list[str]:
                       [f"    return {_vector([s.k for s in cell.dampers])}"])
     alpha, beta = cell.rayleigh if cell.rayleigh is not None else (0, 0)
     lines += function(f"cell_rayleigh({sig})", "Rayleigh coefficients (alpha, beta) of C = alpha M + beta K (zeros "
-                      "without).", [(f"    return numpy.float64({printed(sp.sympify(alpha))}), "
-                                     f"numpy.float64({printed(sp.sympify(beta))})")])
+                      "without).", [(f"    return numpy.float64({printed(as_sympy(alpha))}), "
+                                     f"numpy.float64({printed(as_sympy(beta))})")])
     lines += _omega2(d, sig)
     if d.branches is not None:
         lines += _stacked(d, sig, "band_omega", d.frequencies,
@@ -92,7 +93,7 @@ def band_section(c) -> list[str]:
 
 def _pairs(d: Dispersion) -> tuple[tuple[int, int], ...]:
     """Branches (i, j) from one quadratic: their ω² share the square root of a q-dependent discriminant."""
-    roots = [{a.base for a in sp.sympify(b).atoms(sp.Pow) if a.exp == sp.Rational(1, 2) and a.base.has(d.q)}
+    roots = [{a.base for a in as_sympy(b).atoms(sp.Pow) if a.exp == sp.Rational(1, 2) and a.base.has(d.q)}
              for b in d.branches]
     return tuple((i, j) for i in range(len(roots)) for j in range(i + 1, len(roots)) if roots[i] & roots[j])
 
@@ -197,7 +198,7 @@ def _stacked(d: Dispersion, sig: str, name: str, exprs, doc: str, *, odd: bool, 
     (``touching``: the pairs of branches whose values ``_band_touching`` replaces where they touch)."""
     q = d.q
     folded = sp.Symbol("_qf", nonnegative=True)
-    exprs = [sp.sympify(e).subs(q, folded) for e in exprs]
+    exprs = [as_sympy(e).subs(q, folded) for e in exprs]
     subs, reduced = sp.cse(exprs, symbols=sp.numbered_symbols("_x"), optimizations="basic")
     body = ["    _q = numpy.asarray(q, dtype=float)",
             "    _qa = numpy.arctan2(numpy.sin(_q), numpy.cos(_q))  # q folded into (-pi, pi]",

@@ -9,11 +9,12 @@ import sympy as sp
 
 from ..printing import latex, sstr
 from .dispersion import Dispersion
+from ..expr import as_sympy
 
 
 def _value(expr, values: dict) -> float | None:
     try:
-        v = complex(sp.N(sp.sympify(expr).subs(values), 17))
+        v = complex(sp.N(as_sympy(expr).subs(values), 17))
     except (TypeError, ValueError):
         return None
     return v.real if abs(v.imag) <= 1e-14 * max(abs(v.real), 1e-300) else None

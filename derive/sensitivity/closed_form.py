@@ -16,6 +16,7 @@ import sympy as sp
 
 from ..caps import CAPS
 from ..accurate import NotAccurate, exact_values, value
+from ..expr import as_sympy
 
 #: Largest derivative (SymPy operation count) kept as a closed form.
 MAX_OPS = CAPS.sensitivity_ops
@@ -100,7 +101,7 @@ def _shape_derivatives(model, mode, parameters: tuple[str, ...], subs: dict) -> 
     """``{p: [∂φ_i/∂p]}`` of a simple closed-form mode's mass-normalised shape, or None (too long, numeric)."""
     if not mode.exact or not mode.shapes:
         return None
-    shape = [sp.sympify(c) for c in mode.shapes[0]]
+    shape = [as_sympy(c) for c in mode.shapes[0]]
     if any(c.is_Float for c in shape) or any(sp.count_ops(c) > MAX_SHAPE_OPS for c in shape):
         return None
     norm2 = sp.Add(*[m * c**2 for m, c in zip(model.masses, shape)])
